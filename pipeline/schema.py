@@ -1,0 +1,63 @@
+"""The result-cube schema: one table that the sweep, the cube writer, query and report share.
+
+Dimensions of a cube are the swept axes, always in AXES order (a swept axis with one value is
+still a dimension); parameters that are not swept are stored as scalar coordinates. Per-point
+variables carry the point dimensions plus, for some, `multiplier` or `sample`.
+"""
+
+SCHEMA_VERSION = 1
+
+# name -> (units, long_name). Shaft speed in Hz, clearance in m, contact angle in degrees (the
+# only angle a user types), preload in N.
+AXES = {
+    "speed": ("Hz", "shaft speed"),
+    "clearance": ("m", "radial internal clearance"),
+    "contact_angle": ("degree", "bearing contact angle"),
+    "preload": ("N", "axial preload"),
+}
+
+ORBIT_STATUS = ("converged", "not_converged", "diverged", "not_applicable")
+ORBIT_REASON = (
+    "ok",
+    "max_iterations",        # Newton used all its iterations without reaching the tolerance
+    "line_search_failed",    # no damped step reduced the residual
+    "nan_or_overflow",       # the integration produced NaN/inf
+    "amplitude_limit",       # the state left the physical amplitude limit (divergence)
+    "step_size_underflow",   # the adaptive integrator could not keep its tolerance
+    "singular_jacobian",     # the shooting Jacobian M - I could not be solved
+    "quasi_periodic_forcing",  # incommensurate forcing: no periodic orbit to shoot for
+    "not_requested",         # the scene did not ask for the periodic orbit
+)
+BIFURCATION = ("none", "fold", "period_doubling", "neimark_sacker")
+ATTRACTOR = ("not_computed", "periodic", "quasi_periodic", "chaotic", "diverged")
+STABLE = ("unstable", "stable")
+
+# Fill values for points where a quantity does not apply.
+INT_FILL = -1
+FLOAT_FILL = float("nan")
+
+
+def _flag(meanings):
+    return {"flag_values": list(range(len(meanings))), "flag_meanings": " ".join(meanings)}
+
+
+# name -> (extra dims after the point dims, dtype, attrs). Floats use NaN where not applicable,
+# integers use INT_FILL (declared as _FillValue by the writer).
+VARIABLES = {
+    "orbit_status": ((), "int8", {"long_name": "periodic orbit (shooting) status", **_flag(ORBIT_STATUS)}),
+    "orbit_reason": ((), "int8", {"long_name": "reason behind orbit_status", **_flag(ORBIT_REASON)}),
+    "newton_iterations": ((), "int16", {"long_name": "Newton iterations of the shooting solve", "units": "1"}),
+    "residual": ((), "float64", {"long_name": "final shooting residual, scaled state (lengths in units of length_scale)", "units": "1"}),
+    "multiplier_real": (("multiplier",), "float64", {"long_name": "Floquet multiplier, real part", "units": "1"}),
+    "multiplier_imag": (("multiplier",), "float64", {"long_name": "Floquet multiplier, imaginary part", "units": "1"}),
+    "max_abs_multiplier": ((), "float64", {"long_name": "largest Floquet multiplier modulus", "units": "1"}),
+    "stable": ((), "int8", {"long_name": "periodic orbit is stable (max |multiplier| < 1)", **_flag(STABLE)}),
+    "bifurcation": ((), "int8", {"long_name": "how the leading multiplier left the unit circle", **_flag(BIFURCATION)}),
+    "forcing_period": ((), "float64", {"long_name": "ball-passage (forcing) period T", "units": "s"}),
+    "contact_angle_used": ((), "float64", {"long_name": "contact angle used in the force law", "units": "degree"}),
+    "x_mean": ((), "float64", {"long_name": "mean horizontal journal displacement over the orbit", "units": "m"}),
+    "y_mean": ((), "float64", {"long_name": "mean vertical journal displacement over the orbit", "units": "m"}),
+    "amplitude_x": ((), "float64", {"long_name": "half peak-to-peak horizontal displacement over the orbit", "units": "m"}),
+    "amplitude_y": ((), "float64", {"long_name": "half peak-to-peak vertical displacement over the orbit", "units": "m"}),
+    "compute_time": ((), "float64", {"long_name": "wall time spent on this point", "units": "s"}),
+}
