@@ -1,0 +1,83 @@
+"""Periodic orbits along a chain of parameter points (natural continuation in shaft speed).
+
+Each point starts Newton from the best guess available, in this order: the secant predictor
+through the two previous converged orbits (the scaled state makes neighbouring orbits close),
+the previous orbit itself, a transient settled from that guess, and last a cold start (a
+transient from near static equilibrium). The first start that converges wins; failure of all is
+recorded as data. Everything depends only on the chain, never on how chains are scheduled.
+"""
+from collections import namedtuple
+
+import numpy as np
+
+from rotorkernels import floquet, shooting
+
+PointSolution = namedtuple(
+    "PointSolution",
+    "status reason iterations residual multipliers max_abs stable bifurcation state samples n_rhs",
+)
+
+
+def _shoot(model, guess, p, opts, periods, tol, max_iter):
+    return shooting.shoot(model.rhs, model.jac, guess, p, model.n_state, model.n_position,
+                          float(periods), opts, tol, max_iter)
+
+
+def _settle(model, u0, p, opts, n_periods):
+    z, status, n_rhs = shooting.settle(model.rhs, model.jac, u0, p, model.n_state, model.n_position,
+                                       float(n_periods), opts)
+    return z, status == 0, n_rhs
+
+
+def _guesses(model, p, opts, history, transient_periods, cold_guess):
+    """Yield (guess, n_rhs spent making it) from cheapest to most robust."""
+    if len(history) >= 2:
+        yield 2.0 * history[-1] - history[-2], 0
+    if history:
+        yield history[-1], 0
+        z, ok, n_rhs = _settle(model, history[-1], p, opts, transient_periods)
+        if ok:
+            yield z, n_rhs
+    z, ok, n_rhs = _settle(model, cold_guess(p), p, opts, transient_periods)
+    yield (z if ok else cold_guess(p)), n_rhs
+
+
+def solve_orbit(model, p, opts, history=(), *, cold_guess, periods=1, tol=1e-9, max_iter=30,
+                transient_periods=30, n_samples=32):
+    """Periodic orbit, multipliers and orbit samples at one parameter point.
+
+    history: converged states of the previous points of the chain (most recent last)."""
+    n_rhs = 0
+    best = None
+    for guess, cost in _guesses(model, p, opts, list(history), transient_periods, cold_guess):
+        n_rhs += cost
+        out = _shoot(model, guess, p, opts, periods, tol, max_iter)
+        n_rhs += out[6]
+        if best is None or out[2] == shooting.CONVERGED:
+            best = out
+        if out[2] == shooting.CONVERGED:
+            break
+    state, mono, status, reason, iters, res, _ = best
+    if status != shooting.CONVERGED:
+        nan = np.full(model.n_state, np.nan)
+        return PointSolution(status, reason, iters, res, nan + 0j, np.nan, False, floquet.NONE,
+                             state, None, n_rhs)
+    lams = floquet.multipliers(mono)
+    max_abs, stable, bif = floquet.classify(lams)
+    samples = shooting.sample_orbit(model.rhs, model.jac, state, p, model.n_state, model.n_position,
+                                    float(periods), n_samples * periods, opts)
+    return PointSolution(status, reason, iters, res, lams, max_abs, stable, bif, state, samples, n_rhs)
+
+
+def solve_chain(model, params, opts, **kw):
+    """solve_orbit at each parameter vector of `params` in order, continuing the orbit."""
+    history = []
+    out = []
+    for p in params:
+        sol = solve_orbit(model, p, opts, history[-2:], **kw)
+        out.append(sol)
+        if sol.status == shooting.CONVERGED:
+            history.append(sol.state)
+        else:
+            history.clear()
+    return out

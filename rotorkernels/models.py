@@ -1,0 +1,122 @@
+"""Rotor models: right-hand sides and analytic Jacobians in scaled form.
+
+Scaling, for conditioning and so that one orbit serves as the Newton start of its neighbour
+along the speed axis: time tau = t / T (T the forcing period, so the basic periodic orbit has
+period 1 whatever the speed), displacements in units of the length scale L (1 um by default).
+The state of `jeffcott_clearance` is u = (x/L, y/L, dx/dtau / L, dy/dtau / L).
+
+A model is (rhs, jac, n_state, n_position): rhs(tau, u, p, du) and jac(tau, u, p, J) are Numba
+functions over a float64 parameter vector p built by the model's `*_params` function. The
+integrators and the shooting solver take any model through these two functions.
+"""
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+
+from rotorkernels.contact import ring_load
+
+Model = namedtuple("Model", "name rhs jac n_state n_position")
+
+LENGTH_SCALE = 1e-6  # m: bearing clearances and vibration amplitudes are micrometres
+
+# Parameter vector of jeffcott_clearance (indices).
+P_DAMP, P_GAIN, P_OFFSET, P_LOAD, P_COS_A, P_SIN_A, P_NBALLS, P_PHI0, P_CAGE, P_COS_D, P_SIN_D = range(11)
+N_PARAMS = 11
+
+
+@njit(cache=True, nogil=True)
+def _ball_phase(tau, p):
+    """Angle of the first ball: the cage turns 2 pi / N per forcing period (tau = 1)."""
+    theta = p[P_PHI0] + p[P_CAGE] * 2.0 * np.pi * tau / p[P_NBALLS]
+    return np.cos(theta), np.sin(theta)
+
+
+@njit(cache=True, nogil=True)
+def _jeffcott_load(tau, u, p):
+    cos_t, sin_t = _ball_phase(tau, p)
+    return ring_load(u[0], u[1], 0.0, p[P_OFFSET], p[P_COS_A], p[P_SIN_A], int(p[P_NBALLS]),
+                     cos_t, sin_t, p[P_COS_D], p[P_SIN_D])
+
+
+@njit(cache=True, nogil=True)
+def jeffcott_rhs(tau, u, p, du):
+    """M x'' + D x' + K sum [delta]^{3/2} cos(phi) cos(a) = 0, likewise for y with the load -W."""
+    fx, fy, _, _, _, _, _, _, _ = _jeffcott_load(tau, u, p)
+    g = p[P_GAIN]
+    a = p[P_DAMP]
+    du[0] = u[2]
+    du[1] = u[3]
+    du[2] = -a * u[2] - g * fx
+    du[3] = -a * u[3] - g * fy - p[P_LOAD]
+
+
+@njit(cache=True, nogil=True)
+def jeffcott_jac(tau, u, p, jac):
+    _, _, _, kxx, kxy, kyy, _, _, _ = _jeffcott_load(tau, u, p)
+    g = p[P_GAIN]
+    a = p[P_DAMP]
+    jac[:, :] = 0.0
+    jac[0, 2] = 1.0
+    jac[1, 3] = 1.0
+    jac[2, 0] = -g * kxx
+    jac[2, 1] = -g * kxy
+    jac[3, 0] = -g * kxy
+    jac[3, 1] = -g * kyy
+    jac[2, 2] = -a
+    jac[3, 3] = -a
+
+
+JEFFCOTT_CLEARANCE = Model("jeffcott_clearance", jeffcott_rhs, jeffcott_jac, 4, 2)
+
+
+def cage_speed_ratio(ball_diameter, pitch_diameter, contact_angle):
+    """omega_cage / omega_shaft for an outer ring at rest: (1 - (D_b / D_m) cos a) / 2."""
+    return 0.5 * (1.0 - ball_diameter / pitch_diameter * np.cos(contact_angle))
+
+
+def forcing_period(speed_hz, n_balls, ball_diameter, pitch_diameter, contact_angle):
+    """Ball-passage period T = 2 pi / (N omega_cage) [s]."""
+    omega_cage = 2.0 * np.pi * speed_hz * cage_speed_ratio(ball_diameter, pitch_diameter, contact_angle)
+    return 2.0 * np.pi / (n_balls * omega_cage)
+
+
+def jeffcott_params(*, speed, stiffness, clearance, contact_angle, axial_approach, mass, damping,
+                    radial_load, n_balls, ball_diameter, pitch_diameter, cage_rotation=True,
+                    phase=0.0, length_scale=LENGTH_SCALE):
+    """Parameter vector of `jeffcott_clearance` and the forcing period T [s], from SI inputs.
+
+    speed [Hz], stiffness K [N/m^1.5], clearance c [m], contact_angle [rad], axial_approach s0
+    [m] (0 without preload), mass [kg], damping [N s/m], radial_load W [N] acting in -y."""
+    period = forcing_period(speed, n_balls, ball_diameter, pitch_diameter, contact_angle)
+    L = length_scale
+    p = np.empty(N_PARAMS)
+    p[P_DAMP] = damping * period / mass
+    p[P_GAIN] = period ** 2 * stiffness * np.sqrt(L) * np.cos(contact_angle) / mass
+    p[P_OFFSET] = (axial_approach * np.sin(contact_angle) - clearance) / L
+    p[P_LOAD] = period ** 2 * radial_load / (mass * L)
+    p[P_COS_A] = np.cos(contact_angle)
+    p[P_SIN_A] = np.sin(contact_angle)
+    p[P_NBALLS] = n_balls
+    p[P_PHI0] = phase
+    p[P_CAGE] = 1.0 if cage_rotation else 0.0
+    p[P_COS_D] = np.cos(2.0 * np.pi / n_balls)
+    p[P_SIN_D] = np.sin(2.0 * np.pi / n_balls)
+    return p, period
+
+
+def to_physical(u, period, length_scale=LENGTH_SCALE):
+    """Scaled state(s) (..., 4) -> (x, y, x', y') in m and m/s."""
+    u = np.asarray(u, float)
+    scale = np.array([length_scale, length_scale, length_scale / period, length_scale / period])
+    return u * scale
+
+
+def static_guess(p):
+    """A state near static equilibrium: the lowest ball carries the radial load.
+
+    Used to start the transient of a cold solve; Newton takes over from where it settles."""
+    g = p[P_GAIN]
+    depth = (p[P_LOAD] / g) ** (2.0 / 3.0) if g > 0 else 0.0
+    y = -(depth - p[P_OFFSET]) / p[P_COS_A]
+    return np.array([0.0, y, 0.0, 0.0])

@@ -1,0 +1,121 @@
+"""Periodic orbits by shooting: Newton on r(s) = u(k T; s) - s with the monodromy from the
+variational equations, a backtracking line search, and explicit statuses.
+
+Codes match pipeline.schema: ORBIT_STATUS (converged, not_converged, diverged) and ORBIT_REASON.
+"""
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+
+from rotorkernels import integrators as ig
+
+CONVERGED, NOT_CONVERGED, DIVERGED = 0, 1, 2
+(R_OK, R_MAX_ITER, R_LINE_SEARCH, R_NAN, R_AMPLITUDE, R_STEP_UNDERFLOW, R_SINGULAR) = range(7)
+
+Orbit = namedtuple("Orbit", "state monodromy status reason iterations residual n_rhs")
+
+_MAX_HALVINGS = 12
+
+
+@njit(cache=True, nogil=True)
+def _failure(flow_status):
+    """(status, reason) for an integration that did not reach the end of the period."""
+    if flow_status == ig.STATUS_NAN:
+        return DIVERGED, R_NAN
+    if flow_status == ig.STATUS_AMPLITUDE:
+        return DIVERGED, R_AMPLITUDE
+    return NOT_CONVERGED, R_STEP_UNDERFLOW
+
+
+@njit(cache=True, nogil=True)
+def _residual_norm(r, s):
+    """Infinity norm of the residual relative to the orbit's size (scaled units, floor 1)."""
+    return np.max(np.abs(r)) / max(1.0, np.max(np.abs(s)))
+
+
+@njit(cache=True, nogil=True)
+def _return_map(rhs, jac, s, p, n, n_position, periods, opts, h):
+    """(u(k T; s) - s, monodromy, flow status, n_rhs, h_next)."""
+    z0 = ig.initial_state(s, n, True)
+    z, status, n_rhs, h = ig.flow(rhs, jac, 0.0, periods, z0, p, n, n_position, True, opts, h)
+    r = z[:n] - s
+    mono = z[n:].copy().reshape((n, n))
+    return r, mono, status, n_rhs, h
+
+
+@njit(cache=True, nogil=True)
+def shoot(rhs, jac, guess, p, n, n_position, periods, opts, tol, max_iter):
+    """Newton shooting for an orbit of period `periods` (scaled time) from `guess`.
+
+    Returns (state, monodromy, status, reason, iterations, residual, n_rhs). The monodromy is
+    evaluated at the returned state."""
+    s = guess.copy()
+    r, mono, fstat, n_rhs, h = _return_map(rhs, jac, s, p, n, n_position, periods, opts, 0.0)
+    if fstat != ig.STATUS_OK:
+        status, reason = _failure(fstat)
+        return s, mono, status, reason, 0, np.inf, n_rhs
+    res = _residual_norm(r, s)
+    eye = np.eye(n)
+    for it in range(max_iter + 1):
+        if res <= tol:
+            return s, mono, CONVERGED, R_OK, it, res, n_rhs
+        if it == max_iter:
+            break
+        try:
+            step = np.linalg.solve(mono - eye, -r)
+        except Exception:  # noqa: BLE001 - numba raises a generic error for a singular matrix
+            return s, mono, NOT_CONVERGED, R_SINGULAR, it, res, n_rhs
+        lam = 1.0
+        accepted = False
+        last_fail = ig.STATUS_OK
+        for _ in range(_MAX_HALVINGS):
+            trial = s + lam * step
+            r_t, mono_t, fstat, nr, h_t = _return_map(rhs, jac, trial, p, n, n_position, periods, opts, h)
+            n_rhs += nr
+            if fstat == ig.STATUS_OK:
+                res_t = _residual_norm(r_t, trial)
+                if res_t < (1.0 - 1e-4 * lam) * res or res_t <= tol:
+                    s, r, mono, res, h = trial, r_t, mono_t, res_t, h_t
+                    accepted = True
+                    break
+            else:
+                last_fail = fstat
+            lam *= 0.5
+        if not accepted:
+            if last_fail != ig.STATUS_OK:
+                status, reason = _failure(last_fail)
+                return s, mono, status, reason, it + 1, res, n_rhs
+            return s, mono, NOT_CONVERGED, R_LINE_SEARCH, it + 1, res, n_rhs
+    return s, mono, NOT_CONVERGED, R_MAX_ITER, max_iter, res, n_rhs
+
+
+@njit(cache=True, nogil=True)
+def settle(rhs, jac, u0, p, n, n_position, periods, opts):
+    """Integrate a transient of `periods` forcing periods from u0: (state, flow status, n_rhs)."""
+    z, status, n_rhs, _ = ig.flow(rhs, jac, 0.0, float(periods), u0.copy(), p, n, n_position, False,
+                                  opts, 0.0)
+    return z, status, n_rhs
+
+
+@njit(cache=True, nogil=True)
+def sample_orbit(rhs, jac, u0, p, n, n_position, periods, n_samples, opts):
+    """States at n_samples equally spaced times over [0, periods) starting from u0."""
+    out = np.empty((n_samples, n))
+    z = u0.copy()
+    h = 0.0
+    dt = periods / n_samples
+    for i in range(n_samples):
+        out[i] = z
+        z, status, _, h = ig.flow(rhs, jac, i * dt, (i + 1) * dt, z, p, n, n_position, False, opts, h)
+        if status != ig.STATUS_OK:
+            out[i + 1:] = np.nan
+            break
+    return out
+
+
+def periodic_orbit(model, guess, p, opts, periods=1, tol=1e-9, max_iter=30):
+    """Python-facing wrapper of `shoot` for a `models.Model`."""
+    res = shoot(model.rhs, model.jac, np.asarray(guess, float), p, model.n_state, model.n_position,
+                float(periods), opts, tol, max_iter)
+    return Orbit(*res)
