@@ -92,7 +92,7 @@ def jeffcott_params(*, speed, stiffness, clearance, contact_angle, axial_approac
     L = length_scale
     p = np.empty(N_PARAMS)
     p[P_DAMP] = damping * period / mass
-    p[P_GAIN] = period ** 2 * stiffness * np.sqrt(L) * np.cos(contact_angle) / mass
+    p[P_GAIN] = period ** 2 * stiffness * np.sqrt(L) / mass
     p[P_OFFSET] = (axial_approach * np.sin(contact_angle) - clearance) / L
     p[P_LOAD] = period ** 2 * radial_load / (mass * L)
     p[P_COS_A] = np.cos(contact_angle)

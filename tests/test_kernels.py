@@ -1,0 +1,281 @@
+"""Kernel numerics against independent values: finite differences, linear algebra, scipy."""
+import numpy as np
+import pytest
+from numba import njit
+from scipy.integrate import solve_ivp
+from scipy.linalg import expm
+from scipy.optimize import linear_sum_assignment
+
+from rotorkernels import boundary, continuation, floquet, integrators as ig, models, shooting
+from tests.reference import BAI, BaiPoint
+
+JEFF = models.JEFFCOTT_CLEARANCE
+TIGHT = ig.settings(rtol=1e-13, atol=1e-15)
+
+
+def bai_params(point, **overrides):
+    kw = dict(speed=point.speed, stiffness=point.K, clearance=point.clearance, contact_angle=point.alpha,
+              axial_approach=0.0, mass=point.mass, damping=point.damping, radial_load=point.load,
+              n_balls=point.n_balls, ball_diameter=BAI["Db"], pitch_diameter=BAI["Dm"])
+    kw.update(overrides)
+    return models.jeffcott_params(**kw)
+
+
+def solve_bai(point, opts=TIGHT, tol=1e-12):
+    p, period = bai_params(point)
+    sol = continuation.solve_orbit(JEFF, p, opts, cold_guess=models.static_guess, tol=tol,
+                                   transient_periods=100)
+    assert sol.status == shooting.CONVERGED, sol
+    return sol, period
+
+
+def match(a, b):
+    """Pair two multiplier sets by nearest values; return the largest pair distance."""
+    cost = np.abs(np.subtract.outer(a, b))
+    rows, cols = linear_sum_assignment(cost)
+    return cost[rows, cols].max()
+
+
+def scaled_rhs(p, tau, u):
+    du = np.empty(4)
+    JEFF.rhs(tau, np.asarray(u, float), p, du)
+    return du
+
+
+# --- Jacobian ------------------------------------------------------------------------------
+
+def grazing_states(p, rng, n):
+    """States where one ball's deformation is 1e-4 (scaled, i.e. 1e-10 m) on either side of zero:
+    the finite-difference step stays on one side, so the C^1 kink does not blur the comparison."""
+    states = []
+    for _ in range(n):
+        tau = rng.uniform(0, 1)
+        theta = p[models.P_PHI0] + 2 * np.pi * tau / p[models.P_NBALLS]
+        phi = theta + 2 * np.pi * rng.integers(9) / 9
+        radius = (1e-4 * rng.choice([-1, 1]) - p[models.P_OFFSET]) / p[models.P_COS_A]
+        u = np.array([radius * np.cos(phi), radius * np.sin(phi), *rng.normal(size=2)])
+        states.append((tau, u))
+    return states
+
+
+def test_analytic_jacobian_matches_finite_differences():
+    rng = np.random.default_rng(1)
+    p, _ = bai_params(BaiPoint(120.0, 7.6e-6))
+    cases = [(rng.uniform(0, 1), rng.normal(scale=15.0, size=4)) for _ in range(40)]
+    cases += grazing_states(p, rng, 20)
+    for tau, u in cases:
+        jac = np.empty((4, 4))
+        JEFF.jac(tau, u, p, jac)
+        h = 1e-7
+        fd = np.column_stack([(scaled_rhs(p, tau, u + h * e) - scaled_rhs(p, tau, u - h * e)) / (2 * h)
+                              for e in np.eye(4)])
+        np.testing.assert_allclose(jac, fd, rtol=0, atol=1e-6 * max(1.0, np.abs(fd).max()))
+
+
+# --- Floquet multipliers of linear systems --------------------------------------------------
+
+@njit(cache=True)
+def linear_rhs(t, u, p, du):
+    # u'' + C u' + K u = 0 with K = [[p0, p1], [p1, p2]], C = diag(p3, p4)
+    du[0] = u[2]
+    du[1] = u[3]
+    du[2] = -p[0] * u[0] - p[1] * u[1] - p[3] * u[2]
+    du[3] = -p[1] * u[0] - p[2] * u[1] - p[4] * u[3]
+
+
+@njit(cache=True)
+def linear_jac(t, u, p, jac):
+    jac[:, :] = 0.0
+    jac[0, 2] = 1.0
+    jac[1, 3] = 1.0
+    jac[2, 0] = -p[0]
+    jac[2, 1] = -p[1]
+    jac[3, 0] = -p[1]
+    jac[3, 1] = -p[2]
+    jac[2, 2] = -p[3]
+    jac[3, 3] = -p[4]
+
+
+@njit(cache=True)
+def mathieu_rhs(t, u, p, du):
+    # x'' + 2 zeta x' + (delta + eps cos 2 pi t) x = 0, written twice as an uncoupled pair
+    k = p[1] + p[2] * np.cos(2 * np.pi * t)
+    du[0] = u[2]
+    du[1] = u[3]
+    du[2] = -2 * p[0] * u[2] - k * u[0]
+    du[3] = -2 * p[0] * u[3] - k * u[1]
+
+
+@njit(cache=True)
+def mathieu_jac(t, u, p, jac):
+    k = p[1] + p[2] * np.cos(2 * np.pi * t)
+    jac[:, :] = 0.0
+    jac[0, 2] = 1.0
+    jac[1, 3] = 1.0
+    jac[2, 0] = -k
+    jac[3, 1] = -k
+    jac[2, 2] = -2 * p[0]
+    jac[3, 3] = -2 * p[0]
+
+
+LINEAR = models.Model("linear", linear_rhs, linear_jac, 4, 2)
+MATHIEU = models.Model("mathieu", mathieu_rhs, mathieu_jac, 4, 2)
+
+
+@pytest.mark.parametrize("opts, tol", [(ig.settings(rtol=1e-12, atol=1e-14), 1e-10),
+                                      (ig.settings("rk4", steps_per_unit=400), 1e-7)])
+def test_linear_oscillator_multipliers_are_exp_of_eigenvalues(opts, tol):
+    p = np.array([40.0, 5.0, 90.0, 0.4, 0.9])
+    a = np.zeros((4, 4))
+    linear_jac(0.0, np.zeros(4), p, a)
+    orbit = shooting.periodic_orbit(LINEAR, np.array([1.0, -2.0, 0.5, 0.3]), p, opts, tol=1e-12)
+    assert orbit.status == shooting.CONVERGED and orbit.iterations <= 2
+    np.testing.assert_allclose(orbit.state, 0.0, atol=1e-10)
+    analytic = np.exp(np.linalg.eigvals(a))           # multipliers of a constant-coefficient system
+    assert match(floquet.multipliers(orbit.monodromy), analytic) < tol
+    np.testing.assert_allclose(orbit.monodromy, expm(a), atol=tol)
+
+
+def test_damped_mathieu_multipliers_match_scipy_and_liouville():
+    p = np.array([0.05, 4.0, 2.5])
+    orbit = shooting.periodic_orbit(MATHIEU, np.full(4, 0.1), p, ig.settings(rtol=1e-12, atol=1e-14),
+                                    tol=1e-12)
+    lam = floquet.multipliers(orbit.monodromy)
+
+    def variational(t, y):
+        k = p[1] + p[2] * np.cos(2 * np.pi * t)
+        return np.array([[0, 1], [-k, -2 * p[0]]]) @ y.reshape(2, 2)
+
+    sol = solve_ivp(lambda t, y: variational(t, y).ravel(), (0, 1), np.eye(2).ravel(),
+                    method="DOP853", rtol=1e-13, atol=1e-15)
+    reference = np.linalg.eigvals(sol.y[:, -1].reshape(2, 2))
+    assert match(lam, np.concatenate([reference, reference])) < 1e-9
+    assert abs(np.prod(lam).real - np.exp(-4 * p[0])) < 1e-11   # det = exp(trace) per unit time
+
+
+# --- the Bai 2006 model against an independent scipy computation ---------------------------
+
+BAI_POINTS = [BaiPoint(60.0, 3.8e-6), BaiPoint(100.0, 7.6e-6), BaiPoint(150.0, 11.4e-6),
+              BaiPoint(200.0, 19.0e-6)]
+
+
+@pytest.mark.parametrize("point", BAI_POINTS, ids=lambda pt: f"{pt.speed}Hz-{pt.clearance * 1e6}um")
+def test_bai_orbit_and_multipliers_match_scipy_reference(point):
+    sol, period = solve_bai(point)
+    ours = models.to_physical(sol.state, period)
+    ref_state, ref_mono, ref_residual = point.periodic_orbit(ours, iterations=1)
+    assert ref_residual < 1e-9
+    scale = models.to_physical(np.ones(4), period)
+    np.testing.assert_allclose(ours / scale, ref_state / scale, rtol=0, atol=1e-8)
+    assert match(sol.multipliers, np.linalg.eigvals(ref_mono)) < 1e-7
+
+
+@pytest.mark.parametrize("speed, clearance", [(20.0, 3.8e-6), (90.0, 7.6e-6), (130.0, 15.2e-6),
+                                              (240.0, 19.0e-6)])
+def test_product_of_multipliers_obeys_liouville(speed, clearance):
+    point = BaiPoint(speed, clearance)
+    sol, period = solve_bai(point, opts=ig.settings(rtol=1e-11, atol=1e-13), tol=1e-10)
+    expected = np.exp(-point.damping * period / point.mass) ** 2
+    assert abs(np.prod(sol.multipliers).real - expected) < 1e-9
+
+
+def test_rk4_converges_towards_dop853_at_reduced_order_across_contact_switching():
+    point = BaiPoint(60.0, 3.8e-6)
+    exact, _ = solve_bai(point)
+    p, _ = bai_params(point)
+    errors = []
+    for steps in (256, 512, 1024):
+        sol = continuation.solve_orbit(JEFF, p, ig.settings("rk4", steps_per_unit=steps), [exact.state],
+                                       cold_guess=models.static_guess, tol=1e-12)
+        errors.append(match(sol.multipliers, exact.multipliers))
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    # a smooth problem gives 2^4 = 16 per halving; the C^1 contact force (the Jacobian has a
+    # square-root kink where a ball loses contact) brings RK4 down to an order of about 2.3-2.8
+    orders = np.log2(ratios)
+    assert np.all((orders > 2.0) & (orders < 4.5)), (errors, orders)
+
+
+# --- reduced physics and limits -------------------------------------------------------------
+
+def test_zero_preload_law_is_bai_law():
+    rng = np.random.default_rng(3)
+    point = BaiPoint(130.0, 11.4e-6)
+    p, period = bai_params(point)
+    scale = models.to_physical(np.ones(4), period)
+    for _ in range(30):
+        tau, u = rng.uniform(0, 3), rng.normal(scale=12.0, size=4)
+        ours = scaled_rhs(p, tau, u)
+        ref = np.array(point.rhs(tau * period, u * scale))
+        np.testing.assert_allclose(ours, ref / scale * period, rtol=1e-12, atol=1e-9)
+
+
+def test_zero_clearance_law_is_filipkovsky_preloaded_law():
+    """c = 0, s0 = z0: delta_k = x cos a cos b_k + y cos a sin b_k + z0 sin a (2016 paper)."""
+    rng = np.random.default_rng(4)
+    alpha, z0, K, n = np.radians(26.0), 4e-6, 8e9, 7
+    p, period = models.jeffcott_params(speed=100.0, stiffness=K, clearance=0.0, contact_angle=alpha,
+                                       axial_approach=z0, mass=3.0, damping=50.0, radial_load=0.0,
+                                       n_balls=n, ball_diameter=11.51e-3, pitch_diameter=43.5e-3,
+                                       cage_rotation=False)
+    scale = models.to_physical(np.ones(4), period)
+    b = 2 * np.pi * np.arange(n) / n
+    for _ in range(20):
+        u = rng.normal(scale=3.0, size=4)
+        x, y = u[:2] * 1e-6
+        delta = x * np.cos(alpha) * np.cos(b) + y * np.cos(alpha) * np.sin(b) + z0 * np.sin(alpha)
+        q = K * np.clip(delta, 0, None) ** 1.5
+        fx, fy = np.sum(q * np.cos(alpha) * np.cos(b)), np.sum(q * np.cos(alpha) * np.sin(b))
+        ref_acc = np.array([-50.0 * u[2] * scale[2] - fx, -50.0 * u[3] * scale[3] - fy]) / 3.0
+        ours = scaled_rhs(p, 0.37, u)
+        np.testing.assert_allclose(ours[2:] * scale[2:] / period, ref_acc, rtol=1e-11)
+
+
+def test_frozen_cage_orbit_is_static_equilibrium_with_expm_monodromy():
+    """Without cage rotation the system is autonomous: the 'periodic orbit' is the equilibrium
+    and the monodromy over one period is expm(A) of the linearization (FD of the reference)."""
+    point = BaiPoint(80.0, 7.6e-6)
+    p, period = bai_params(point, cage_rotation=False)
+    sol = continuation.solve_orbit(JEFF, p, TIGHT, cold_guess=models.static_guess, tol=1e-12,
+                                   transient_periods=200)
+    assert sol.status == shooting.CONVERGED
+    scale = models.to_physical(np.ones(4), period)
+    eq = sol.state * scale
+    frozen = lambda u: np.array(point.rhs(0.0, u))  # noqa: E731 - reference rhs at t = 0 (balls fixed)
+    np.testing.assert_allclose(frozen(eq)[2:] / (scale[2] / period), 0.0, atol=1e-9)
+    h = 1e-4 * scale
+    a = np.column_stack([(frozen(eq + h[i] * e) - frozen(eq - h[i] * e)) / (2 * h[i])
+                         for i, e in enumerate(np.eye(4))])
+    assert match(sol.multipliers, np.exp(np.linalg.eigvals(a) * period)) < 1e-7
+
+
+# --- stability boundary ---------------------------------------------------------------------
+
+def test_boundary_is_located_far_below_the_grid_step():
+    clearance = 7.6e-6
+    opts = ig.settings(rtol=1e-12, atol=1e-14)
+
+    def solve(speed, guess):
+        p, _ = bai_params(BaiPoint(speed, clearance))
+        return continuation.solve_orbit(JEFF, p, opts, [guess], cold_guess=models.static_guess, tol=1e-11)
+
+    start = solve(70.0, models.static_guess(bai_params(BaiPoint(70.0, clearance))[0]))
+    grid = np.arange(70.0, 110.0, 2.0)
+    states, mus = [start.state], []
+    for speed in grid:
+        sol = solve(speed, states[-1])
+        states.append(sol.state)
+        mus.append(sol.max_abs)
+    i = int(np.argmax(np.array(mus) > 1.0))
+    assert i > 0, "the grid must bracket a crossing"
+    found = boundary.locate_boundary(solve, grid[i - 1], grid[i], states[i], states[i + 1], xtol_rel=1e-8)
+    assert abs(found.solution.max_abs - 1.0) < 1e-5
+    assert floquet.crossing_type(found.solution.multipliers[0]) == floquet.PERIOD_DOUBLING
+    # independent check: the scipy reference sees the crossing within 1e-6 relative
+    below = BaiPoint(found.value * (1 - 1e-6), clearance)
+    above = BaiPoint(found.value * (1 + 1e-6), clearance)
+    mu = []
+    for pt, state in ((below, found.solution.state), (above, found.solution.state)):
+        _, period = bai_params(pt)
+        _, mono, _ = pt.periodic_orbit(models.to_physical(state, period), iterations=2)
+        mu.append(np.abs(np.linalg.eigvals(mono)).max())
+    assert mu[0] < 1.0 < mu[1], mu
