@@ -1,0 +1,302 @@
+"""Tests of rotorkernels.bearing: Hertz constants, contact angles, preload state, presets."""
+import math
+
+import numpy as np
+import pytest
+
+from rotorkernels.bearing import (
+    BAI2006_CONTACT_CONSTANT,
+    PRESETS,
+    BearingGeometry,
+    ball_contacts,
+    contact_constant,
+    free_contact_angle,
+    groove_free_angle,
+    hertz_constant,
+    preload_state,
+    preset,
+    raceway_curvatures,
+)
+
+ANGLES = (12, 15, 26, 36, 40)
+STEEL_E, STEEL_NU = 2.08e11, 0.3
+
+
+def e_star(e=STEEL_E, nu=STEEL_NU):
+    """Hertz's contact modulus for two bodies of one material: 1/E* = 2 (1 - nu^2) / E."""
+    return e / (2.0 * (1.0 - nu ** 2))
+
+
+# ---------------------------------------------------------------- 1. circular-contact limit
+
+@pytest.mark.parametrize("r1, r2", [(6.35e-3, math.inf), (6.35e-3, 10e-3), (5e-3, -20e-3)])
+def test_circular_contact_matches_hertz_sphere(r1, r2):
+    """Sphere on a flat / sphere / spherical cup: kappa = 1 and K = (4/3) E* sqrt(R_eff)."""
+    c2 = 0.0 if math.isinf(r2) else 1.0 / r2
+    cc = contact_constant((1 / r1, 1 / r1), (c2, c2), STEEL_E, STEEL_NU)
+    r_eff = 1.0 / (1.0 / r1 + c2)
+    assert cc.ellipticity == 1.0
+    assert cc.ellip_k == pytest.approx(math.pi / 2, rel=1e-12)
+    assert cc.ellip_e == pytest.approx(math.pi / 2, rel=1e-12)
+    assert cc.stiffness == pytest.approx(4.0 / 3.0 * e_star() * math.sqrt(r_eff), rel=1e-8)
+
+
+def test_nearly_circular_contact_is_continuous():
+    """The elliptic branch (kappa solved by brentq) must join the circular closed form."""
+    r = 6.35e-3
+    circ = contact_constant((1 / r, 1 / r), (0.0, 0.0), STEEL_E, STEEL_NU)
+    near = contact_constant((1 / r, 1 / r), (1e-4 / r, 0.0), STEEL_E, STEEL_NU)
+    assert 1.0 < near.ellipticity < 1.001
+    assert near.stiffness == pytest.approx(circ.stiffness, rel=1e-4)
+
+
+# ---------------------------------------------------------------- 2. Hamrock-Brewe approximations
+
+def hamrock_brewe(curv_1, curv_2, e, nu):
+    """Hamrock & Brewe (1983) curve fits: kappa ~ 1.0339 (R_y/R_x)^0.636,
+    E ~ 1.0003 + 0.5968 R_x/R_y, K ~ 1.5277 + 0.6023 ln(R_y/R_x), and the exact Hertz
+    delta = K [9/(2 E R) (Q/(pi kappa E'))^2]^{1/3} solved for Q = k delta^{3/2}."""
+    rx = 1.0 / (curv_1[0] + curv_2[0])
+    ry = 1.0 / (curv_1[1] + curv_2[1])
+    r = 1.0 / (1.0 / rx + 1.0 / ry)
+    ratio = ry / rx
+    kappa = 1.0339 * ratio ** 0.636
+    ell_e = 1.0003 + 0.5968 / ratio
+    ell_k = 1.5277 + 0.6023 * math.log(ratio)
+    e_prime = e / (1.0 - nu ** 2)
+    # delta^{3/2} = K^{3/2} (9/(2ER))^{1/2} Q / (pi kappa E')
+    k = math.pi * kappa * e_prime / (ell_k ** 1.5 * math.sqrt(9.0 / (2.0 * ell_e * r)))
+    return k, kappa, ell_k, ell_e
+
+
+@pytest.mark.parametrize("which", [0, 1])
+def test_209_contacts_agree_with_hamrock_brewe(which):
+    """Independent curve fits (a few % accuracy) vs the elliptic-integral solution, 209 bearing."""
+    geom = preset("209")
+    ball, inner, outer = raceway_curvatures(geom)
+    race = (inner, outer)[which]
+    exact = contact_constant(ball, race, geom.youngs_modulus, geom.poisson_ratio)
+    k, kappa, ell_k, ell_e = hamrock_brewe(ball, race, geom.youngs_modulus, geom.poisson_ratio)
+    assert exact.ellipticity == pytest.approx(kappa, rel=0.03)
+    assert exact.ellip_k == pytest.approx(ell_k, rel=0.02)
+    assert exact.ellip_e == pytest.approx(ell_e, rel=0.02)
+    assert exact.stiffness == pytest.approx(k, rel=0.03)
+
+
+def test_209_curvatures():
+    """Harris's curvature sums for a ball on the 209 races, gamma = D cos(a) / d_m."""
+    geom = preset("209")
+    d, gamma = 12.7e-3, 12.7 / 65.0
+    inner, outer = ball_contacts(geom)
+    assert inner.curvature_sum == pytest.approx((4 - d / 6.6e-3 + 2 * gamma / (1 - gamma)) / d, rel=1e-12)
+    assert outer.curvature_sum == pytest.approx((4 - d / 6.6e-3 - 2 * gamma / (1 + gamma)) / d, rel=1e-12)
+
+
+# ---------------------------------------------------------------- 3. named bearing
+
+def test_209_hertz_constant_matches_spec_value():
+    """209 deep-groove bearing (D_b = 12.7 mm, D_m = 65 mm, r_i = r_o = 6.6 mm, E = 2.08e11 Pa,
+    nu = 0.3). Reference: /work/shared/SPEC.md section 2.1, "The Hertz value computed from the 209
+    geometry (E = 2.08e11 Pa, Poisson 0.3) is about 1.18e10 N/m^1.5". Harris's worked 209 example is
+    not used: its book value could not be verified here, so none is cited."""
+    geom = preset("209")
+    k = hertz_constant(geom)
+    assert k == pytest.approx(1.18e10, rel=0.02)
+    inner, outer = ball_contacts(geom)
+    assert k < min(inner.stiffness, outer.stiffness)  # series is softer than either contact
+    assert k == pytest.approx((inner.stiffness ** (-2 / 3) + outer.stiffness ** (-2 / 3)) ** -1.5, rel=1e-12)
+    # The paper's constant is ~4x softer than Hertz; keep the two apart.
+    assert BAI2006_CONTACT_CONSTANT == 2.883e9
+    assert k / BAI2006_CONTACT_CONSTANT > 3.5
+
+
+def test_hertz_constant_uses_contact_angle():
+    """Larger angle -> smaller gamma -> inner race flatter, outer less concave; K changes a little."""
+    geom = preset("angular_contact_medium", 26)
+    assert hertz_constant(geom) == hertz_constant(geom, math.radians(26))
+    assert hertz_constant(geom, 0.0) != pytest.approx(hertz_constant(geom, math.radians(40)), rel=1e-4)
+
+
+# ---------------------------------------------------------------- 4. free contact angle
+
+@pytest.mark.parametrize("c_um", [3.8, 7.6, 11.4, 15.2, 19.0])
+def test_free_contact_angle_bai_eq6(c_um):
+    geom = preset("209")
+    a = 6.6 + 6.6 - 12.7  # mm, r_i + r_o - D_b
+    expected = math.acos(1.0 - c_um * 1e-3 / a)
+    assert free_contact_angle(geom, c_um * 1e-6) == pytest.approx(expected, rel=1e-12)
+
+
+def test_free_contact_angle_limits():
+    geom = preset("209")
+    assert free_contact_angle(geom, 0.0) == 0.0
+    assert free_contact_angle(geom, 0.5e-3) == pytest.approx(math.pi / 2, rel=1e-12)
+    with pytest.raises(ValueError, match=r"-1e-06.*allowed range"):
+        free_contact_angle(geom, -1e-6)
+    with pytest.raises(ValueError, match="allowed range"):
+        free_contact_angle(geom, 0.6e-3)  # angle past 90 deg
+    with pytest.raises(ValueError, match="allowed range"):
+        free_contact_angle(geom, 1.2e-3)  # cosine below -1
+
+
+# ---------------------------------------------------------------- 5. preload state
+
+def summed_force(k, alpha, s0, c, n, x=0.0):
+    """Ball-load sum of one bearing, sum_j K [delta_j]_+^{3/2} (cos phi cos a, sin a), phi_j = 2 pi j/N."""
+    phi = 2 * np.pi * np.arange(n) / n
+    delta = x * np.cos(phi) * np.cos(alpha) + s0 * np.sin(alpha) - c
+    q = k * np.where(delta > 0, delta, 0.0) ** 1.5
+    return np.sum(q * np.cos(phi)) * np.cos(alpha), np.sum(q) * np.sin(alpha)
+
+
+BEARINGS = [("209", None), ("angular_contact_medium", 12), ("angular_contact_medium", 26),
+            ("angular_contact_medium", 40)]
+
+
+@pytest.mark.parametrize("name, angle", BEARINGS)
+@pytest.mark.parametrize("p0", [10.0, 100.0, 300.0, 2000.0])
+def test_preload_static_equilibrium(name, angle, p0):
+    geom = preset(name, angle)
+    st = preload_state(geom, p0)
+    n = geom.n_balls
+    assert n * st.ball_load * math.sin(st.contact_angle) == pytest.approx(p0, rel=1e-10)
+    # the force law at x = y = 0 reproduces the preload
+    _, fz = summed_force(st.contact_constant, st.contact_angle, st.axial_approach, 0.0, n)
+    assert fz == pytest.approx(p0, rel=1e-10)
+    # loaded geometry: delta_n = A (cos a0 / cos a - 1) and K is the Hertz value at the loaded angle
+    a = geom.groove_center_distance
+    expected = a * (math.cos(geom.nominal_contact_angle) / math.cos(st.contact_angle) - 1)
+    assert st.normal_approach == pytest.approx(expected, rel=1e-10)
+    assert st.contact_constant == pytest.approx(hertz_constant(geom, st.contact_angle), rel=1e-12)
+
+
+@pytest.mark.parametrize("name, angle", BEARINGS)
+def test_preload_angle_grows_with_load(name, angle):
+    geom = preset(name, angle)
+    alphas = [preload_state(geom, p).contact_angle for p in (1e-6, 1.0, 10.0, 100.0, 1000.0, 2000.0)]
+    assert np.all(np.diff(alphas) > 0)
+    assert alphas[0] > geom.nominal_contact_angle
+    assert alphas[0] == pytest.approx(geom.nominal_contact_angle, abs=2e-3)
+
+
+def test_preload_zero_load():
+    geom = preset("angular_contact_medium", 26)
+    st = preload_state(geom, 0.0)
+    assert st.contact_angle == geom.nominal_contact_angle
+    assert (st.normal_approach, st.ball_load, st.radial_stiffness, st.axial_stiffness) == (0, 0, 0, 0)
+    assert st.axial_approach == 0.0
+    g209 = preset("209")
+    st = preload_state(g209, 0.0, clearance=7.6e-6)
+    assert st.contact_angle == free_contact_angle(g209, 7.6e-6)
+    assert st.axial_approach * math.sin(st.contact_angle) == pytest.approx(7.6e-6, rel=1e-12)
+    assert preload_state(g209, 0.0).axial_approach == 0.0
+
+
+@pytest.mark.parametrize("name, angle, clearance", [("209", None, 0.0), ("209", None, 11.4e-6),
+                                                    ("angular_contact_medium", 15, 0.0),
+                                                    ("angular_contact_medium", 40, 0.0)])
+def test_linear_stiffness_matches_finite_difference(name, angle, clearance):
+    geom = preset(name, angle)
+    st = preload_state(geom, 300.0, clearance=clearance)
+    assert st.axial_approach * math.sin(st.contact_angle) - clearance == pytest.approx(
+        st.normal_approach, rel=1e-9)
+    args = (st.contact_constant, st.contact_angle, st.axial_approach, clearance, geom.n_balls)
+    h = 1e-3 * st.normal_approach
+    kr = (summed_force(*args, x=h)[0] - summed_force(*args, x=-h)[0]) / (2 * h)
+    assert st.radial_stiffness == pytest.approx(kr, rel=1e-5)
+    # axial: shift s0 with alpha frozen, as in the force law
+    k, a, s0, c, n = args
+    ka = (summed_force(k, a, s0 + h, c, n)[1] - summed_force(k, a, s0 - h, c, n)[1]) / (2 * h)
+    assert st.axial_stiffness == pytest.approx(ka, rel=1e-5)
+
+
+def test_preload_with_given_constant_and_free_angle():
+    """Bai's constant and an explicit free angle are honoured; equilibrium still holds."""
+    geom = preset("209")
+    alpha0 = free_contact_angle(geom, 3.8e-6)
+    st = preload_state(geom, 50.0, clearance=3.8e-6, stiffness=BAI2006_CONTACT_CONSTANT)
+    assert st.contact_constant == BAI2006_CONTACT_CONSTANT
+    assert st.contact_angle > alpha0
+    _, fz = summed_force(st.contact_constant, st.contact_angle, st.axial_approach, 3.8e-6, 9)
+    assert fz == pytest.approx(50.0, rel=1e-10)
+    ac = preset("angular_contact_medium", 15)
+    free = groove_free_angle(ac)
+    st = preload_state(ac, 300.0, free_angle=free)
+    assert st.normal_approach == pytest.approx(
+        ac.groove_center_distance * (math.cos(free) / math.cos(st.contact_angle) - 1), rel=1e-10)
+
+
+@pytest.mark.parametrize("angle", ANGLES)
+def test_filipkovsky_constant_gives_one_and_a_half_preload(angle):
+    geom = preset("angular_contact_medium", angle)
+    p0 = 300.0
+    ref = preload_state(geom, p0)
+    st = preload_state(geom, p0, constant="filipkovsky")
+    n, a = geom.n_balls, st.contact_angle
+    assert a == ref.contact_angle and st.axial_approach == ref.axial_approach
+    # the papers' formula, z0 = s0
+    assert st.contact_constant == pytest.approx(1.5 * p0 / n * st.axial_approach ** -1.5 * math.sin(a) ** -2.5,
+                                                rel=1e-12)
+    _, fz = summed_force(st.contact_constant, a, st.axial_approach, 0.0, n)
+    assert fz == pytest.approx(1.5 * p0, rel=1e-10)
+    assert st.radial_stiffness == pytest.approx(1.5 * ref.radial_stiffness, rel=1e-10)
+
+
+def test_preload_state_rejects_bad_input():
+    geom = preset("angular_contact_medium")
+    with pytest.raises(ValueError, match="preload"):
+        preload_state(geom, -1.0)
+    with pytest.raises(ValueError, match="consistent.*filipkovsky"):
+        preload_state(geom, 100.0, constant="harris")
+    with pytest.raises(ValueError, match="clearance"):
+        preload_state(geom, 100.0, clearance=-1e-6)
+    with pytest.raises(ValueError, match="free contact angle"):
+        preload_state(geom, 100.0, free_angle=math.pi / 2)
+    with pytest.raises(ValueError, match="preload > 0"):
+        preload_state(geom, 0.0, constant="filipkovsky")
+
+
+# ---------------------------------------------------------------- 6. presets
+
+def test_presets_listed():
+    assert {"209", "angular_contact_medium"} <= set(PRESETS)
+    g = preset("209")
+    assert (g.ball_diameter, g.pitch_diameter, g.n_balls, g.youngs_modulus) == (12.7e-3, 65.0e-3, 9, 2.08e11)
+    assert g.nominal_contact_angle == 0.0
+    ac = preset("angular_contact_medium")
+    assert ac.nominal_contact_angle == pytest.approx(math.radians(26))
+    assert ac.outer_race_radius == pytest.approx(27.5399e-3)
+    assert ac.pitch_diameter == pytest.approx(16.0e-3 + 27.5399e-3)
+
+
+def test_preset_rejects_unknown_name():
+    with pytest.raises(ValueError, match=r"'6205'.*209.*angular_contact_medium"):
+        preset("6205")
+
+
+@pytest.mark.parametrize("bad", [20, 26.5, -12, "26"])
+def test_preset_rejects_bad_nominal_angle(bad):
+    with pytest.raises(ValueError, match=r"\[12, 15, 26, 36, 40\]"):
+        preset("angular_contact_medium", bad)
+    with pytest.raises(ValueError, match="209"):
+        preset("209", 15)
+
+
+@pytest.mark.parametrize("angle", ANGLES)
+def test_angular_contact_radii_encode_the_angle(angle):
+    """Finding (see the comment at _ANGULAR_R2_MM): with the printed R_K and ball, eq. 10 at zero
+    load does not give the nominal angle, but all five R2 follow R2 = 27.85048 - 0.34555 cos(a) mm
+    to their 0.1 um rounding."""
+    geom = preset("angular_contact_medium", angle)
+    r2_mm = geom.outer_race_radius * 1e3
+    assert r2_mm == pytest.approx(27.85048 - 0.34555 * math.cos(math.radians(angle)), abs=5e-5)
+    cos_a0 = (16.0 + 2 * 5.93 - r2_mm) / (2 * 5.93 - 11.51)
+    assert groove_free_angle(geom) == pytest.approx(math.acos(cos_a0), rel=1e-9)
+    assert math.degrees(groove_free_angle(geom)) < angle - 1.5
+
+
+def test_geometry_validation():
+    with pytest.raises(ValueError, match="n_balls"):
+        BearingGeometry("x", 12.7e-3, 65e-3, 6.6e-3, 6.6e-3, 2, 2e11, 0.3)
+    with pytest.raises(ValueError, match="ball radius"):
+        BearingGeometry("x", 12.7e-3, 65e-3, 6.0e-3, 6.6e-3, 9, 2e11, 0.3)
