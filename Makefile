@@ -1,0 +1,31 @@
+# The README's two commands: `make demo` and `make test`. Each installs what it needs into .venv.
+PYTHON ?= python3
+VENV   ?= .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed
+
+.PHONY: demo test test-slow bench fig13 clean
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e ".[test]"
+	touch $(STAMP)
+
+demo: $(STAMP)  ## demo sweep on a local Dask cluster -> out/demo.nc and out/demo_report/
+	$(BIN)/rotorsweep run configs/demo.toml -o out/demo.nc --overwrite --report out/demo_report
+
+test: $(STAMP)  ## default test suite (< 15 min on 2 cores)
+	$(BIN)/python -m pytest -q -m "not slow"
+
+test-slow: $(STAMP)  ## long tests (full sweeps, cascades)
+	$(BIN)/python -m pytest -q -m slow
+
+fig13: $(STAMP)  ## the Bai 2006 Fig. 13 sweep (2401 speeds x 5 clearances)
+	$(BIN)/rotorsweep run configs/bai2006_fig13.toml -o out/bai2006_fig13.nc --overwrite --report out/bai2006_fig13_report
+
+bench: $(STAMP)  ## work-precision and baseline benchmarks -> docs/benchmarks/
+	$(BIN)/python -m workflows.bench_kernels
+
+clean:
+	rm -rf out .pytest_cache
