@@ -279,3 +279,24 @@ def test_boundary_is_located_far_below_the_grid_step():
         _, mono, _ = pt.periodic_orbit(models.to_physical(state, period), iterations=2)
         mu.append(np.abs(np.linalg.eigvals(mono)).max())
     assert mu[0] < 1.0 < mu[1], mu
+
+
+@pytest.mark.parametrize("preload", [50.0, 300.0, 1500.0])
+def test_preloaded_law_linearizes_to_the_bearing_radial_stiffness(preload):
+    """Two independent routes to the radial stiffness of a preloaded bearing: the closed form of
+    rotorkernels.bearing ((3/4) N K delta_n^{1/2} cos^2 a) and the kernel's analytic Jacobian of
+    the ball-by-ball force law at the centred journal."""
+    from rotorkernels import bearing
+
+    geom = bearing.preset("angular_contact_medium", 26)
+    state = bearing.preload_state(geom, preload)
+    mass = 3.0
+    p, period = models.jeffcott_params(
+        speed=100.0, stiffness=state.contact_constant, clearance=0.0, contact_angle=state.contact_angle,
+        axial_approach=state.axial_approach, mass=mass, damping=0.0, radial_load=0.0,
+        n_balls=geom.n_balls, ball_diameter=geom.ball_diameter, pitch_diameter=geom.pitch_diameter)
+    jac = np.empty((4, 4))
+    JEFF.jac(0.3, np.zeros(4), p, jac)
+    np.testing.assert_allclose(-jac[2, 0] * mass / period ** 2, state.radial_stiffness, rtol=1e-12)
+    np.testing.assert_allclose(-jac[3, 1] * mass / period ** 2, state.radial_stiffness, rtol=1e-12)
+    np.testing.assert_allclose(scaled_rhs(p, 0.3, np.zeros(4)), 0.0, atol=1e-9)
