@@ -29,17 +29,22 @@ def _settle(model, u0, p, opts, n_periods):
     return z, status == 0, n_rhs
 
 
+# Newton from a neighbour's orbit converges in a few iterations or not at all: give such starts
+# this many iterations before falling back, so a wandering Newton costs little.
+QUICK_ITERATIONS = 6
+
+
 def _guesses(model, p, opts, history, transient_periods, cold_guess):
-    """Yield (guess, n_rhs spent making it) from cheapest to most robust."""
+    """Yield (guess, n_rhs spent making it, quick) from cheapest to most robust."""
     if len(history) >= 2:
-        yield 2.0 * history[-1] - history[-2], 0
+        yield 2.0 * history[-1] - history[-2], 0, True
     if history:
-        yield history[-1], 0
+        yield history[-1], 0, True
         z, ok, n_rhs = _settle(model, history[-1], p, opts, transient_periods)
         if ok:
-            yield z, n_rhs
+            yield z, n_rhs, False
     z, ok, n_rhs = _settle(model, cold_guess(p), p, opts, transient_periods)
-    yield (z if ok else cold_guess(p)), n_rhs
+    yield (z if ok else cold_guess(p)), n_rhs, False
 
 
 def solve_orbit(model, p, opts, history=(), *, cold_guess, periods=1, tol=1e-9, max_iter=30,
@@ -49,9 +54,9 @@ def solve_orbit(model, p, opts, history=(), *, cold_guess, periods=1, tol=1e-9, 
     history: converged states of the previous points of the chain (most recent last)."""
     n_rhs = 0
     best = None
-    for guess, cost in _guesses(model, p, opts, list(history), transient_periods, cold_guess):
+    for guess, cost, quick in _guesses(model, p, opts, list(history), transient_periods, cold_guess):
         n_rhs += cost
-        out = _shoot(model, guess, p, opts, periods, tol, max_iter)
+        out = _shoot(model, guess, p, opts, periods, tol, min(max_iter, QUICK_ITERATIONS) if quick else max_iter)
         n_rhs += out[6]
         if best is None or out[2] == shooting.CONVERGED:
             best = out

@@ -15,7 +15,7 @@ CONVERGED, NOT_CONVERGED, DIVERGED = 0, 1, 2
 
 Orbit = namedtuple("Orbit", "state monodromy status reason iterations residual n_rhs")
 
-_MAX_HALVINGS = 12
+_MAX_HALVINGS = 8
 
 
 @njit(cache=True, nogil=True)
