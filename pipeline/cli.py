@@ -1,0 +1,193 @@
+"""`rotorsweep` command line: run, point, query, report, info.
+
+User mistakes (bad config, bad cube, bad query) print one clear message and exit with code 2;
+no traceback."""
+import argparse
+import json
+import sys
+
+import numpy as np
+
+from pipeline import config as config_mod
+from pipeline import cube, query, schema
+
+EXIT_USAGE = 2
+
+
+def _load(path, allow_large=False):
+    if path is None:
+        return config_mod.parse_config(config_mod.DEFAULT_CONFIG_TOML, path="<default scene>",
+                                       allow_large=allow_large)
+    return config_mod.load_config(path, allow_large=allow_large)
+
+
+def cmd_run(args):
+    from pipeline import report, sweep
+
+    cfg = _load(args.config, allow_large=args.yes)
+    output = args.output or f"out/{cfg.data['scene']['name']}.nc"
+    path = sweep.run(cfg, output, workers=args.workers, scheduler=args.scheduler, resume=args.resume,
+                     overwrite=args.overwrite, chunk_points=args.chunk_points,
+                     progress=not args.quiet)
+    print(f"cube: {path}")
+    if args.report:
+        files = report.make_report(cube.open_cube(path), args.report)
+        print(f"report: {files['html']}")
+    return 0
+
+
+def _point_result(args):
+    from pipeline import compute
+
+    cfg = _load(args.config)
+    fixed = compute.fixed_values(cfg.data)
+    pt = {"speed": args.speed, "clearance": args.clearance,
+          "contact_angle": args.contact_angle if args.contact_angle is not None else fixed["contact_angle"],
+          "preload": args.preload if args.preload is not None else fixed["preload"]}
+    config_mod.check_point(pt)
+    row = compute.solve_segment(cfg.data, [pt])
+    return {k: v[0] for k, v in row.items()}
+
+
+def cmd_point(args):
+    row = _point_result(args)
+    status = schema.ORBIT_STATUS[row["orbit_status"]]
+    lam = [[float(re), float(im)] for re, im in zip(row["multiplier_real"], row["multiplier_imag"])]
+    bif = schema.BIFURCATION[row["bifurcation"]] if row["bifurcation"] >= 0 else "none"
+    result = {
+        "status": status,
+        "reason": schema.ORBIT_REASON[row["orbit_reason"]],
+        "newton_iterations": int(row["newton_iterations"]),
+        "residual": _num(row["residual"]),
+        "multipliers": [[_num(a), _num(b)] for a, b in lam],
+        "max_abs_multiplier": _num(row["max_abs_multiplier"]),
+        "stable": bool(row["stable"] == 1),
+        "bifurcation": bif,
+        "period": float(row["forcing_period"]),
+        "contact_angle": float(row["contact_angle_used"]),
+    }
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        print(_point_text(result))
+    return 0
+
+
+def _num(x):
+    x = float(x)
+    return x if np.isfinite(x) else None
+
+
+def _point_text(r):
+    lines = [
+        f"status            {r['status']} ({r['reason']})",
+        f"newton iterations {r['newton_iterations']}",
+        f"residual          {r['residual']:.3e}" if r["residual"] is not None else "residual          -",
+        f"forcing period    {r['period']:.6e} s",
+        f"contact angle     {r['contact_angle']:.4f} deg",
+        "multipliers       (real, imag, modulus)",
+    ]
+    for re, im in r["multipliers"]:
+        if re is None:
+            lines.append("  -")
+        else:
+            lines.append(f"  {re:+.10f} {im:+.10f}  |{np.hypot(re, im):.10f}|")
+    mu = r["max_abs_multiplier"]
+    lines.append(f"max |multiplier|  {mu:.10f}" if mu is not None else "max |multiplier|  -")
+    verdict = "stable" if r["stable"] else f"unstable ({r['bifurcation']})"
+    lines.append(f"periodic orbit    {verdict if r['status'] == 'converged' else 'not found'}")
+    return "\n".join(lines)
+
+
+def cmd_query(args):
+    ds = cube.open_cube(args.cube)
+    ds = query.select(ds, query.parse_where(args.where or []))
+    if args.unstable:
+        print(query.intervals_table(query.unstable_intervals(ds), fmt=args.format))
+    else:
+        print(query.to_table(ds, args.var or None, fmt=args.format))
+    return 0
+
+
+def cmd_report(args):
+    from pipeline import report
+
+    ds = cube.open_cube(args.cube)
+    out = args.output or str(args.cube).rsplit(".", 1)[0] + "_report"
+    files = report.make_report(ds, out)
+    print(f"report: {files['html']}")
+    for png in files["png"]:
+        print(f"figure: {png}")
+    return 0
+
+
+def cmd_info(args):
+    print(cube.describe(cube.open_cube(args.cube)))
+    return 0
+
+
+def build_parser():
+    ap = argparse.ArgumentParser(prog="rotorsweep", description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+
+    r = sub.add_parser("run", help="run a sweep from a config into a netCDF cube")
+    r.add_argument("config", nargs="?", help="scene TOML (default: the embedded demo scene)")
+    r.add_argument("-o", "--output", help="cube path (default out/<scene name>.nc)")
+    r.add_argument("--workers", type=int, help="local Dask worker processes (default: one per core, at least 2)")
+    r.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
+    r.add_argument("--chunk-points", type=int, help="points per Dask task (default: automatic)")
+    r.add_argument("--resume", action="store_true", help="finish an interrupted run from its part files")
+    r.add_argument("--overwrite", action="store_true", help="replace an existing cube")
+    r.add_argument("--yes", action="store_true", help="allow grids above numerics.max_points")
+    r.add_argument("--report", metavar="DIR", help="also write the report into DIR")
+    r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    r.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("point", help="periodic orbit and Floquet multipliers at one point")
+    p.add_argument("--config", help="scene TOML (default: Bai 2006, 209 bearing, the paper's constant)")
+    p.add_argument("--speed", type=float, required=True, help="shaft speed [Hz]")
+    p.add_argument("--clearance", type=float, required=True, help="radial clearance [m]")
+    p.add_argument("--contact-angle", type=float, help="contact angle [deg] (default: from clearance)")
+    p.add_argument("--preload", type=float, help="axial preload [N] (default: the scene's, 0)")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_point)
+
+    q = sub.add_parser("query", help="select points of a cube and print them")
+    q.add_argument("cube")
+    q.add_argument("--where", action="append", metavar="AXIS=SEL",
+                   help="speed=80:120 (range), clearance=3.8e-6 (value), preload=0,100 (list); repeatable")
+    q.add_argument("--var", action="append", metavar="NAME", help="variable to print; repeatable")
+    q.add_argument("--unstable", action="store_true", help="print the unstable speed intervals")
+    q.add_argument("--format", choices=["table", "csv", "json"], default="table")
+    q.set_defaults(func=cmd_query)
+
+    rp = sub.add_parser("report", help="HTML + PNG stability-map report of a cube")
+    rp.add_argument("cube")
+    rp.add_argument("-o", "--output", help="report directory (default <cube>_report)")
+    rp.set_defaults(func=cmd_report)
+
+    i = sub.add_parser("info", help="what a cube holds")
+    i.add_argument("cube")
+    i.set_defaults(func=cmd_info)
+    return ap
+
+
+def main(argv=None):
+    from pipeline.sweep import SweepError
+    from rotorkernels.boundary import BoundaryError
+
+    args = build_parser().parse_args(argv)
+    user_errors = (config_mod.ConfigError, cube.CubeError, query.QueryError, SweepError,
+                   BoundaryError, ValueError, FileNotFoundError)
+    try:
+        return args.func(args)
+    except user_errors as exc:
+        print(f"rotorsweep {args.command}: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("rotorsweep: interrupted; finished chunks are kept, rerun with --resume", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,227 @@
+"""Distributed sweeps: grid -> continuation segments -> chunks on Dask workers -> part files ->
+one result cube.
+
+Segments (fixed by the config) carry the numerics; chunks (groups of whole segments, sized for
+scheduling) carry only the work distribution, so the cube is the same for any worker count or
+chunk size. Every finished chunk is written at once as a part file next to the output; a
+re-run with `resume` computes only the segments no part holds, and the parts are assembled
+into the cube (atomically written) at the end.
+"""
+import itertools
+import json
+import os
+import sys
+import time
+from dataclasses import dataclass
+from datetime import datetime, timezone
+
+import numpy as np
+
+from pipeline import compute, cube, schema
+
+VERSION = "0.1.0"
+
+
+class SweepError(Exception):
+    """A sweep that cannot start or finish (message for the user)."""
+
+
+@dataclass(frozen=True)
+class Segment:
+    id: int
+    index: np.ndarray      # (n, n_axes) grid indices of its points, speed varying fastest
+    points: tuple          # dicts with speed, clearance, contact_angle, preload
+
+
+def segments(cfg):
+    """The continuation segments of a config's grid, in a fixed order."""
+    axes = cfg.axes
+    names = list(axes)
+    fixed = compute.fixed_values(cfg.data)
+    length = cfg.data["numerics"]["segment_length"]
+    others = [n for n in names if n != "speed"]
+    out = []
+    for combo in itertools.product(*(range(len(axes[n])) for n in others)):
+        where = dict(zip(others, combo))
+        values = {**fixed, **{n: float(axes[n][i]) for n, i in where.items()}}
+        for s0 in range(0, len(axes["speed"]), length):
+            speeds = range(s0, min(s0 + length, len(axes["speed"])))
+            index = np.array([[k if n == "speed" else where[n] for n in names] for k in speeds])
+            points = tuple({**values, "speed": float(axes["speed"][k])} for k in speeds)
+            out.append(Segment(len(out), index, points))
+    return out
+
+
+def plan_chunks(segs, n_workers, chunk_points=None):
+    """Group segments into chunks of about chunk_points points (default: enough chunks for
+    load balance, about 8 per worker, each big enough that Dask's ~1 ms per task is noise)."""
+    total = sum(len(s.points) for s in segs)
+    if chunk_points is None:
+        chunk_points = max(64, total // max(1, 8 * n_workers))
+    chunks, current, size = [], [], 0
+    for seg in segs:
+        current.append(seg)
+        size += len(seg.points)
+        if size >= chunk_points:
+            chunks.append(current)
+            current, size = [], 0
+    if current:
+        chunks.append(current)
+    return chunks
+
+
+def compute_chunk(data, chunk):
+    """Worker task: solve every segment of a chunk. A plain function of an importable module so
+    Dask ships it by reference and workers reuse Numba's on-disk cache."""
+    index = np.concatenate([seg.index for seg in chunk])
+    parts = [compute.solve_segment(data, list(seg.points)) for seg in chunk]
+    results = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+    return [seg.id for seg in chunk], index, results
+
+
+def _warm_up(data, segment):
+    """Compile the kernels once in the driver so workers load them from Numba's disk cache
+    instead of each compiling them again."""
+    compute.solve_segment(data, list(segment.points[:1]))
+
+
+class Progress:
+    """Points done, rate and ETA on stderr (one updating line on a terminal, else a line per
+    ~5% of the work)."""
+
+    def __init__(self, total, done=0, stream=sys.stderr):
+        self.total, self.done, self.stream = total, done, stream
+        self.start_done, self.t0 = done, time.monotonic()
+        self.tty = stream.isatty()
+        self.last_reported = -1
+
+    def update(self, n):
+        self.done += n
+        elapsed = time.monotonic() - self.t0
+        rate = (self.done - self.start_done) / elapsed if elapsed > 0 else 0.0
+        eta = (self.total - self.done) / rate if rate > 0 else float("nan")
+        frac = self.done / self.total if self.total else 1.0
+        bar = "#" * int(30 * frac) + "." * (30 - int(30 * frac))
+        line = (f"[{bar}] {self.done}/{self.total} points  {rate:7.1f} pts/s  "
+                f"ETA {_fmt_seconds(eta)}")
+        step = int(frac * 20)
+        if self.tty:
+            self.stream.write("\r" + line + ("\n" if self.done >= self.total else ""))
+        elif step != self.last_reported or self.done >= self.total:
+            self.stream.write(line + "\n")
+        self.last_reported = step
+        self.stream.flush()
+
+
+def _fmt_seconds(s):
+    if not np.isfinite(s):
+        return "--"
+    s = int(round(s))
+    return f"{s // 3600}h{s // 60 % 60:02d}m" if s >= 3600 else f"{s // 60}m{s % 60:02d}s"
+
+
+def _done_segments(parts_dir, config_hash):
+    """Segment ids already held by part files of the same config; refuse parts of another."""
+    done = set()
+    for _, _, _, meta in cube.read_parts(parts_dir):
+        if meta.get("config_hash") != config_hash:
+            raise SweepError(
+                f"{parts_dir} holds partial results of a different config (hash "
+                f"{meta.get('config_hash', '?')[:12]}, this config {config_hash[:12]}); "
+                "use another output path or pass --overwrite to discard them")
+        done.update(meta["segments"])
+    return done
+
+
+def _prepare_output(output, cfg, resume, overwrite):
+    output = os.path.abspath(output)
+    parts = cube.parts_dir(output)
+    if os.path.exists(output) and not overwrite:
+        raise SweepError(f"{output} exists; pass --overwrite to replace it")
+    if os.path.isdir(parts) and os.listdir(parts):
+        if overwrite and not resume:
+            for name in os.listdir(parts):
+                os.remove(os.path.join(parts, name))
+        elif not resume:
+            raise SweepError(f"{parts} holds partial results of an interrupted run; pass --resume to "
+                             "finish it or --overwrite to start again")
+    os.makedirs(parts, exist_ok=True)
+    return output, parts
+
+
+def _client(workers, scheduler):
+    from dask.distributed import Client, LocalCluster
+
+    if scheduler:
+        return Client(scheduler), None
+    os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+    n = workers or max(2, os.cpu_count() or 2)
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                           dashboard_address="127.0.0.1:0", env={"NUMBA_NUM_THREADS": "1"})
+    return Client(cluster), cluster
+
+
+def _provenance(cfg):
+    return {
+        "config_toml": cfg.source,
+        "config_hash": cfg.hash(),
+        "scene": cfg.data["scene"]["name"],
+        "model": cfg.data["scene"]["model"],
+        "numerics": json.dumps(cfg.data["numerics"], sort_keys=True),
+        "rotorsweep_version": VERSION,
+        "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "title": f"rotorsweep result cube: {cfg.data['scene']['name']}",
+    }
+
+
+def _fixed_coords(cfg):
+    fixed = compute.fixed_values(cfg.data)
+    return {k: (np.nan if v is None else float(v)) for k, v in fixed.items() if k not in cfg.axes}
+
+
+def run(cfg, output, workers=None, scheduler=None, resume=False, overwrite=False, chunk_points=None,
+        progress=True, stream=sys.stderr):
+    """Run a sweep from a validated config into a netCDF cube at `output`; returns its path."""
+    output, parts = _prepare_output(output, cfg, resume, overwrite)
+    config_hash = cfg.hash()
+    segs = segments(cfg)
+    done = _done_segments(parts, config_hash)
+    todo = [s for s in segs if s.id not in done]
+    total = sum(len(s.points) for s in segs)
+    bar = Progress(total, total - sum(len(s.points) for s in todo), stream) if progress else None
+    if todo:
+        _warm_up(cfg.data, todo[0])
+        _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points, bar)
+    ds = cube.assemble(cfg.axes, _fixed_coords(cfg), cube.read_parts(parts), _provenance(cfg),
+                       n_multipliers=compute.MODELS[cfg.data["scene"]["model"]].n_state)
+    path = cube.write_cube(ds, output, overwrite=True)
+    _remove_parts(parts)
+    return path
+
+
+def _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points, bar):
+    from dask.distributed import as_completed
+
+    client, cluster = _client(workers, scheduler)
+    try:
+        n_workers = max(1, len(client.scheduler_info()["workers"]))
+        chunks = plan_chunks(todo, n_workers, chunk_points)
+        data = client.scatter(cfg.data, broadcast=True)
+        futures = [client.submit(compute_chunk, data, chunk, pure=False) for chunk in chunks]
+        for future in as_completed(futures):
+            seg_ids, index, results = future.result()
+            cube.write_part(parts, f"seg{seg_ids[0]:06d}", index, results,
+                            {"config_hash": config_hash, "segments": seg_ids})
+            if bar:
+                bar.update(len(index))
+            future.release()
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _remove_parts(parts):
+    for name in os.listdir(parts):
+        os.remove(os.path.join(parts, name))
+    os.rmdir(parts)

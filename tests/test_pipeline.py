@@ -1,0 +1,123 @@
+"""End to end: the CLI as a user runs it (subprocesses), and sweep invariances."""
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline import config, cube, sweep
+
+SMALL = """
+[scene]
+name = "small"
+model = "jeffcott_clearance"
+
+[bearing]
+preset = "209"
+stiffness = "bai2006"
+
+[sweep]
+speed = {start = 70.0, stop = 100.0, step = 3.0}
+clearance = [7.6e-6, 19.0e-6]
+
+[numerics]
+segment_length = 4
+"""
+
+CLI = [str(Path(sys.executable).with_name("rotorsweep"))]
+
+
+def rotorsweep(*args, check=True):
+    proc = subprocess.run(CLI + [str(a) for a in args], capture_output=True, text=True, timeout=600)
+    if check and proc.returncode != 0:
+        raise AssertionError(f"rotorsweep {args} failed ({proc.returncode}):\n{proc.stdout}\n{proc.stderr}")
+    return proc
+
+
+@pytest.fixture(scope="module")
+def small_config(tmp_path_factory):
+    path = tmp_path_factory.mktemp("cfg") / "small.toml"
+    path.write_text(SMALL)
+    return path
+
+
+@pytest.fixture(scope="module")
+def small_cube(small_config, tmp_path_factory):
+    out = tmp_path_factory.mktemp("run") / "small.nc"
+    proc = rotorsweep("run", small_config, "-o", out, "--workers", "2")
+    assert "points" in proc.stderr          # the progress bar
+    return out
+
+
+def data_vars(path):
+    ds = cube.open_cube(path)
+    return ds.drop_vars("compute_time")     # the only variable that measures the machine
+
+
+def test_run_writes_a_cube_with_the_grid_and_provenance(small_cube):
+    ds = cube.open_cube(small_cube)
+    assert dict(ds.sizes)["speed"] == 11 and dict(ds.sizes)["clearance"] == 2
+    assert ds.attrs["config_hash"] == config.parse_config(SMALL).hash()
+    assert "[scene]" in ds.attrs["config_toml"]
+    assert (ds["orbit_status"].values == 0).all()
+    assert not os.path.exists(cube.parts_dir(small_cube))        # parts cleaned up after assembly
+
+
+def test_cube_values_match_the_point_command(small_cube):
+    ds = cube.open_cube(small_cube)
+    proc = rotorsweep("point", "--speed", 85.0, "--clearance", 19.0e-6, "--json")
+    point = json.loads(proc.stdout)
+    assert set(point) >= {"status", "multipliers", "max_abs_multiplier", "bifurcation", "period"}
+    at = ds.sel(speed=85.0, clearance=19.0e-6)
+    assert point["status"] == "converged"
+    # the sweep continues the orbit from neighbours, the point solves cold: same orbit, to Newton tol
+    assert abs(point["max_abs_multiplier"] - float(at["max_abs_multiplier"])) < 1e-7
+    assert abs(point["period"] - float(at["forcing_period"])) < 1e-15
+
+
+def test_results_do_not_depend_on_workers_or_chunking(small_config, small_cube, tmp_path):
+    cfg = config.load_config(small_config)
+    one = sweep.run(cfg, tmp_path / "one.nc", workers=1, chunk_points=1, progress=False)
+    reference = data_vars(small_cube)
+    other = data_vars(one)
+    for name in reference.data_vars:
+        np.testing.assert_array_equal(reference[name].values, other[name].values, err_msg=name)
+
+
+def test_query_and_info_and_report(small_cube, tmp_path):
+    table = rotorsweep("query", small_cube, "--where", "speed=80:90", "--where", "clearance=7.6e-6").stdout
+    assert "82" in table and "70" not in table.split("\n", 1)[1]
+    as_json = json.loads(rotorsweep("query", small_cube, "--format", "json").stdout)
+    assert len(as_json) == 22
+    intervals = rotorsweep("query", small_cube, "--unstable", "--format", "json").stdout
+    assert isinstance(json.loads(intervals), list)
+    info = rotorsweep("info", small_cube).stdout
+    assert "speed" in info and "clearance" in info
+    rotorsweep("report", small_cube, "-o", tmp_path / "rep")
+    assert (tmp_path / "rep" / "report.html").exists()
+    assert (tmp_path / "rep" / "stability_map.png").exists()
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (["point", "--speed", "-5", "--clearance", "7.6e-6"], "speed"),
+    (["point", "--speed", "80", "--clearance", "-1e-6"], "clearance"),
+    (["point", "--speed", "80", "--clearance", "7.6e-6", "--contact-angle", "95"], "contact_angle"),
+    (["point", "--speed", "80", "--clearance", "7.6e-6", "--preload", "-3"], "preload"),
+    (["query", "does-not-exist.nc"], "does-not-exist.nc"),
+    (["info", __file__], "test_pipeline.py"),
+])
+def test_user_errors_exit_2_without_traceback(args, fragment):
+    proc = rotorsweep(*args, check=False)
+    assert proc.returncode == 2, proc.stderr
+    assert fragment in proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
+def test_bad_config_exits_2(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(SMALL.replace('preset = "209"', 'preset = "208"'))
+    proc = rotorsweep("run", bad, "-o", tmp_path / "x.nc", check=False)
+    assert proc.returncode == 2 and "bearing.preset" in proc.stderr and "Traceback" not in proc.stderr
