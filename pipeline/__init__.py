@@ -1,0 +1,69 @@
+"""rotorsweep pipeline: configs, Dask sweeps, result cubes, queries and reports.
+
+The Python API mirrors the command line:
+
+    import pipeline
+    path = pipeline.run("configs/demo.toml", "out/demo.nc")        # rotorsweep run
+    ds = pipeline.open_cube(path)                                  # an xarray.Dataset
+    pipeline.unstable_intervals(ds)                                # rotorsweep query --unstable
+    pipeline.report(ds, "out/demo_report")                         # rotorsweep report
+    pipeline.point(speed=100.0, clearance=7.6e-6)                  # rotorsweep point
+"""
+
+
+def _config(cfg, allow_large=False):
+    from pipeline import config as config_mod
+
+    if isinstance(cfg, config_mod.Config):
+        return cfg
+    if cfg is None:
+        return config_mod.parse_config(config_mod.DEFAULT_CONFIG_TOML, path="<default scene>",
+                                       allow_large=allow_large)
+    return config_mod.load_config(cfg, allow_large=allow_large)
+
+
+def _dataset(cube_or_path):
+    return open_cube(cube_or_path) if isinstance(cube_or_path, (str, bytes)) or hasattr(cube_or_path, "__fspath__") else cube_or_path
+
+
+def run(config=None, output=None, *, allow_large=False, **kwargs):
+    """Run a sweep (config: path, Config or None for the demo scene); returns the cube path.
+    kwargs: workers, scheduler, resume, overwrite, chunk_points, progress."""
+    from pipeline import sweep
+
+    cfg = _config(config, allow_large)
+    return sweep.run(cfg, output or f"out/{cfg.data['scene']['name']}.nc", **kwargs)
+
+
+def open_cube(path):
+    from pipeline import cube
+
+    return cube.open_cube(path)
+
+
+def unstable_intervals(cube_or_path):
+    from pipeline import query
+
+    return query.unstable_intervals(_dataset(cube_or_path))
+
+
+def report(cube_or_path, out_dir):
+    from pipeline import report as report_mod
+
+    return report_mod.make_report(_dataset(cube_or_path), out_dir)
+
+
+def point(speed, clearance, contact_angle=None, preload=None, config=None):
+    """Periodic orbit and Floquet multipliers at one point, as the cube variables of that point
+    (a dict of numpy values). contact_angle in degrees; None: the scene's (or from clearance)."""
+    from pipeline import compute
+    from pipeline import config as config_mod
+
+    cfg = _config(config)
+    fixed = compute.fixed_values(cfg.data)
+    pt = {"speed": speed, "clearance": clearance,
+          "contact_angle": fixed["contact_angle"] if contact_angle is None else contact_angle,
+          "preload": fixed["preload"] if preload is None else preload}
+    config_mod.check_point(pt)
+    row = compute.solve_segment(cfg.data, [pt])
+    return {k: v[0] for k, v in row.items()}

@@ -8,49 +8,26 @@ import sys
 
 import numpy as np
 
+import pipeline
 from pipeline import config as config_mod
 from pipeline import cube, query, schema
 
 EXIT_USAGE = 2
 
 
-def _load(path, allow_large=False):
-    if path is None:
-        return config_mod.parse_config(config_mod.DEFAULT_CONFIG_TOML, path="<default scene>",
-                                       allow_large=allow_large)
-    return config_mod.load_config(path, allow_large=allow_large)
-
-
 def cmd_run(args):
-    from pipeline import report, sweep
-
-    cfg = _load(args.config, allow_large=args.yes)
-    output = args.output or f"out/{cfg.data['scene']['name']}.nc"
-    path = sweep.run(cfg, output, workers=args.workers, scheduler=args.scheduler, resume=args.resume,
-                     overwrite=args.overwrite, chunk_points=args.chunk_points,
-                     progress=not args.quiet)
+    path = pipeline.run(args.config, args.output, allow_large=args.yes, workers=args.workers,
+                        scheduler=args.scheduler, resume=args.resume, overwrite=args.overwrite,
+                        chunk_points=args.chunk_points, progress=not args.quiet)
     print(f"cube: {path}")
     if args.report:
-        files = report.make_report(cube.open_cube(path), args.report)
+        files = pipeline.report(path, args.report)
         print(f"report: {files['html']}")
     return 0
 
 
-def _point_result(args):
-    from pipeline import compute
-
-    cfg = _load(args.config)
-    fixed = compute.fixed_values(cfg.data)
-    pt = {"speed": args.speed, "clearance": args.clearance,
-          "contact_angle": args.contact_angle if args.contact_angle is not None else fixed["contact_angle"],
-          "preload": args.preload if args.preload is not None else fixed["preload"]}
-    config_mod.check_point(pt)
-    row = compute.solve_segment(cfg.data, [pt])
-    return {k: v[0] for k, v in row.items()}
-
-
 def cmd_point(args):
-    row = _point_result(args)
+    row = pipeline.point(args.speed, args.clearance, args.contact_angle, args.preload, args.config)
     status = schema.ORBIT_STATUS[row["orbit_status"]]
     lam = [[float(re), float(im)] for re, im in zip(row["multiplier_real"], row["multiplier_imag"])]
     bif = schema.BIFURCATION[row["bifurcation"]] if row["bifurcation"] >= 0 else "none"
@@ -110,11 +87,8 @@ def cmd_query(args):
 
 
 def cmd_report(args):
-    from pipeline import report
-
-    ds = cube.open_cube(args.cube)
     out = args.output or str(args.cube).rsplit(".", 1)[0] + "_report"
-    files = report.make_report(ds, out)
+    files = pipeline.report(args.cube, out)
     print(f"report: {files['html']}")
     for png in files["png"]:
         print(f"figure: {png}")
