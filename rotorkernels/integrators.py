@@ -89,6 +89,9 @@ def dop853(rhs, jac, t0, t1, z0, p, n, n_position, variational, rtol, atol, h0, 
     """Integrate z from t0 to t1 > t0 with adaptive Dormand-Prince 8(5,3)."""
     m = z0.size
     z = z0.copy()
+    status = state_status(z, n, n_position, amplitude_limit)
+    if status != STATUS_OK:
+        return z, status, 0, h0
     znew = np.empty(m)
     stage = np.empty(m)
     K = np.empty((_N_STAGES + 1, m))
@@ -123,7 +126,8 @@ def dop853(rhs, jac, t0, t1, z0, p, n, n_position, variational, rtol, atol, h0, 
             err = _error_norm(K, step, z, znew, rtol, atol)
             if err < 1.0:
                 break
-            step *= max(_MIN_FACTOR, _SAFETY * err ** _ERR_EXPONENT)
+            # a NaN error (overflow inside a too-large step) shrinks the step like a huge error
+            step *= max(_MIN_FACTOR, _SAFETY * err ** _ERR_EXPONENT) if np.isfinite(err) else _MIN_FACTOR
             last = False
             rejected = True
         t = t1 if last else t + step
@@ -151,6 +155,9 @@ def rk4(rhs, jac, t0, t1, z0, p, n, n_position, variational, n_steps, amplitude_
     stage = np.empty(m)
     jbuf = np.empty((n, n))
     h = (t1 - t0) / n_steps
+    status = state_status(z, n, n_position, amplitude_limit)
+    if status != STATUS_OK:
+        return z, status, 0, h
     for step in range(n_steps):
         t = t0 + step * h
         derivative(rhs, jac, t, z, p, n, variational, k1, jbuf)
