@@ -1,9 +1,158 @@
-"""Questions asked of a result cube: selections and the unstable speed intervals."""
+"""Questions asked of a result cube: selections, flat tables (table/csv/json) and the unstable
+speed intervals."""
 import itertools
+import json
+import math
 
 import numpy as np
+import pandas as pd
 
 from pipeline import schema
+
+RTOL = 1e-9                       # a typed value matches a grid value to this relative tolerance
+DEFAULT_VARIABLES = ("orbit_status", "max_abs_multiplier", "stable", "bifurcation")
+FORMATS = ("table", "csv", "json")
+
+
+class QueryError(Exception):
+    """A selection or output request the cube cannot answer (message for the user)."""
+
+
+# --- selections -----------------------------------------------------------------------------
+
+def parse_where(items):
+    """`AXIS=SEL` strings -> {axis: slice(lo, hi) (inclusive, None: open) or [values]}.
+    SEL: "80:120", "80:", ":120" (range), "3.8e-6" (a value) or "0,100" (a list)."""
+    where = {}
+    for item in items:
+        axis, sep, sel = (part.strip() for part in item.partition("="))
+        if not sep or not axis or not sel:
+            raise QueryError(f"bad selection {item!r}: expected AXIS=SEL, e.g. speed=80:120")
+        if axis in where:
+            raise QueryError(f"{axis} is selected twice")
+        where[axis] = _parse_selector(item, sel)
+    return where
+
+
+def _parse_selector(item, sel):
+    if ":" in sel:
+        bounds = sel.split(":")
+        if len(bounds) != 2:
+            raise QueryError(f"bad range in {item!r}: expected LO:HI")
+        return slice(*(_number(item, b) if b.strip() else None for b in bounds))
+    return [_number(item, v) for v in sel.split(",")]
+
+
+def _number(item, text):
+    try:
+        return float(text)
+    except ValueError:
+        raise QueryError(f"bad number {text.strip()!r} in {item!r}") from None
+
+
+def select(ds, where):
+    """The part of a cube that `where` (from parse_where) selects; swept axes stay dimensions."""
+    axes = [a for a in schema.AXES if a in ds.dims]
+    index = {}
+    for axis, sel in where.items():
+        if axis not in axes:
+            raise QueryError(f"{axis} is not a swept axis of this cube; its axes are {', '.join(axes)}")
+        grid = ds[axis].values
+        index[axis] = _range_index(axis, grid, sel) if isinstance(sel, slice) else _value_index(axis, grid, sel)
+    return ds.isel(index)
+
+
+def _range_index(axis, grid, sel):
+    keep = np.ones(grid.shape, bool)
+    if sel.start is not None:
+        keep &= grid >= sel.start - RTOL * abs(sel.start)
+    if sel.stop is not None:
+        keep &= grid <= sel.stop + RTOL * abs(sel.stop)
+    if not keep.any():
+        lo, hi = ("" if b is None else f"{b:g}" for b in (sel.start, sel.stop))
+        raise QueryError(f"{axis}={lo}:{hi} selects no grid value; the grid spans "
+                         f"{grid.min():g} .. {grid.max():g}")
+    return np.flatnonzero(keep)
+
+
+def _value_index(axis, grid, values):
+    out = []
+    for v in values:
+        hits = np.flatnonzero(np.isclose(grid, v, rtol=RTOL, atol=0.0))
+        if not hits.size:
+            raise QueryError(f"{axis}={v:g} is not on the grid; available: {_sample(grid)}")
+        out.append(hits[0])
+    return out
+
+
+def _sample(grid, n=8):
+    shown = ", ".join(f"{g:g}" for g in grid[:n])
+    return shown + (f", ... ({grid.size} values, up to {grid[-1]:g})" if grid.size > n else "")
+
+
+# --- tables ---------------------------------------------------------------------------------
+
+def to_table(ds, variables=None, fmt="table"):
+    """One row per grid point (speed varying fastest): axis columns, then the variables. Flags
+    are shown by meaning; a variable with an extra dimension gives one column per index."""
+    variables = list(variables or [v for v in DEFAULT_VARIABLES if v in ds])
+    unknown = [v for v in variables if v not in ds.data_vars]
+    if unknown:
+        raise QueryError(f"unknown variable {unknown[0]!r}; this cube has {', '.join(ds.data_vars)}")
+    axes = [a for a in schema.AXES if a in ds.dims]
+    order = [a for a in axes if a != "speed"] + [a for a in axes if a == "speed"]
+    grid = np.meshgrid(*(ds[a].values for a in order), indexing="ij")
+    columns = {a: grid[order.index(a)].ravel().tolist() for a in axes}
+    for name in variables:
+        columns.update(_columns(name, ds[name], order))
+    return _render(columns, fmt)
+
+
+def _columns(name, var, order):
+    """A variable's column, or one per index of its extra dims (multiplier_real_0, ...)."""
+    extra = [d for d in var.dims if d not in order]
+    n_points = int(np.prod([var.sizes[a] for a in order]))
+    values = var.transpose(*order, *extra).values.reshape(n_points, -1)
+    suffixes = ("_".join(map(str, k)) for k in np.ndindex(*(var.sizes[d] for d in extra)))
+    labels = [f"{name}_{s}" if s else name for s in suffixes]
+    shown = _flag_names(var)
+    return {label: [shown(x) for x in values[:, j].tolist()] for j, label in enumerate(labels)}
+
+
+def _flag_names(var):
+    """value -> shown value: a flag's meaning (None where unset), else the value itself."""
+    if "flag_meanings" not in var.attrs:
+        return lambda x: x
+    names = dict(zip(np.asarray(var.attrs["flag_values"]).tolist(), var.attrs["flag_meanings"].split()))
+    return names.get
+
+
+def intervals_table(intervals, fmt="table"):
+    """unstable_intervals(ds) in one of FORMATS."""
+    if not intervals:
+        return {"table": "no unstable intervals", "csv": "", "json": "[]"}[_check_format(fmt)]
+    return _render({k: [row[k] for row in intervals] for k in intervals[0]}, fmt)
+
+
+def _check_format(fmt):
+    if fmt not in FORMATS:
+        raise QueryError(f"unknown format {fmt!r}; use one of {', '.join(FORMATS)}")
+    return fmt
+
+
+def _render(columns, fmt):
+    fmt = _check_format(fmt)
+    if fmt == "json":
+        rows = [dict(zip(columns, values)) for values in zip(*columns.values())]
+        return json.dumps([{k: _json_value(v) for k, v in row.items()} for row in rows], indent=1)
+    frame = pd.DataFrame(columns)
+    if fmt == "csv":
+        return frame.to_csv(index=False, lineterminator="\n").rstrip("\n")
+    return frame.to_string(index=False, na_rep="-", float_format=lambda x: f"{x:.7g}")
+
+
+def _json_value(v):
+    return None if isinstance(v, float) and not math.isfinite(v) else v
 
 
 def _other_axes(ds):

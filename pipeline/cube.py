@@ -1,0 +1,300 @@
+"""Result cubes: build, write (atomically), open and describe the netCDF files of pipeline.schema,
+plus the part files a sweep writes per finished chunk and assembles at the end.
+
+The schema (axes, variables, dtypes, attrs, flags) lives in pipeline.schema; this module only
+applies it.
+"""
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from pipeline import schema
+
+CONVENTIONS = "CF-1.10"
+COMPRESSION = {"zlib": True, "complevel": 4}
+# A fixed parameter stored as NaN is not fixed at all; say where its per-point value comes from.
+DERIVED = {"contact_angle": "derived from clearance per point, see contact_angle_used"}
+_NETCDF_MAGIC = (b"CDF\x01", b"CDF\x02", b"CDF\x05", b"\x89HDF\r\n\x1a\n")
+
+
+class CubeError(Exception):
+    """A cube that cannot be built, written or read (message for the user)."""
+
+
+# --- building -------------------------------------------------------------------------------
+
+def build_dataset(axes, fixed, results, attrs, extra_attrs=None):
+    """A schema-conforming Dataset. axes: swept axis -> 1-D values (schema.AXES names, in that
+    order); fixed: other axis parameters -> value (NaN: not fixed); results: variable -> array of
+    shape point dims + extra dims; extra_attrs: attrs of variables not in the schema (point
+    dims only)."""
+    _check_axes(axes, fixed)
+    dims = tuple(axes)
+    shape = tuple(len(v) for v in axes.values())
+    coords = {name: (name, np.asarray(values, float), _axis_attrs(name)) for name, values in axes.items()}
+    coords.update({name: ((), float(value), _axis_attrs(name, value)) for name, value in fixed.items()})
+    ds = xr.Dataset(coords=coords)
+    for name, data in results.items():
+        data = np.asarray(data)
+        extra, dtype, var_attrs = _variable_spec(name, data, extra_attrs or {})
+        _check_shape(name, data, shape, extra)
+        ds[name] = (dims + extra, data.astype(dtype), var_attrs)
+        for dim, n in zip(extra, data.shape[len(dims):]):
+            ds.coords[dim] = (dim, np.arange(n), {"long_name": f"{dim} index", "units": "1"})
+    ds.attrs = {"Conventions": CONVENTIONS, "title": "rotorsweep result cube", **attrs,
+                "rotorsweep_schema_version": schema.SCHEMA_VERSION}
+    return ds
+
+
+def _check_axes(axes, fixed):
+    unknown = [a for a in list(axes) + list(fixed) if a not in schema.AXES]
+    if unknown:
+        raise CubeError(f"unknown axis {unknown[0]!r}; cube axes are {', '.join(schema.AXES)}")
+    order = [a for a in schema.AXES if a in axes]
+    if list(axes) != order:
+        raise CubeError(f"swept axes must come in schema order ({', '.join(order)}), got {', '.join(axes)}")
+    both = set(axes) & set(fixed)
+    if both:
+        raise CubeError(f"{sorted(both)[0]} is both swept and fixed")
+    for name, values in axes.items():
+        if np.ndim(values) != 1 or len(values) == 0:
+            raise CubeError(f"axis {name} must be a non-empty 1-D array")
+
+
+def _axis_attrs(name, value=0.0):
+    units, long_name = schema.AXES[name]
+    if np.isnan(value):
+        long_name = f"{long_name} ({DERIVED.get(name, 'not fixed')})"
+    return {"units": units, "long_name": long_name}
+
+
+def _variable_spec(name, data, extra_attrs):
+    """(extra dims, dtype, attrs) of a variable: from the schema, else from extra_attrs."""
+    if name in schema.VARIABLES:
+        extra, dtype, attrs = schema.VARIABLES[name]
+        attrs = dict(attrs)
+        if "flag_values" in attrs:  # CF: flag_values has the variable's type
+            attrs["flag_values"] = np.asarray(attrs["flag_values"], dtype)
+        return tuple(extra), np.dtype(dtype), attrs
+    if name in extra_attrs:
+        return (), data.dtype, dict(extra_attrs[name])
+    raise CubeError(f"variable {name!r} is not in the cube schema; pass its attrs in extra_attrs")
+
+
+def _check_shape(name, data, shape, extra):
+    if data.shape[:len(shape)] != shape or data.ndim != len(shape) + len(extra):
+        dims = " x ".join(map(str, shape)) + "".join(f" x n_{d}" for d in extra)
+        raise CubeError(f"variable {name}: shape {data.shape} does not fit the grid ({dims})")
+
+
+# --- writing and opening --------------------------------------------------------------------
+
+def write_cube(ds, path, overwrite=False):
+    """Write a cube atomically: a temp file in the same directory, fsync, then os.replace, so
+    `path` holds either the previous file or the complete new one."""
+    path = Path(path).absolute()
+    if path.exists() and not overwrite:
+        raise CubeError(f"{path} exists; pass --overwrite to replace it")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        ds.drop_encoding().to_netcdf(tmp, engine="netcdf4", encoding=_encoding(ds))
+        _fsync(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+    _fsync(path.parent)
+    return path
+
+
+def _encoding(ds):
+    """Compressed data variables, INT_FILL as integer fill value, no fill value on coordinates."""
+    enc = {name: {"_FillValue": None} for name in ds.coords}
+    for name, var in ds.data_vars.items():
+        enc[name] = dict(COMPRESSION)
+        if var.dtype.kind in "iu":
+            enc[name]["_FillValue"] = schema.INT_FILL
+    return enc
+
+
+def _fsync(path):
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def open_cube(path):
+    """Open a cube into memory (the file is closed on return); integers stay integers."""
+    path = Path(path)
+    _check_is_netcdf(path)
+    try:
+        with xr.open_dataset(path, engine="netcdf4", mask_and_scale=False) as ds:
+            ds = ds.load()
+    except (OSError, ValueError) as exc:
+        raise CubeError(f"{path}: cannot be read as netCDF ({exc})") from None
+    _check_version(path, ds)
+    for var in ds.variables.values():  # keep fill values where the writer put them
+        if "_FillValue" in var.attrs:
+            var.encoding["_FillValue"] = var.attrs.pop("_FillValue")
+    return ds
+
+
+def _check_is_netcdf(path):
+    if not path.exists():
+        raise CubeError(f"{path}: no such file (expected a rotorsweep result cube, .nc)")
+    if not path.is_file():
+        raise CubeError(f"{path} is not a file (expected a rotorsweep result cube, .nc)")
+    with open(path, "rb") as f:
+        head = f.read(8)
+    if not any(head.startswith(m) for m in _NETCDF_MAGIC):
+        raise CubeError(f"{path} is not a netCDF file (expected a rotorsweep result cube, netCDF4)")
+
+
+def _check_version(path, ds):
+    version = ds.attrs.get("rotorsweep_schema_version")
+    if version is None:
+        raise CubeError(f"{path} is a netCDF file but not a rotorsweep result cube "
+                        "(no rotorsweep_schema_version attribute)")
+    if int(version) != schema.SCHEMA_VERSION:
+        raise CubeError(f"{path} is a rotorsweep cube of schema version {int(version)}; this rotorsweep "
+                        f"reads version {schema.SCHEMA_VERSION} (re-run the sweep with this version)")
+
+
+# --- describing -----------------------------------------------------------------------------
+
+def describe(ds):
+    """What a cube holds, as text for `rotorsweep info`."""
+    lines = [f"{ds.attrs.get('title', 'rotorsweep result cube')} "
+             f"(schema version {ds.attrs.get('rotorsweep_schema_version', '?')})", "", "axes:"]
+    for name in (a for a in schema.AXES if a in ds.dims):
+        v = ds[name]
+        lines.append(f"  {name:<14} {v.size:>5} values  {v.values.min():g} .. {v.values.max():g} "
+                     f"{v.attrs.get('units', '')}  ({v.attrs.get('long_name', '')})")
+    fixed = [name for name in schema.AXES if name in ds.coords and ds[name].ndim == 0]
+    if fixed:
+        lines += ["", "fixed parameters:"]
+        lines += [_describe_fixed(name, ds[name]) for name in fixed]
+    lines += ["", "variables:"] + [_describe_variable(name, var) for name, var in ds.data_vars.items()]
+    if "orbit_status" in ds:
+        lines += ["", "points per orbit_status:"] + _flag_counts(ds["orbit_status"])
+    lines += ["", "provenance:"]
+    lines += [f"  {k}: {v}" for k, v in ds.attrs.items() if k not in ("title", "config_toml")]
+    if "config_toml" in ds.attrs:
+        lines += ["", "config:"] + ["  " + line for line in ds.attrs["config_toml"].rstrip().splitlines()]
+    return "\n".join(lines)
+
+
+def _describe_fixed(name, coord):
+    value = float(coord)
+    shown = "-" if np.isnan(value) else f"{value:g} {coord.attrs.get('units', '')}"
+    return f"  {name:<14} {shown:<12} {coord.attrs.get('long_name', '')}"
+
+
+def _describe_variable(name, var):
+    extra = "".join(f" (per {d}: {var.sizes[d]})" for d in var.dims if d not in schema.AXES)
+    text = f"  {name:<20} {var.attrs.get('long_name', '')}{extra}"
+    if "flag_meanings" in var.attrs:
+        return f"{text}  flags: {var.attrs['flag_meanings']}"
+    return f"{text}  [{var.attrs.get('units', '')}]"
+
+
+def _flag_counts(var):
+    values = np.asarray(var.values).ravel()
+    meanings = var.attrs["flag_meanings"].split()
+    flags = np.asarray(var.attrs["flag_values"]).tolist()
+    lines = [f"  {m:<16} {int((values == f).sum()):>8}" for f, m in zip(flags, meanings)]
+    unset = int((~np.isin(values, flags)).sum())
+    return lines + ([f"  {'(no value)':<16} {unset:>8}"] if unset else [])
+
+
+# --- part files -----------------------------------------------------------------------------
+
+def parts_dir(cube_path):
+    """Directory of a sweep's part files: `<cube file name>.parts` next to the cube."""
+    cube_path = Path(cube_path)
+    return cube_path.with_name(cube_path.name + ".parts")
+
+
+def write_part(parts_dir, chunk_id, index, results, meta):
+    """Save one finished chunk as `<chunk_id>.npz` (numeric arrays only, meta as a JSON string),
+    atomically so a killed sweep never leaves a truncated part."""
+    if not chunk_id or "/" in chunk_id or chunk_id.startswith("."):
+        raise CubeError(f"bad chunk id {chunk_id!r}")
+    parts_dir = Path(parts_dir)
+    parts_dir.mkdir(parents=True, exist_ok=True)
+    arrays = {"index": np.asarray(index, np.int64), "meta": np.array(json.dumps(meta))}
+    arrays.update({f"result_{name}": np.asarray(value) for name, value in results.items()})
+    path = parts_dir / f"{chunk_id}.npz"
+    fd, tmp = tempfile.mkstemp(dir=parts_dir, prefix=f".{chunk_id}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, **arrays)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+    return path
+
+
+def read_parts(parts_dir):
+    """All part files of a directory as (chunk_id, index, results, meta), in chunk-id order."""
+    parts_dir = Path(parts_dir)
+    if not parts_dir.is_dir():
+        return []
+    return [_read_part(path) for path in sorted(parts_dir.glob("[!.]*.npz"))]
+
+
+def _read_part(path):
+    try:
+        with np.load(path, allow_pickle=False) as f:
+            results = {k[len("result_"):]: f[k] for k in f.files if k.startswith("result_")}
+            return path.stem, f["index"], results, json.loads(str(f["meta"]))
+    except (OSError, ValueError, KeyError) as exc:
+        raise CubeError(f"{path}: unreadable part file ({exc}); delete it to recompute its points") from None
+
+
+def assemble(axes, fixed, parts, attrs, n_multipliers, allow_missing=False):
+    """The cube of a sweep from its parts: full-grid arrays (NaN / INT_FILL where no part has
+    the point). A point no part holds is an error unless allow_missing."""
+    shape = tuple(len(v) for v in axes.values())
+    have = np.zeros(shape, bool)
+    full = {}
+    for _, index, results, _ in parts:
+        at = tuple(np.asarray(index).T)
+        have[at] = True
+        for name, values in results.items():
+            if name not in full:
+                full[name] = _empty(name, shape, values, n_multipliers)
+            full[name][at] = values
+    missing = int((~have).sum())
+    if missing and not allow_missing:
+        raise CubeError(f"{missing} of {have.size} grid points have no result in the part files "
+                        f"(first: {_point(axes, np.argwhere(~have)[0])})")
+    return build_dataset(axes, fixed, full, attrs)
+
+
+def _empty(name, shape, values, n_multipliers):
+    """A full-grid array for a variable, filled with its 'no value' (NaN or INT_FILL)."""
+    if name not in schema.VARIABLES:
+        raise CubeError(f"part files hold variable {name!r}, which the cube schema does not know")
+    extra_dims, dtype, _ = schema.VARIABLES[name]
+    extra = tuple(n_multipliers if d == "multiplier" else n for d, n in zip(extra_dims, values.shape[1:]))
+    dtype = np.dtype(dtype)
+    fill = schema.INT_FILL if dtype.kind in "iu" else schema.FLOAT_FILL
+    return np.full(shape + extra, fill, dtype)
+
+
+def _point(axes, idx):
+    return ", ".join(f"{name}={values[i]:g}" for (name, values), i in zip(axes.items(), idx))

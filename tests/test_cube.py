@@ -1,0 +1,209 @@
+"""Result cubes: schema, CF attributes, round trips, atomic writes, user errors, part files."""
+import os
+
+import netCDF4
+import numpy as np
+import pytest
+import xarray as xr
+
+from pipeline import cube, schema
+from tests.synthetic import synthetic_cube
+
+AXES4 = {
+    "speed": np.array([50.0, 60.0, 70.0]),
+    "clearance": np.array([5e-6, 1e-5]),
+    "contact_angle": np.array([0.0, 15.0]),
+    "preload": np.array([0.0, 100.0]),
+}
+PROVENANCE = {"config_toml": '[scene]\nname = "t"\n', "config_hash": "ab" * 32, "rotorsweep_version": "0.1.0",
+              "created": "2026-01-01T00:00:00+00:00", "numerics": '{"newton_tol": 1e-10}'}
+
+
+def random_results(shape, n_multipliers=4, seed=0):
+    """Every schema variable, with fills (-1 / NaN) sprinkled in, as compute returns them (int64)."""
+    rng = np.random.default_rng(seed)
+    out = {}
+    for name, (extra, dtype, attrs) in schema.VARIABLES.items():
+        full = shape + (n_multipliers,) * len(extra)
+        if "flag_values" in attrs:
+            out[name] = rng.integers(schema.INT_FILL, len(attrs["flag_values"]), full)
+        elif np.dtype(dtype).kind == "i":
+            out[name] = rng.integers(0, 50, full)
+        else:
+            out[name] = np.where(rng.random(full) < 0.1, np.nan, rng.normal(size=full))
+    return out
+
+
+def four_d():
+    return cube.build_dataset(AXES4, {}, random_results((3, 2, 2, 2)), PROVENANCE)
+
+
+def from_synthetic():
+    """The synthetic cube rebuilt through build_dataset (a NaN fixed contact angle included)."""
+    syn = synthetic_cube()
+    results = {name: syn[name].values for name in syn.data_vars}
+    fixed = {"contact_angle": np.nan, "preload": 0.0}
+    attrs = {k: v for k, v in syn.attrs.items() if k not in ("Conventions", "rotorsweep_schema_version")}
+    return syn, cube.build_dataset({"speed": syn.speed.values, "clearance": syn.clearance.values},
+                                   fixed, results, attrs)
+
+
+def assert_same(a, b):
+    xr.testing.assert_identical(a, b)
+    for name, var in a.variables.items():
+        assert b[name].dtype == var.dtype, name
+
+
+@pytest.mark.parametrize("make", [four_d, lambda: from_synthetic()[1]], ids=["4d", "synthetic"])
+def test_round_trip_is_identical(make, tmp_path):
+    ds = make()
+    back = cube.open_cube(cube.write_cube(ds, tmp_path / "c.nc"))
+    assert_same(ds, back)
+    assert back["stable"].dtype == np.int8                # flags with fills stay integers
+
+
+def test_build_follows_the_schema():
+    syn, built = from_synthetic()
+    for name in syn.data_vars:
+        np.testing.assert_array_equal(built[name].values, syn[name].values)
+        assert built[name].dtype == np.dtype(schema.VARIABLES[name][1])
+        assert built[name].dims == syn[name].dims
+    assert built.attrs["config_hash"] == syn.attrs["config_hash"]
+    assert built.attrs["rotorsweep_schema_version"] == schema.SCHEMA_VERSION
+    assert "clearance" in built["contact_angle"].attrs["long_name"]       # NaN fixed value explained
+    np.testing.assert_array_equal(built["multiplier"].values, np.arange(4))
+
+
+def test_cf_attributes_and_compression_on_disk(tmp_path):
+    path = cube.write_cube(four_d(), tmp_path / "c.nc")
+    ds = cube.open_cube(path)
+    assert ds.attrs["Conventions"] == "CF-1.10" and ds.attrs["title"]
+    for name in AXES4:
+        assert ds[name].attrs["units"] == schema.AXES[name][0] and ds[name].attrs["long_name"]
+    for name, var in ds.data_vars.items():
+        assert var.attrs["long_name"]
+        assert "units" in var.attrs or {"flag_values", "flag_meanings"} <= set(var.attrs), name
+        assert var.encoding["zlib"] and var.encoding["complevel"] == 4, name
+    flags = ds["bifurcation"].attrs
+    assert flags["flag_meanings"].split() == list(schema.BIFURCATION)
+    assert flags["flag_values"].dtype == np.int8
+    with netCDF4.Dataset(path) as nc:
+        assert nc["orbit_status"].getncattr("_FillValue") == schema.INT_FILL
+        assert nc["orbit_status"].filters()["zlib"]
+        assert "_FillValue" not in nc["speed"].ncattrs()
+
+
+def test_existing_cube_needs_overwrite(tmp_path):
+    path = tmp_path / "sub" / "c.nc"
+    cube.write_cube(four_d(), path)                       # creates the parent directory
+    with pytest.raises(cube.CubeError, match="exists; pass --overwrite"):
+        cube.write_cube(four_d(), path)
+    other = cube.build_dataset(AXES4, {}, random_results((3, 2, 2, 2), seed=1), PROVENANCE)
+    cube.write_cube(other, path, overwrite=True)
+    assert_same(cube.open_cube(path), other)
+
+
+@pytest.mark.parametrize("interrupt", [OSError("disk full"), KeyboardInterrupt()])
+def test_interrupted_write_keeps_the_previous_cube(tmp_path, monkeypatch, interrupt):
+    path = cube.write_cube(four_d(), tmp_path / "c.nc")
+    before = path.read_bytes()
+
+    def half_written(self, target, *args, **kwargs):
+        with open(target, "wb") as f:
+            f.write(b"\x89HDF\r\n\x1a\n half a file")
+        raise interrupt
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", half_written)
+    with pytest.raises(type(interrupt)):
+        cube.write_cube(four_d(), path, overwrite=True)
+    with pytest.raises(type(interrupt)):
+        cube.write_cube(four_d(), tmp_path / "new.nc")
+    assert path.read_bytes() == before
+    assert sorted(os.listdir(tmp_path)) == ["c.nc"]       # no temp file, no half-written new.nc
+
+
+def test_open_cube_says_what_the_file_is(tmp_path):
+    text = tmp_path / "notes.txt"
+    text.write_text("speed, clearance\n")
+    with pytest.raises(cube.CubeError, match="notes.txt is not a netCDF file"):
+        cube.open_cube(text)
+    plain = tmp_path / "plain.nc"
+    xr.Dataset({"a": ("x", [1.0, 2.0])}).to_netcdf(plain)
+    with pytest.raises(cube.CubeError, match="plain.nc is a netCDF file but not a rotorsweep result cube"):
+        cube.open_cube(plain)
+    old = four_d()
+    old.attrs["rotorsweep_schema_version"] = schema.SCHEMA_VERSION - 1
+    cube.write_cube(old, tmp_path / "old.nc")
+    with pytest.raises(cube.CubeError, match=f"schema version {schema.SCHEMA_VERSION - 1}.*reads version "
+                                             f"{schema.SCHEMA_VERSION}"):
+        cube.open_cube(tmp_path / "old.nc")
+    with pytest.raises(cube.CubeError, match="missing.nc: no such file"):
+        cube.open_cube(tmp_path / "missing.nc")
+
+
+def test_build_rejects_what_the_schema_does_not_know():
+    shape = (3, 2, 2, 2)
+    with pytest.raises(cube.CubeError, match="'lle' is not in the cube schema"):
+        cube.build_dataset(AXES4, {}, {"lle": np.zeros(shape)}, {})
+    lle = cube.build_dataset(AXES4, {}, {"lle": np.zeros(shape)}, {},
+                             extra_attrs={"lle": {"units": "1/s", "long_name": "largest Lyapunov exponent"}})
+    assert lle["lle"].attrs["units"] == "1/s"
+    with pytest.raises(cube.CubeError, match="shape"):
+        cube.build_dataset(AXES4, {}, {"residual": np.zeros((3, 2))}, {})
+    with pytest.raises(cube.CubeError, match="schema order"):
+        cube.build_dataset({"clearance": [1e-6], "speed": [1.0]}, {}, {}, {})
+    with pytest.raises(cube.CubeError, match="unknown axis 'temperature'"):
+        cube.build_dataset({"speed": [1.0]}, {"temperature": 20.0}, {}, {})
+
+
+def test_describe_lists_axes_flags_and_provenance():
+    text = cube.describe(from_synthetic()[1])
+    assert "speed" in text and "121 values" in text and "10 .. 250 Hz" in text
+    assert "contact_angle" in text and "from clearance" in text
+    assert "max_abs_multiplier" in text and "neimark_sacker" in text
+    assert any(line.split() == ["converged", "605"] for line in text.splitlines())
+    assert "config_hash: " + "0" * 64 in text and 'name = "synthetic"' in text
+
+
+def _write_random_parts(parts, results, shape, seed=0):
+    """The grid's points shuffled into chunks of uneven size, written in that random order."""
+    rng = np.random.default_rng(seed)
+    index = np.argwhere(np.ones(shape, bool))[rng.permutation(int(np.prod(shape)))]
+    cuts = np.sort(rng.choice(np.arange(1, len(index)), size=5, replace=False))
+    for k, chunk in enumerate(np.split(index, cuts)):
+        at = tuple(chunk.T)
+        cube.write_part(parts, f"c{k:03d}", chunk, {n: v[at] for n, v in results.items()},
+                        {"config_hash": "x", "segments": [k]})
+    return len(cuts) + 1
+
+
+def test_parts_in_random_order_assemble_to_the_direct_build(tmp_path):
+    shape = (3, 2, 2, 2)
+    results = random_results(shape)
+    parts = cube.parts_dir(tmp_path / "c.nc")
+    assert parts == tmp_path / "c.nc.parts"
+    n = _write_random_parts(parts, results, shape)
+    (parts / ".c999.npz.tmp").write_bytes(b"an interrupted write")     # ignored
+    read = cube.read_parts(parts)
+    assert [r[0] for r in read] == [f"c{k:03d}" for k in range(n)]
+    assert read[0][3] == {"config_hash": "x", "segments": [0]}
+    assembled = cube.assemble(AXES4, {}, read, PROVENANCE, n_multipliers=4)
+    assert_same(assembled, cube.build_dataset(AXES4, {}, results, PROVENANCE))
+
+
+def test_a_missing_part_is_reported(tmp_path):
+    shape = (3, 2, 2, 2)
+    _write_random_parts(tmp_path, random_results(shape), shape)
+    read = cube.read_parts(tmp_path)
+    lost = len(read[2][1])
+    with pytest.raises(cube.CubeError, match=f"{lost} of 24 grid points have no result"):
+        cube.assemble(AXES4, {}, read[:2] + read[3:], PROVENANCE, n_multipliers=4)
+    partial = cube.assemble(AXES4, {}, read[:2] + read[3:], PROVENANCE, n_multipliers=4, allow_missing=True)
+    assert int((partial["orbit_status"].values == schema.INT_FILL).sum()) >= lost
+    assert int(np.isnan(partial["multiplier_real"].values).all(axis=-1).sum()) >= lost
+
+
+def test_unreadable_part_is_a_cube_error(tmp_path):
+    (tmp_path / "c000.npz").write_bytes(b"truncated")
+    with pytest.raises(cube.CubeError, match="c000.npz: unreadable part file"):
+        cube.read_parts(tmp_path)
