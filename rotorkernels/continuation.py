@@ -19,12 +19,12 @@ PointSolution = namedtuple(
 
 
 def _shoot(model, guess, p, opts, periods, tol, max_iter):
-    return shooting.shoot(model.rhs, model.jac, guess, p, model.n_state, model.n_position,
+    return shooting.shoot(model.id, guess, p, model.n_state, model.n_position,
                           float(periods), opts, tol, max_iter)
 
 
 def _settle(model, u0, p, opts, n_periods):
-    z, status, n_rhs = shooting.settle(model.rhs, model.jac, u0, p, model.n_state, model.n_position,
+    z, status, n_rhs = shooting.settle(model.id, u0, p, model.n_state, model.n_position,
                                        float(n_periods), opts)
     return z, status == 0, n_rhs
 
@@ -69,7 +69,7 @@ def solve_orbit(model, p, opts, history=(), *, cold_guess, periods=1, tol=1e-9, 
                              state, None, n_rhs)
     lams = floquet.multipliers(mono)
     max_abs, stable, bif = floquet.classify(lams)
-    samples = shooting.sample_orbit(model.rhs, model.jac, state, p, model.n_state, model.n_position,
+    samples = shooting.sample_orbit(model.id, state, p, model.n_state, model.n_position,
                                     float(periods), n_samples * periods, opts)
     return PointSolution(status, reason, iters, res, lams, max_abs, stable, bif, state, samples, n_rhs)
 

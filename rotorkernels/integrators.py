@@ -1,4 +1,5 @@
-"""Numba integrators for any model (rhs, jac), optionally carrying the variational equations.
+"""Numba integrators for any model (by id, see models.rhs/jac), optionally carrying the
+variational equations.
 
 The integrated vector is z = [u (n), Phi (n x n, row-major)] when `variational` is set, with
 Phi' = J(t, u) Phi; otherwise z = u. Both integrators return (z_end, status, n_rhs, h_next):
@@ -14,6 +15,8 @@ import numpy as np
 from numba import njit
 from scipy.integrate._ivp import dop853_coefficients as _dop
 
+from rotorkernels import models
+
 STATUS_OK, STATUS_NAN, STATUS_AMPLITUDE, STATUS_STEP_UNDERFLOW = range(4)
 
 _N_STAGES = _dop.N_STAGES
@@ -27,11 +30,11 @@ _ERR_EXPONENT = -1.0 / 8.0
 
 
 @njit(cache=True, nogil=True)
-def derivative(rhs, jac, t, z, p, n, variational, dz, jbuf):
+def derivative(model, t, z, p, n, variational, dz, jbuf):
     """dz/dt of the (possibly augmented) system."""
-    rhs(t, z[:n], p, dz[:n])
+    models.rhs(model, t, z[:n], p, dz[:n])
     if variational:
-        jac(t, z[:n], p, jbuf)
+        models.jac(model, t, z[:n], p, jbuf)
         for i in range(n):
             for j in range(n):
                 acc = 0.0
@@ -84,7 +87,7 @@ def _error_norm(K, h, z, znew, rtol, atol):
 
 
 @njit(cache=True, nogil=True)
-def dop853(rhs, jac, t0, t1, z0, p, n, n_position, variational, rtol, atol, h0, max_steps,
+def dop853(model, t0, t1, z0, p, n, n_position, variational, rtol, atol, h0, max_steps,
            amplitude_limit):
     """Integrate z from t0 to t1 > t0 with adaptive Dormand-Prince 8(5,3)."""
     m = z0.size
@@ -96,7 +99,7 @@ def dop853(rhs, jac, t0, t1, z0, p, n, n_position, variational, rtol, atol, h0, 
     stage = np.empty(m)
     K = np.empty((_N_STAGES + 1, m))
     jbuf = np.empty((n, n))
-    derivative(rhs, jac, t0, z, p, n, variational, K[0], jbuf)
+    derivative(model, t0, z, p, n, variational, K[0], jbuf)
     n_rhs = 1
     t = t0
     h = h0 if h0 > 0.0 else 0.01 * (t1 - t0)
@@ -115,13 +118,13 @@ def dop853(rhs, jac, t0, t1, z0, p, n, n_position, variational, rtol, atol, h0, 
                     for j in range(s):
                         acc += _A[s, j] * K[j, i]
                     stage[i] = z[i] + step * acc
-                derivative(rhs, jac, t + _C[s] * step, stage, p, n, variational, K[s], jbuf)
+                derivative(model, t + _C[s] * step, stage, p, n, variational, K[s], jbuf)
             for i in range(m):
                 acc = 0.0
                 for j in range(_N_STAGES):
                     acc += _B[j] * K[j, i]
                 znew[i] = z[i] + step * acc
-            derivative(rhs, jac, t + step, znew, p, n, variational, K[_N_STAGES], jbuf)
+            derivative(model, t + step, znew, p, n, variational, K[_N_STAGES], jbuf)
             n_rhs += _N_STAGES
             err = _error_norm(K, step, z, znew, rtol, atol)
             if err < 1.0:
@@ -144,7 +147,7 @@ def dop853(rhs, jac, t0, t1, z0, p, n, n_position, variational, rtol, atol, h0, 
 
 
 @njit(cache=True, nogil=True)
-def rk4(rhs, jac, t0, t1, z0, p, n, n_position, variational, n_steps, amplitude_limit):
+def rk4(model, t0, t1, z0, p, n, n_position, variational, n_steps, amplitude_limit):
     """Integrate z from t0 to t1 with n_steps classical RK4 steps."""
     m = z0.size
     z = z0.copy()
@@ -160,16 +163,16 @@ def rk4(rhs, jac, t0, t1, z0, p, n, n_position, variational, n_steps, amplitude_
         return z, status, 0, h
     for step in range(n_steps):
         t = t0 + step * h
-        derivative(rhs, jac, t, z, p, n, variational, k1, jbuf)
+        derivative(model, t, z, p, n, variational, k1, jbuf)
         for i in range(m):
             stage[i] = z[i] + 0.5 * h * k1[i]
-        derivative(rhs, jac, t + 0.5 * h, stage, p, n, variational, k2, jbuf)
+        derivative(model, t + 0.5 * h, stage, p, n, variational, k2, jbuf)
         for i in range(m):
             stage[i] = z[i] + 0.5 * h * k2[i]
-        derivative(rhs, jac, t + 0.5 * h, stage, p, n, variational, k3, jbuf)
+        derivative(model, t + 0.5 * h, stage, p, n, variational, k3, jbuf)
         for i in range(m):
             stage[i] = z[i] + h * k3[i]
-        derivative(rhs, jac, t + h, stage, p, n, variational, k4, jbuf)
+        derivative(model, t + h, stage, p, n, variational, k4, jbuf)
         for i in range(m):
             z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
         status = state_status(z, n, n_position, amplitude_limit)
@@ -195,10 +198,10 @@ def settings(method="dop853", rtol=1e-10, atol=1e-12, steps_per_unit=512, max_st
 
 
 @njit(cache=True, nogil=True)
-def flow(rhs, jac, t0, t1, z0, p, n, n_position, variational, opts, h0):
+def flow(model, t0, t1, z0, p, n, n_position, variational, opts, h0):
     """Integrate with the method and tolerances in `opts` (see `settings`)."""
     if opts[S_METHOD] == METHOD_RK4:
         n_steps = max(1, int(round(opts[S_STEPS_PER_UNIT] * (t1 - t0))))
-        return rk4(rhs, jac, t0, t1, z0, p, n, n_position, variational, n_steps, opts[S_AMPLITUDE])
-    return dop853(rhs, jac, t0, t1, z0, p, n, n_position, variational, opts[S_RTOL], opts[S_ATOL],
+        return rk4(model, t0, t1, z0, p, n, n_position, variational, n_steps, opts[S_AMPLITUDE])
+    return dop853(model, t0, t1, z0, p, n, n_position, variational, opts[S_RTOL], opts[S_ATOL],
                   h0, int(opts[S_MAX_STEPS]), opts[S_AMPLITUDE])

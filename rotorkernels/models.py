@@ -5,9 +5,11 @@ along the speed axis: time tau = t / T (T the forcing period, so the basic perio
 period 1 whatever the speed), displacements in units of the length scale L (1 um by default).
 The state of `jeffcott_clearance` is u = (x/L, y/L, dx/dtau / L, dy/dtau / L).
 
-A model is (rhs, jac, n_state, n_position): rhs(tau, u, p, du) and jac(tau, u, p, J) are Numba
-functions over a float64 parameter vector p built by the model's `*_params` function. The
-integrators and the shooting solver take any model through these two functions.
+A model is (name, id, n_state, n_position) with a right-hand side f(tau, u, p, du) and an analytic
+Jacobian J(tau, u, p, J) over a float64 parameter vector p built by the model's `*_params`
+function. The integrators and the shooting solver reach every model through `rhs` and `jac`,
+which dispatch on the model id: Numba caches functions of plain arguments on disk, whereas a
+jitted function passed as an argument would be recompiled in every process (~25 s each).
 """
 from collections import namedtuple
 
@@ -16,7 +18,7 @@ from numba import njit
 
 from rotorkernels.contact import ring_load
 
-Model = namedtuple("Model", "name rhs jac n_state n_position")
+Model = namedtuple("Model", "name id n_state n_position")
 
 LENGTH_SCALE = 1e-6  # m: bearing clearances and vibration amplitudes are micrometres
 
@@ -67,7 +69,76 @@ def jeffcott_jac(tau, u, p, jac):
     jac[3, 3] = -a
 
 
-JEFFCOTT_CLEARANCE = Model("jeffcott_clearance", jeffcott_rhs, jeffcott_jac, 4, 2)
+@njit(cache=True, nogil=True)
+def linear_rhs(tau, u, p, du):
+    """Validation model: u'' + C u' + K u = 0, K = [[p0, p1], [p1, p2]], C = diag(p3, p4)."""
+    du[0] = u[2]
+    du[1] = u[3]
+    du[2] = -p[0] * u[0] - p[1] * u[1] - p[3] * u[2]
+    du[3] = -p[1] * u[0] - p[2] * u[1] - p[4] * u[3]
+
+
+@njit(cache=True, nogil=True)
+def linear_jac(tau, u, p, jac):
+    jac[:, :] = 0.0
+    jac[0, 2] = 1.0
+    jac[1, 3] = 1.0
+    jac[2, 0] = -p[0]
+    jac[2, 1] = -p[1]
+    jac[3, 0] = -p[1]
+    jac[3, 1] = -p[2]
+    jac[2, 2] = -p[3]
+    jac[3, 3] = -p[4]
+
+
+@njit(cache=True, nogil=True)
+def mathieu_rhs(tau, u, p, du):
+    """Validation model: x'' + 2 zeta x' + (delta + eps cos 2 pi tau) x = 0, twice (uncoupled),
+    p = (zeta, delta, eps)."""
+    k = p[1] + p[2] * np.cos(2 * np.pi * tau)
+    du[0] = u[2]
+    du[1] = u[3]
+    du[2] = -2 * p[0] * u[2] - k * u[0]
+    du[3] = -2 * p[0] * u[3] - k * u[1]
+
+
+@njit(cache=True, nogil=True)
+def mathieu_jac(tau, u, p, jac):
+    k = p[1] + p[2] * np.cos(2 * np.pi * tau)
+    jac[:, :] = 0.0
+    jac[0, 2] = 1.0
+    jac[1, 3] = 1.0
+    jac[2, 0] = -k
+    jac[3, 1] = -k
+    jac[2, 2] = -2 * p[0]
+    jac[3, 3] = -2 * p[0]
+
+
+JEFFCOTT_CLEARANCE = Model("jeffcott_clearance", 0, 4, 2)
+LINEAR_OSCILLATOR = Model("linear_oscillator", 1, 4, 2)
+DAMPED_MATHIEU = Model("damped_mathieu", 2, 4, 2)
+
+
+@njit(cache=True, nogil=True)
+def rhs(model, tau, u, p, du):
+    """du = f(tau, u) of model id `model`."""
+    if model == 0:
+        jeffcott_rhs(tau, u, p, du)
+    elif model == 1:
+        linear_rhs(tau, u, p, du)
+    else:
+        mathieu_rhs(tau, u, p, du)
+
+
+@njit(cache=True, nogil=True)
+def jac(model, tau, u, p, out):
+    """out = df/du(tau, u) of model id `model`."""
+    if model == 0:
+        jeffcott_jac(tau, u, p, out)
+    elif model == 1:
+        linear_jac(tau, u, p, out)
+    else:
+        mathieu_jac(tau, u, p, out)
 
 
 def cage_speed_ratio(ball_diameter, pitch_diameter, contact_angle):

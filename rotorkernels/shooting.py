@@ -35,23 +35,23 @@ def _residual_norm(r, s):
 
 
 @njit(cache=True, nogil=True)
-def _return_map(rhs, jac, s, p, n, n_position, periods, opts, h):
+def _return_map(model, s, p, n, n_position, periods, opts, h):
     """(u(k T; s) - s, monodromy, flow status, n_rhs, h_next)."""
     z0 = ig.initial_state(s, n, True)
-    z, status, n_rhs, h = ig.flow(rhs, jac, 0.0, periods, z0, p, n, n_position, True, opts, h)
+    z, status, n_rhs, h = ig.flow(model, 0.0, periods, z0, p, n, n_position, True, opts, h)
     r = z[:n] - s
     mono = z[n:].copy().reshape((n, n))
     return r, mono, status, n_rhs, h
 
 
 @njit(cache=True, nogil=True)
-def shoot(rhs, jac, guess, p, n, n_position, periods, opts, tol, max_iter):
+def shoot(model, guess, p, n, n_position, periods, opts, tol, max_iter):
     """Newton shooting for an orbit of period `periods` (scaled time) from `guess`.
 
     Returns (state, monodromy, status, reason, iterations, residual, n_rhs). The monodromy is
     evaluated at the returned state."""
     s = guess.copy()
-    r, mono, fstat, n_rhs, h = _return_map(rhs, jac, s, p, n, n_position, periods, opts, 0.0)
+    r, mono, fstat, n_rhs, h = _return_map(model, s, p, n, n_position, periods, opts, 0.0)
     if fstat != ig.STATUS_OK:
         status, reason = _failure(fstat)
         return s, mono, status, reason, 0, np.inf, n_rhs
@@ -71,7 +71,7 @@ def shoot(rhs, jac, guess, p, n, n_position, periods, opts, tol, max_iter):
         last_fail = ig.STATUS_OK
         for _ in range(_MAX_HALVINGS):
             trial = s + lam * step
-            r_t, mono_t, fstat, nr, h_t = _return_map(rhs, jac, trial, p, n, n_position, periods, opts, h)
+            r_t, mono_t, fstat, nr, h_t = _return_map(model, trial, p, n, n_position, periods, opts, h)
             n_rhs += nr
             if fstat == ig.STATUS_OK:
                 res_t = _residual_norm(r_t, trial)
@@ -91,15 +91,15 @@ def shoot(rhs, jac, guess, p, n, n_position, periods, opts, tol, max_iter):
 
 
 @njit(cache=True, nogil=True)
-def settle(rhs, jac, u0, p, n, n_position, periods, opts):
+def settle(model, u0, p, n, n_position, periods, opts):
     """Integrate a transient of `periods` forcing periods from u0: (state, flow status, n_rhs)."""
-    z, status, n_rhs, _ = ig.flow(rhs, jac, 0.0, float(periods), u0.copy(), p, n, n_position, False,
+    z, status, n_rhs, _ = ig.flow(model, 0.0, float(periods), u0.copy(), p, n, n_position, False,
                                   opts, 0.0)
     return z, status, n_rhs
 
 
 @njit(cache=True, nogil=True)
-def sample_orbit(rhs, jac, u0, p, n, n_position, periods, n_samples, opts):
+def sample_orbit(model, u0, p, n, n_position, periods, n_samples, opts):
     """States at n_samples equally spaced times over [0, periods) starting from u0."""
     out = np.empty((n_samples, n))
     z = u0.copy()
@@ -107,7 +107,7 @@ def sample_orbit(rhs, jac, u0, p, n, n_position, periods, n_samples, opts):
     dt = periods / n_samples
     for i in range(n_samples):
         out[i] = z
-        z, status, _, h = ig.flow(rhs, jac, i * dt, (i + 1) * dt, z, p, n, n_position, False, opts, h)
+        z, status, _, h = ig.flow(model, i * dt, (i + 1) * dt, z, p, n, n_position, False, opts, h)
         if status != ig.STATUS_OK:
             out[i + 1:] = np.nan
             break
@@ -116,6 +116,6 @@ def sample_orbit(rhs, jac, u0, p, n, n_position, periods, n_samples, opts):
 
 def periodic_orbit(model, guess, p, opts, periods=1, tol=1e-9, max_iter=30):
     """Python-facing wrapper of `shoot` for a `models.Model`."""
-    res = shoot(model.rhs, model.jac, np.asarray(guess, float), p, model.n_state, model.n_position,
+    res = shoot(model.id, np.asarray(guess, float), p, model.n_state, model.n_position,
                 float(periods), opts, tol, max_iter)
     return Orbit(*res)

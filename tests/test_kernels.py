@@ -1,7 +1,6 @@
 """Kernel numerics against independent values: finite differences, linear algebra, scipy."""
 import numpy as np
 import pytest
-from numba import njit
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 from scipy.optimize import linear_sum_assignment
@@ -38,7 +37,7 @@ def match(a, b):
 
 def scaled_rhs(p, tau, u):
     du = np.empty(4)
-    JEFF.rhs(tau, np.asarray(u, float), p, du)
+    models.rhs(JEFF.id, tau, np.asarray(u, float), p, du)
     return du
 
 
@@ -65,7 +64,7 @@ def test_analytic_jacobian_matches_finite_differences():
     cases += grazing_states(p, rng, 20)
     for tau, u in cases:
         jac = np.empty((4, 4))
-        JEFF.jac(tau, u, p, jac)
+        models.jac(JEFF.id, tau, u, p, jac)
         h = 1e-7
         fd = np.column_stack([(scaled_rhs(p, tau, u + h * e) - scaled_rhs(p, tau, u - h * e)) / (2 * h)
                               for e in np.eye(4)])
@@ -74,52 +73,8 @@ def test_analytic_jacobian_matches_finite_differences():
 
 # --- Floquet multipliers of linear systems --------------------------------------------------
 
-@njit(cache=True)
-def linear_rhs(t, u, p, du):
-    # u'' + C u' + K u = 0 with K = [[p0, p1], [p1, p2]], C = diag(p3, p4)
-    du[0] = u[2]
-    du[1] = u[3]
-    du[2] = -p[0] * u[0] - p[1] * u[1] - p[3] * u[2]
-    du[3] = -p[1] * u[0] - p[2] * u[1] - p[4] * u[3]
-
-
-@njit(cache=True)
-def linear_jac(t, u, p, jac):
-    jac[:, :] = 0.0
-    jac[0, 2] = 1.0
-    jac[1, 3] = 1.0
-    jac[2, 0] = -p[0]
-    jac[2, 1] = -p[1]
-    jac[3, 0] = -p[1]
-    jac[3, 1] = -p[2]
-    jac[2, 2] = -p[3]
-    jac[3, 3] = -p[4]
-
-
-@njit(cache=True)
-def mathieu_rhs(t, u, p, du):
-    # x'' + 2 zeta x' + (delta + eps cos 2 pi t) x = 0, written twice as an uncoupled pair
-    k = p[1] + p[2] * np.cos(2 * np.pi * t)
-    du[0] = u[2]
-    du[1] = u[3]
-    du[2] = -2 * p[0] * u[2] - k * u[0]
-    du[3] = -2 * p[0] * u[3] - k * u[1]
-
-
-@njit(cache=True)
-def mathieu_jac(t, u, p, jac):
-    k = p[1] + p[2] * np.cos(2 * np.pi * t)
-    jac[:, :] = 0.0
-    jac[0, 2] = 1.0
-    jac[1, 3] = 1.0
-    jac[2, 0] = -k
-    jac[3, 1] = -k
-    jac[2, 2] = -2 * p[0]
-    jac[3, 3] = -2 * p[0]
-
-
-LINEAR = models.Model("linear", linear_rhs, linear_jac, 4, 2)
-MATHIEU = models.Model("mathieu", mathieu_rhs, mathieu_jac, 4, 2)
+LINEAR = models.LINEAR_OSCILLATOR
+MATHIEU = models.DAMPED_MATHIEU
 
 
 @pytest.mark.parametrize("opts, tol", [(ig.settings(rtol=1e-12, atol=1e-14), 1e-10),
@@ -127,7 +82,7 @@ MATHIEU = models.Model("mathieu", mathieu_rhs, mathieu_jac, 4, 2)
 def test_linear_oscillator_multipliers_are_exp_of_eigenvalues(opts, tol):
     p = np.array([40.0, 5.0, 90.0, 0.4, 0.9])
     a = np.zeros((4, 4))
-    linear_jac(0.0, np.zeros(4), p, a)
+    models.jac(LINEAR.id, 0.0, np.zeros(4), p, a)
     orbit = shooting.periodic_orbit(LINEAR, np.array([1.0, -2.0, 0.5, 0.3]), p, opts, tol=1e-12)
     assert orbit.status == shooting.CONVERGED and orbit.iterations <= 2
     np.testing.assert_allclose(orbit.state, 0.0, atol=1e-10)
@@ -296,7 +251,7 @@ def test_preloaded_law_linearizes_to_the_bearing_radial_stiffness(preload):
         axial_approach=state.axial_approach, mass=mass, damping=0.0, radial_load=0.0,
         n_balls=geom.n_balls, ball_diameter=geom.ball_diameter, pitch_diameter=geom.pitch_diameter)
     jac = np.empty((4, 4))
-    JEFF.jac(0.3, np.zeros(4), p, jac)
+    models.jac(JEFF.id, 0.3, np.zeros(4), p, jac)
     np.testing.assert_allclose(-jac[2, 0] * mass / period ** 2, state.radial_stiffness, rtol=1e-12)
     np.testing.assert_allclose(-jac[3, 1] * mass / period ** 2, state.radial_stiffness, rtol=1e-12)
     np.testing.assert_allclose(scaled_rhs(p, 0.3, np.zeros(4)), 0.0, atol=1e-9)
