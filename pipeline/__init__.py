@@ -9,6 +9,7 @@ The Python API mirrors the command line:
     pipeline.report(ds, "out/demo_report")                         # rotorsweep report
     pipeline.point(speed=100.0, clearance=7.6e-6)                  # rotorsweep point
 """
+import importlib
 
 
 def _config(cfg, allow_large=False):
@@ -48,8 +49,8 @@ def unstable_intervals(cube_or_path):
 
 
 def report(cube_or_path, out_dir):
-    from pipeline import report as report_mod
-
+    # the submodule pipeline.report is shadowed by this function in the package namespace
+    report_mod = importlib.import_module("pipeline.report")
     return report_mod.make_report(_dataset(cube_or_path), out_dir)
 
 

@@ -1,0 +1,375 @@
+"""Scene configs: TOML, validated completely before any work starts.
+
+Every problem becomes one line of a ConfigError naming the file, the key as a dotted path, what
+was wrong and what is allowed; all problems of a file are reported together. Configs are data
+only (tomllib; no eval, no includes)."""
+import difflib
+import hashlib
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+AXES = ("speed", "clearance", "contact_angle", "preload")
+MODELS = ("jeffcott_clearance",)
+PRESETS = ("209", "angular_contact_medium")
+NOMINAL_ANGLES = (12, 15, 26, 36, 40)
+
+
+class ConfigError(Exception):
+    """A config that cannot be run; the message lists every problem, one per line."""
+
+
+# --- declarative schema ------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Key:
+    kind: str                 # "str", "bool", "int", "float", "choice", "float_or", "axis"
+    default: object = None
+    required: bool = False
+    lo: float = -math.inf     # bounds; lo_open/hi_open make them strict
+    hi: float = math.inf
+    lo_open: bool = False
+    hi_open: bool = False
+    choices: tuple = ()
+    pattern: str = ""
+    help: str = ""
+
+
+def _num(lo=-math.inf, hi=math.inf, lo_open=False, hi_open=False, default=None, kind="float", **kw):
+    return Key(kind, default, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open, **kw)
+
+
+AXIS_RANGES = {
+    "speed": _num(0, 1e5, lo_open=True, help="shaft speed [Hz]"),
+    "clearance": _num(0, 1e-3, hi_open=True, help="radial clearance [m]"),
+    "contact_angle": _num(0, 90, lo_open=True, hi_open=True, help="contact angle [deg]"),
+    "preload": _num(0, 1e6, hi_open=True, help="axial preload [N]"),
+}
+
+SCHEMA = {
+    "scene": {
+        "name": Key("str", required=True, pattern=r"[A-Za-z0-9_.-]+"),
+        "model": Key("choice", required=True, choices=MODELS),
+        "description": Key("str", default=""),
+    },
+    "bearing": {
+        "preset": Key("choice", default="209", choices=PRESETS),
+        "nominal_angle": Key("choice", default=None, choices=NOMINAL_ANGLES),
+        "stiffness": Key("float_or", default="hertz", choices=("hertz", "bai2006"), lo=0, lo_open=True),
+        "preload_constant": Key("choice", default="consistent", choices=("consistent", "filipkovsky")),
+        "cage_rotation": Key("bool", default=True),
+        "clearance": AXIS_RANGES["clearance"],
+        "contact_angle": AXIS_RANGES["contact_angle"],
+        "preload": AXIS_RANGES["preload"],
+    },
+    "rotor": {
+        "mass": _num(0, lo_open=True, default=2.0),
+        "damping": _num(0, default=300.0),
+        "radial_load": Key("float_or", default="gravity", choices=("gravity",)),
+        "gravity": _num(0, default=9.8),
+    },
+    "sweep": {name: Key("axis") for name in AXES},
+    "analysis": {
+        "floquet": Key("bool", default=True),
+        "poincare": Key("bool", default=False),
+        "lyapunov": Key("bool", default=False),
+    },
+    "numerics": {
+        "integrator": Key("choice", default="dop853", choices=("dop853", "rk4")),
+        "rtol": _num(0, 1e-2, lo_open=True, default=1e-10),
+        "atol": _num(0, 1, lo_open=True, hi_open=True, default=1e-12),
+        "rk4_steps": _num(16, kind="int", default=512),
+        "newton_tol": _num(0, lo_open=True, default=1e-9),
+        "max_newton_iter": _num(1, 1000, kind="int", default=30),
+        "transient_periods": _num(0, kind="int", default=30),
+        "segment_length": _num(1, kind="int", default=32),
+        "amplitude_limit": _num(0, lo_open=True, default=1e-3),
+        "max_points": _num(1, kind="int", default=200_000),
+    },
+}
+REQUIRED_SECTIONS = ("scene", "sweep")
+
+DEFAULT_CONFIG_TOML = """\
+# The embedded default scene (same as configs/demo.toml): Bai 2006, 209 bearing, the paper's constant.
+[scene]
+name = "demo"
+model = "jeffcott_clearance"
+description = "Bai 2006 rotor on the 209 bearing: stability vs speed for two clearances"
+
+[bearing]
+preset = "209"
+stiffness = "bai2006"
+
+[rotor]
+mass = 2.0
+damping = 300.0
+radial_load = "gravity"
+gravity = 9.8
+
+[sweep]
+speed = {start = 20.0, stop = 220.0, step = 2.0}
+clearance = [7.6e-6, 19.0e-6]
+"""
+
+
+# --- value checks --------------------------------------------------------------------------------
+
+def _type_name(v):
+    return {bool: "boolean", int: "integer", float: "number", str: "string", list: "list",
+            dict: "table"}.get(type(v), type(v).__name__)
+
+
+def _is_number(v):
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _range_text(k):
+    lo = "" if k.lo == -math.inf else f"{'>' if k.lo_open else '>='} {k.lo:g}"
+    hi = "" if k.hi == math.inf else f"{'<' if k.hi_open else '<='} {k.hi:g}"
+    return " and ".join(x for x in (lo, hi) if x)
+
+
+def _check_number(v, k):
+    """Error text for a number outside the key's range, or None."""
+    if not math.isfinite(v):
+        return f"must be a finite number (got {v})"
+    bad_lo = v < k.lo or (k.lo_open and v == k.lo)
+    bad_hi = v > k.hi or (k.hi_open and v == k.hi)
+    return f"must be {_range_text(k)} (got {v:g})" if bad_lo or bad_hi else None
+
+
+def _check_value(v, k):
+    """(normalized value, error text or None) for a scalar key."""
+    if k.kind == "str":
+        if not isinstance(v, str):
+            return v, f"must be a string (got {_type_name(v)})"
+        if k.pattern and not re.fullmatch(k.pattern, v):
+            return v, f"must match {k.pattern} (got {v!r})"
+        return v, None
+    if k.kind == "bool":
+        return v, None if isinstance(v, bool) else f"must be true or false (got {_type_name(v)})"
+    if k.kind == "choice":
+        if v not in k.choices or isinstance(v, bool):
+            allowed = ", ".join(json.dumps(c) for c in k.choices)
+            return v, f"unknown value {json.dumps(v) if isinstance(v, (str, int, float)) else _type_name(v)}; allowed: {allowed}"
+        return v, None
+    if k.kind == "float_or" and isinstance(v, str):
+        if v in k.choices:
+            return v, None
+        return v, f"unknown value {json.dumps(v)}; allowed: {', '.join(json.dumps(c) for c in k.choices)} or a number"
+    if k.kind == "int":
+        if not isinstance(v, int) or isinstance(v, bool):
+            return v, f"must be an integer (got {_type_name(v)} {v!r})"
+        return v, _check_number(v, k)
+    if not _is_number(v):
+        extra = f" or {', '.join(json.dumps(c) for c in k.choices)}" if k.kind == "float_or" else ""
+        return v, f"must be a number{extra} (got {_type_name(v)})"
+    return float(v), _check_number(float(v), k)
+
+
+def _axis_values(v, name, errors, where):
+    """Grid values of a sweep axis, appending problems to errors."""
+    rng = AXIS_RANGES[name]
+    if isinstance(v, list):
+        if not v:
+            errors.append(f"{where}: must not be empty")
+            return None
+        bad = [x for x in v if not _is_number(x)]
+        if bad:
+            errors.append(f"{where}: must be a list of numbers (got {_type_name(bad[0])} {bad[0]!r})")
+            return None
+        values = np.array(v, float)
+    elif isinstance(v, dict):
+        values = _range_values(v, errors, where)
+        if values is None:
+            return None
+    else:
+        errors.append(f"{where}: must be a list of numbers or a table {{start, stop, step}} or "
+                      f"{{start, stop, num}} (got {_type_name(v)})")
+        return None
+    for x in values:
+        problem = _check_number(float(x), rng)
+        if problem:
+            errors.append(f"{where}: every value {problem} ({rng.help})")
+            return None
+    if np.any(np.diff(values) <= 0):
+        errors.append(f"{where}: values must be strictly increasing, without duplicates")
+        return None
+    return values
+
+
+def _range_values(v, errors, where):
+    keys = set(v)
+    unknown = keys - {"start", "stop", "step", "num"}
+    if unknown:
+        errors.append(f"{where}: unknown key(s) {sorted(unknown)}; allowed: start, stop, and one of step/num")
+        return None
+    if not {"start", "stop"} <= keys or len(keys & {"step", "num"}) != 1:
+        errors.append(f"{where}: needs start, stop and exactly one of step or num")
+        return None
+    for key in keys:
+        val = v[key]
+        ok = (isinstance(val, int) and not isinstance(val, bool)) if key == "num" else _is_number(val)
+        if not ok or (key != "num" and not math.isfinite(val)):
+            errors.append(f"{where}.{key}: must be a finite {'integer' if key == 'num' else 'number'} (got {val!r})")
+            return None
+    start, stop = float(v["start"]), float(v["stop"])
+    if start > stop:
+        errors.append(f"{where}: start must be <= stop (got start={start:g}, stop={stop:g})")
+        return None
+    if "num" in v:
+        if v["num"] < 1:
+            errors.append(f"{where}.num: must be >= 1 (got {v['num']})")
+            return None
+        return np.array([start]) if v["num"] == 1 else np.linspace(start, stop, v["num"])
+    step = float(v["step"])
+    if step <= 0:
+        errors.append(f"{where}.step: must be > 0 (got {step:g})")
+        return None
+    n = int(math.floor((stop - start) / step + 1e-9)) + 1
+    values = start + step * np.arange(n)
+    return np.array([float(f"{x:.12g}") for x in values])   # no float drift: 10 + 0.1 k exactly
+
+
+# --- the whole file ------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Config:
+    path: object
+    source: str
+    data: dict
+    axes: dict = field(repr=False)
+
+    @property
+    def n_points(self):
+        return int(np.prod([len(v) for v in self.axes.values()]))
+
+    def hash(self):
+        """Identifies the scene (data, not formatting): changes with any value, not comments."""
+        text = json.dumps(self.data, sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _unknown(key, known, where):
+    close = difflib.get_close_matches(key, known, n=1)
+    hint = f"; did you mean {close[0]!r}?" if close else f"; allowed: {', '.join(known)}"
+    return f"{where}: unknown key{hint}"
+
+
+def _validate_section(name, table, errors):
+    out = {}
+    spec = SCHEMA[name]
+    if not isinstance(table, dict):
+        errors.append(f"{name}: must be a table (got {_type_name(table)})")
+        return out
+    for key in table:
+        if key not in spec:
+            errors.append(_unknown(key, list(spec), f"{name}.{key}"))
+    for key, k in spec.items():
+        where = f"{name}.{key}"
+        if key not in table:
+            if k.required:
+                errors.append(f"{where}: required")
+            out[key] = k.default
+            continue
+        if k.kind == "axis":
+            out[key] = table[key]
+            continue
+        value, problem = _check_value(table[key], k)
+        if problem:
+            errors.append(f"{where}: {problem}")
+        out[key] = value
+    return out
+
+
+def _cross_checks(data, axes, errors):
+    b = data["bearing"]
+    if "speed" not in axes and "sweep.speed" not in " ".join(errors):
+        errors.append("sweep.speed: required (speed is the continuation axis of every sweep)")
+    for name in ("clearance", "contact_angle", "preload"):
+        if name in axes and b.get(name) is not None:
+            errors.append(f"bearing.{name}: is also swept in sweep.{name}; give it in one place only")
+    if b["nominal_angle"] is not None and b["preset"] != "angular_contact_medium":
+        errors.append(f"bearing.nominal_angle: only for preset \"angular_contact_medium\" (preset is {b['preset']!r})")
+    clearances = axes.get("clearance", [b["clearance"] or 0.0])
+    has_angle = "contact_angle" in axes or b["contact_angle"] is not None
+    angular = b["preset"] == "angular_contact_medium"
+    if min(clearances) == 0 and not has_angle and not angular:
+        errors.append("bearing.contact_angle: required when the clearance is 0 (the angle cannot follow "
+                      "from a zero clearance); give bearing.contact_angle or sweep.contact_angle")
+    if b["preload_constant"] == "filipkovsky" and max(axes.get("preload", [b["preload"] or 0.0])) <= 0:
+        errors.append("bearing.preload_constant: \"filipkovsky\" needs a preload > 0")
+    num = data["numerics"]
+    if num["integrator"] == "dop853" and num["newton_tol"] < num["rtol"]:
+        errors.append(f"numerics.newton_tol: must be >= numerics.rtol ({num['rtol']:g}); Newton cannot "
+                      "converge below the integration accuracy")
+
+
+def parse_config(text, path=None, allow_large=False):
+    """Validate a TOML scene; returns a Config or raises ConfigError listing every problem."""
+    label = str(path) if path is not None else "<config>"
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{label}: not valid TOML: {exc}") from None
+    errors = []
+    for section in raw:
+        if section not in SCHEMA:
+            errors.append(_unknown(section, list(SCHEMA), section))
+    for section in REQUIRED_SECTIONS:
+        if section not in raw:
+            errors.append(f"{section}: required section missing")
+    data = {name: _validate_section(name, raw.get(name, {}), errors) for name in SCHEMA}
+    sweep = data.pop("sweep")
+    axes = {}
+    for name in AXES:
+        if sweep.get(name) is not None:
+            values = _axis_values(sweep[name], name, errors, f"sweep.{name}")
+            if values is not None:
+                axes[name] = values
+    data["sweep"] = {name: [float(x) for x in values] for name, values in axes.items()}
+    if not errors:
+        _cross_checks(data, axes, errors)
+    if not errors and axes:
+        n = int(np.prod([len(v) for v in axes.values()]))
+        limit = data["numerics"]["max_points"]
+        if n > limit and not allow_large:
+            errors.append(f"sweep: the grid has {n} points, above numerics.max_points = {limit}; "
+                          "raise numerics.max_points or pass --yes")
+    if errors:
+        raise ConfigError("\n".join(f"{label}: {e}" for e in errors))
+    return Config(path, text, data, axes)
+
+
+def load_config(path, allow_large=False):
+    p = Path(path)
+    try:
+        text = p.read_text()
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such config file") from None
+    except (IsADirectoryError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"{path}: cannot read as a TOML text file ({exc.__class__.__name__})") from None
+    return parse_config(text, path=path, allow_large=allow_large)
+
+
+def check_point(point):
+    """Validate a single point (the `point` command) with the sweep-axis rules."""
+    errors = []
+    for name in AXES:
+        v = point.get(name)
+        if v is None or (name == "contact_angle" and v is None):
+            continue
+        problem = _check_number(float(v), AXIS_RANGES[name])
+        if problem:
+            errors.append(f"{name}: {problem} ({AXIS_RANGES[name].help})")
+    if errors:
+        raise ConfigError("\n".join(errors))
