@@ -6,10 +6,9 @@ The Python API mirrors the command line:
     path = pipeline.run("configs/demo.toml", "out/demo.nc")        # rotorsweep run
     ds = pipeline.open_cube(path)                                  # an xarray.Dataset
     pipeline.unstable_intervals(ds)                                # rotorsweep query --unstable
-    pipeline.report(ds, "out/demo_report")                         # rotorsweep report
+    pipeline.make_report(ds, "out/demo_report")                    # rotorsweep report
     pipeline.point(speed=100.0, clearance=7.6e-6)                  # rotorsweep point
 """
-import importlib
 
 
 def _config(cfg, allow_large=False):
@@ -48,10 +47,11 @@ def unstable_intervals(cube_or_path):
     return query.unstable_intervals(_dataset(cube_or_path))
 
 
-def report(cube_or_path, out_dir):
-    # the submodule pipeline.report is shadowed by this function in the package namespace
-    report_mod = importlib.import_module("pipeline.report")
-    return report_mod.make_report(_dataset(cube_or_path), out_dir)
+def make_report(cube_or_path, out_dir):
+    """HTML + PNG report of a cube (rotorsweep report); returns the written paths."""
+    from pipeline import report
+
+    return report.make_report(_dataset(cube_or_path), out_dir)
 
 
 def point(speed, clearance, contact_angle=None, preload=None, config=None):

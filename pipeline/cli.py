@@ -21,7 +21,7 @@ def cmd_run(args):
                         chunk_points=args.chunk_points, progress=not args.quiet)
     print(f"cube: {path}")
     if args.report:
-        files = pipeline.report(path, args.report)
+        files = pipeline.make_report(path, args.report)
         print(f"report: {files['html']}")
     return 0
 
@@ -88,7 +88,7 @@ def cmd_query(args):
 
 def cmd_report(args):
     out = args.output or str(args.cube).rsplit(".", 1)[0] + "_report"
-    files = pipeline.report(args.cube, out)
+    files = pipeline.make_report(args.cube, out)
     print(f"report: {files['html']}")
     for png in files["png"]:
         print(f"figure: {png}")

@@ -11,8 +11,6 @@ import contextlib
 import csv
 import html
 import itertools
-import sys
-import types
 from pathlib import Path
 
 import numpy as np
@@ -576,16 +574,3 @@ def _save_html(path, title, header_html, figs, table_html, config_toml):
             f"<title>{html.escape(title)}</title>\n{resources}\n{_CSS}\n</head>\n"
             "<body>\n" + "\n".join(body) + f"\n{script}\n</body>\n</html>\n")
     Path(path).write_text(page, encoding="utf-8")
-
-
-class _CallableModule(types.ModuleType):
-    """`pipeline.report` is both this module and, in pipeline/__init__.py, a function of the same
-    name; once this module is imported it shadows that function. Calling the module therefore
-    does what the function does: pipeline.report(cube_or_path, out_dir)."""
-
-    def __call__(self, cube_or_path, out_dir, title=None):
-        import pipeline
-        return make_report(pipeline._dataset(cube_or_path), out_dir, title=title)
-
-
-sys.modules[__name__].__class__ = _CallableModule

@@ -193,12 +193,3 @@ def test_boundaries_are_capped_deterministic_and_inside_the_grid():
     assert iv["start"] == 84.0
     kinds = [b["kind"] for b in report.stability_boundaries(ds2)]
     assert kinds == ["end"]
-
-
-def test_calling_the_module_makes_a_report(monkeypatch, tmp_path):
-    """pipeline.report (the module, once imported, shadows the same-named function in
-    pipeline/__init__.py) is callable like that function."""
-    calls = []
-    monkeypatch.setattr(report, "make_report", lambda ds, out, title=None: calls.append((ds, out)) or "ok")
-    ds = synthetic_cube()
-    assert report(ds, tmp_path) == "ok" and calls[0][0] is ds
