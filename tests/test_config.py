@@ -1,0 +1,150 @@
+"""Config validation: shipped scenes parse; every malformed config is rejected with its key and
+what is allowed, all problems at once; the scene hash ignores formatting."""
+import random
+import subprocess
+
+import numpy as np
+import pytest
+
+from pipeline import config
+from tests.test_pipeline import CLI
+
+BASE = """
+[scene]
+name = "t"
+model = "jeffcott_clearance"
+
+[bearing]
+preset = "209"
+stiffness = "bai2006"
+
+[sweep]
+speed = {start = 10.0, stop = 20.0, step = 1.0}
+clearance = [3.8e-6, 7.6e-6]
+"""
+
+
+def test_shipped_configs_and_default_parse():
+    for name in ("demo", "bai2006_fig13", "atlas4d"):
+        config.load_config(f"configs/{name}.toml")
+    cfg = config.parse_config(config.DEFAULT_CONFIG_TOML)
+    assert cfg.data["bearing"]["stiffness"] == "bai2006"
+    assert cfg.data["numerics"]["rtol"] == 1e-10 and cfg.data["rotor"]["mass"] == 2.0
+
+
+def test_fig13_axis_has_no_float_drift():
+    speed = config.load_config("configs/bai2006_fig13.toml").axes["speed"]
+    assert len(speed) == 2401 and speed[0] == 10.0 and speed[-1] == 250.0
+    np.testing.assert_array_equal(speed, np.round(10.0 + 0.1 * np.arange(2401), 10))
+
+
+def test_range_forms():
+    cfg = config.parse_config(BASE.replace("clearance = [3.8e-6, 7.6e-6]",
+                                           "contact_angle = {start = 10, stop = 40, num = 4}"))
+    np.testing.assert_array_equal(cfg.axes["contact_angle"], [10, 20, 30, 40])
+    assert list(cfg.axes) == ["speed", "contact_angle"]
+
+
+def edit(old, new):
+    assert old in BASE
+    return BASE.replace(old, new)
+
+
+MALFORMED = [
+    ("unknown section", BASE + "\n[rotr]\nmass = 2\n", ["rotr", "rotor"]),
+    ("unknown key, suggestion", edit('preset = "209"', 'preset = "209"\nstifness = 1e9'), ["bearing.stifness", "stiffness"]),
+    ("unknown preset", edit('preset = "209"', 'preset = "208"'), ["bearing.preset", '"209"', "angular_contact_medium"]),
+    ("wrong type", edit('stiffness = "bai2006"', 'stiffness = "bai2006"\ncage_rotation = "yes"'), ["bearing.cage_rotation", "true or false"]),
+    ("bool as number", BASE + "\n[rotor]\nmass = true\n", ["rotor.mass", "number"]),
+    ("negative clearance", edit("clearance = [3.8e-6, 7.6e-6]", "clearance = [-1e-6, 7.6e-6]"), ["sweep.clearance", ">= 0"]),
+    ("contact angle 0", edit("clearance = [3.8e-6, 7.6e-6]", "contact_angle = [0.0]"), ["sweep.contact_angle", "> 0"]),
+    ("contact angle 90", edit("clearance = [3.8e-6, 7.6e-6]", "contact_angle = [90.0]"), ["sweep.contact_angle", "< 90"]),
+    ("contact angle 120", edit('stiffness = "bai2006"', 'stiffness = "bai2006"\ncontact_angle = 120.0'), ["bearing.contact_angle", "< 90"]),
+    ("negative preload", edit("clearance = [3.8e-6, 7.6e-6]", "preload = [-5.0]\nclearance = [1e-6]"), ["sweep.preload", ">= 0"]),
+    ("empty axis", edit("clearance = [3.8e-6, 7.6e-6]", "clearance = []"), ["sweep.clearance", "empty"]),
+    ("step <= 0", edit("step = 1.0", "step = 0.0"), ["sweep.speed.step", "> 0"]),
+    ("start > stop", edit("start = 10.0, stop = 20.0", "start = 30.0, stop = 20.0"), ["sweep.speed", "start must be <= stop"]),
+    ("step and num", edit("step = 1.0", "step = 1.0, num = 3"), ["sweep.speed", "exactly one of step or num"]),
+    ("neither step nor num", edit(", step = 1.0", ""), ["sweep.speed", "exactly one of step or num"]),
+    ("nan", edit("start = 10.0", "start = nan"), ["sweep.speed.start", "finite"]),
+    ("inf rtol", BASE + "\n[numerics]\nrtol = inf\n", ["numerics.rtol", "finite"]),
+    ("missing name", edit('name = "t"\n', ""), ["scene.name", "required"]),
+    ("unknown model", edit('model = "jeffcott_clearance"', 'model = "jeffcott"'), ["scene.model", "jeffcott_clearance"]),
+    ("speed not swept", edit("speed = {start = 10.0, stop = 20.0, step = 1.0}\n", ""), ["sweep.speed", "required"]),
+    ("swept and fixed", edit('stiffness = "bai2006"', 'stiffness = "bai2006"\nclearance = 1e-6'), ["bearing.clearance", "also swept"]),
+    ("non-increasing list", edit("clearance = [3.8e-6, 7.6e-6]", "clearance = [7.6e-6, 3.8e-6]"), ["sweep.clearance", "increasing"]),
+    ("TOML syntax", BASE + "\n[numerics\n", ["not valid TOML", "line"]),
+    ("nominal angle with 209", edit('preset = "209"', 'preset = "209"\nnominal_angle = 26'), ["bearing.nominal_angle", "angular_contact_medium"]),
+    ("huge grid", edit("clearance = [3.8e-6, 7.6e-6]", "clearance = {start = 1e-6, stop = 2e-5, num = 30000}"), ["max_points", "--yes"]),
+    ("float for int", BASE + "\n[numerics]\nmax_newton_iter = 30.0\n", ["numerics.max_newton_iter", "integer"]),
+    ("zero clearance, no angle", edit("clearance = [3.8e-6, 7.6e-6]", "clearance = [0.0]"), ["bearing.contact_angle", "required when the clearance is 0"]),
+    ("newton below rtol", BASE + "\n[numerics]\nrtol = 1e-6\nnewton_tol = 1e-9\n", ["numerics.newton_tol", "rtol"]),
+    ("bad stiffness word", edit('stiffness = "bai2006"', 'stiffness = "soft"'), ["bearing.stiffness", '"hertz"', "a number"]),
+    ("integrator", BASE + "\n[numerics]\nintegrator = \"euler\"\n", ["numerics.integrator", '"dop853"', '"rk4"']),
+]
+
+
+@pytest.mark.parametrize("text, fragments", [m[1:] for m in MALFORMED], ids=[m[0] for m in MALFORMED])
+def test_malformed_config_is_rejected_with_its_key(text, fragments):
+    with pytest.raises(config.ConfigError) as err:
+        config.parse_config(text, path="bad.toml")
+    message = str(err.value)
+    assert message.startswith("bad.toml")
+    for fragment in fragments:
+        assert fragment in message, (fragment, message)
+
+
+def test_all_problems_are_reported_together():
+    text = edit('preset = "209"', 'preset = "208"\ncage_rotation = 3').replace("step = 1.0", "step = -1.0")
+    message = str(pytest.raises(config.ConfigError, config.parse_config, text).value)
+    assert {"bearing.preset", "bearing.cage_rotation", "sweep.speed.step"} <= {
+        line.split(": ")[1] for line in message.splitlines()}
+
+
+def test_large_grid_allowed_with_flag():
+    text = edit("clearance = [3.8e-6, 7.6e-6]", "clearance = {start = 1e-6, stop = 2e-5, num = 30000}")
+    assert config.parse_config(text, allow_large=True).n_points == 11 * 30000
+
+
+def test_hash_ignores_formatting_and_follows_values():
+    a = config.parse_config(BASE).hash()
+    assert config.parse_config("# a comment\n" + BASE.replace(" = ", "=")).hash() == a
+    assert config.parse_config(edit("step = 1.0", "step = 0.5")).hash() != a
+
+
+def mutate(text, rng):
+    """One random corruption of a valid config: a value, a key, a type or a section."""
+    lines = text.splitlines()
+    i = rng.choice([k for k, line in enumerate(lines) if line.strip()])
+    junk = rng.choice(['"x"', "-1", "1e400", "[]", "{}", "true", "nan", "0", "1e12", '"209"', "[1, 2, 1]"])
+    line = lines[i]
+    kind = rng.randrange(4)
+    if kind == 0 and "=" in line:
+        lines[i] = line.split("=")[0] + "= " + junk
+    elif kind == 1 and "=" in line:
+        lines[i] = "x" + line
+    elif kind == 2:
+        del lines[i]
+    else:
+        lines.insert(i, rng.choice(["[extra]", "a = 1", "= 3", "[sweep.speed]", "[[scene]]"]))
+    return "\n".join(lines)
+
+
+def test_fuzzed_configs_never_raise_anything_but_config_error():
+    rng = random.Random(7)
+    sources = [BASE] + [open(f"configs/{n}.toml").read() for n in ("demo", "atlas4d")]
+    for _ in range(400):
+        text = mutate(rng.choice(sources), rng)
+        try:
+            config.parse_config(text)
+        except config.ConfigError:
+            pass
+
+
+@pytest.mark.parametrize("text", [MALFORMED[2][1], MALFORMED[11][1], MALFORMED[22][1]])
+def test_cli_rejects_bad_config_with_exit_2(tmp_path, text):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    proc = subprocess.run(CLI + ["run", str(path), "-o", str(tmp_path / "x.nc")], capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr and str(path) in proc.stderr
