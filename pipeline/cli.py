@@ -4,6 +4,7 @@ User mistakes (bad config, bad cube, bad query) print one clear message and exit
 no traceback."""
 import argparse
 import json
+import os
 import sys
 
 import numpy as np
@@ -158,6 +159,9 @@ def main(argv=None):
     except user_errors as exc:
         print(f"rotorsweep {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
+    except BrokenPipeError:      # output piped into head & co.
+        sys.stdout = open(os.devnull, "w")
+        return 0
     except KeyboardInterrupt:
         print("rotorsweep: interrupted; finished chunks are kept, rerun with --resume", file=sys.stderr)
         return 130

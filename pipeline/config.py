@@ -300,12 +300,6 @@ def _cross_checks(data, axes, errors):
             errors.append(f"bearing.{name}: is also swept in sweep.{name}; give it in one place only")
     if b["nominal_angle"] is not None and b["preset"] != "angular_contact_medium":
         errors.append(f"bearing.nominal_angle: only for preset \"angular_contact_medium\" (preset is {b['preset']!r})")
-    clearances = axes.get("clearance", [b["clearance"] or 0.0])
-    has_angle = "contact_angle" in axes or b["contact_angle"] is not None
-    angular = b["preset"] == "angular_contact_medium"
-    if min(clearances) == 0 and not has_angle and not angular:
-        errors.append("bearing.contact_angle: required when the clearance is 0 (the angle cannot follow "
-                      "from a zero clearance); give bearing.contact_angle or sweep.contact_angle")
     if b["preload_constant"] == "filipkovsky" and max(axes.get("preload", [b["preload"] or 0.0])) <= 0:
         errors.append("bearing.preload_constant: \"filipkovsky\" needs a preload > 0")
     num = data["numerics"]
