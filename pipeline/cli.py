@@ -16,8 +16,24 @@ from pipeline import cube, query, schema
 EXIT_USAGE = 2
 
 
+def _confirm_large(args):
+    """--yes, or on a terminal a yes/no question, lets a grid above numerics.max_points run."""
+    if args.yes:
+        return True
+    try:
+        pipeline._config(args.config)
+        return False
+    except config_mod.ConfigError as exc:
+        if exc.grid_points is None or not sys.stdin.isatty():
+            raise
+        answer = input(f"{exc}\nRun all {exc.grid_points} points anyway? [y/N] ")
+        if answer.strip().lower() not in ("y", "yes"):
+            raise
+        return True
+
+
 def cmd_run(args):
-    path = pipeline.run(args.config, args.output, allow_large=args.yes, workers=args.workers,
+    path = pipeline.run(args.config, args.output, allow_large=_confirm_large(args), workers=args.workers,
                         scheduler=args.scheduler, resume=args.resume, overwrite=args.overwrite,
                         chunk_points=args.chunk_points, progress=not args.quiet)
     print(f"cube: {path}")

@@ -25,7 +25,14 @@ NOMINAL_ANGLES = (12, 15, 26, 36, 40)
 
 
 class ConfigError(Exception):
-    """A config that cannot be run; the message lists every problem, one per line."""
+    """A config that cannot be run; the message lists every problem, one per line.
+
+    grid_points is set when the grid size (above numerics.max_points) is the only problem, so a
+    front end may ask the user to confirm instead."""
+
+    def __init__(self, message, grid_points=None):
+        super().__init__(message)
+        self.grid_points = grid_points
 
 
 # --- declarative schema ------------------------------------------------------------------------
@@ -333,14 +340,13 @@ def parse_config(text, path=None, allow_large=False):
     data["sweep"] = {name: [float(x) for x in values] for name, values in axes.items()}
     if not errors:
         _cross_checks(data, axes, errors)
-    if not errors and axes:
-        n = int(np.prod([len(v) for v in axes.values()]))
-        limit = data["numerics"]["max_points"]
-        if n > limit and not allow_large:
-            errors.append(f"sweep: the grid has {n} points, above numerics.max_points = {limit}; "
-                          "raise numerics.max_points or pass --yes")
     if errors:
         raise ConfigError("\n".join(f"{label}: {e}" for e in errors))
+    n = int(np.prod([len(v) for v in axes.values()]))
+    limit = data["numerics"]["max_points"]
+    if n > limit and not allow_large:
+        raise ConfigError(f"{label}: sweep: the grid has {n} points, above numerics.max_points = "
+                          f"{limit}; raise numerics.max_points or pass --yes", grid_points=n)
     return Config(path, text, data, axes)
 
 
