@@ -116,6 +116,7 @@ def point_variables(sol, params, seconds):
         "bifurcation": sol.bifurcation if sol.status == shooting.CONVERGED else schema.INT_FILL,
         "forcing_period": params.period,
         "contact_angle_used": np.degrees(params.contact_angle),
+        "orbit_state": sol.state if sol.status == shooting.CONVERGED else np.full(len(lam), np.nan),
         "compute_time": seconds,
     }
     out.update(_orbit_extent(sol.samples))

@@ -172,15 +172,31 @@ def _run_type(line, i0):
     return schema.BIFURCATION[int(line["bifurcation"].values[i0])]
 
 
+def _refined_crossings(ds, others):
+    """(other axes' values..., unstable grid speed next to the crossing) -> refined speed."""
+    if "boundary_speed" not in ds:
+        return {}
+    out = {}
+    for k in range(ds.sizes["boundary"]):
+        key = tuple(ds[f"boundary_{a}"].values[k] for a in others)
+        losing = int(ds["boundary_direction"].values[k]) == 0
+        unstable_side = ds["boundary_grid_high" if losing else "boundary_grid_low"].values[k]
+        out[(*key, float(unstable_side))] = float(ds["boundary_speed"].values[k])
+    return out
+
+
 def unstable_intervals(ds):
     """Maximal runs of consecutive speeds whose periodic orbit is not stable (unstable, or not
     found), one list entry per run and per combination of the other swept axes.
 
     Each entry: the other axes' values, `start`/`end` (Hz, the first and last grid speed of the
-    run), `n_points`, `type` (fold / period_doubling / neimark_sacker / no_orbit: the state at the
-    run's first point) and the run's largest `max_abs_multiplier`."""
+    run), `onset`/`offset` (Hz, the refined crossings of the cube's boundary table just below
+    `start` and just above `end`; NaN where there is none, e.g. at a grid edge or next to a point
+    without orbit), `n_points`, `type` (fold / period_doubling / neimark_sacker / no_orbit: the
+    state at the run's first point) and the run's largest `max_abs_multiplier`."""
     others = _other_axes(ds)
     speed = ds["speed"].values
+    refined = _refined_crossings(ds, others)
     out = []
     for values in itertools.product(*(ds[a].values for a in others)):
         where = dict(zip(others, values))
@@ -192,6 +208,8 @@ def unstable_intervals(ds):
                 **{a: float(v) for a, v in where.items()},
                 "start": float(speed[i0]),
                 "end": float(speed[i1]),
+                "onset": refined.get((*values, float(speed[i0])), float("nan")),
+                "offset": refined.get((*values, float(speed[i1])), float("nan")),
                 "n_points": int(i1 - i0 + 1),
                 "type": _run_type(line, i0),
                 "max_abs_multiplier": float(np.nanmax(mu)) if np.isfinite(mu).any() else float("nan"),

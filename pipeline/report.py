@@ -207,9 +207,11 @@ def _map_panel(hv, ds, plan, where, backend, title, colorbar, show_x=True, show_
     )
     ticks = [(i, name) for i, name in enumerate(CLASSES)]
     if backend == "bokeh":
-        return mesh.opts(cticks=ticks, line_width=0, tools=["hover"],
+        mesh = mesh.opts(cticks=ticks, line_width=0, tools=["hover"],
                          colorbar_opts={"title": "stability class"}, **common)
-    return mesh.opts(cbar_ticks=ticks, clabel="stability class", **common)
+    else:
+        mesh = mesh.opts(cbar_ticks=ticks, clabel="stability class", **common)
+    return mesh
 
 
 def fig_stability_map(ds, backend="bokeh"):
@@ -429,17 +431,24 @@ def interval_rows(ds, intervals, machine=False):
     ASCII header and the query's type codes (fold, period_doubling, neimark_sacker, no_orbit),
     for the CSV."""
     others = [a for a in schema.AXES if a in ds.dims and a != "speed"]
-    header = [_axis_label(a) for a in others] + ["start [Hz]", "end [Hz]", "points", "type",
+    header = [_axis_label(a) for a in others] + ["start [Hz]", "end [Hz]", "refined onset [Hz]",
+                                                  "refined offset [Hz]", "points", "type",
                                                   "max |multiplier|"]
     rows = []
     for iv in intervals:
         rows.append([f"{iv[a] * DISPLAY[a][0]:.6g}" for a in others]
-                    + [f"{iv['start']:.6g}", f"{iv['end']:.6g}", str(iv["n_points"]),
+                    + [f"{iv['start']:.6g}", f"{iv['end']:.6g}", _refined(iv, "onset"),
+                       _refined(iv, "offset"), str(iv["n_points"]),
                        iv["type"] if machine else _TYPE_NAMES.get(iv["type"], iv["type"]),
                        f"{iv['max_abs_multiplier']:.4g}"])
     if machine:
         header = [h.replace("µ", "u").replace("|multiplier|", "abs multiplier") for h in header]
     return header, rows
+
+
+def _refined(iv, key):
+    value = iv.get(key, float("nan"))
+    return f"{value:.8g}" if np.isfinite(value) else "-"
 
 
 def write_csv(path, header, rows):

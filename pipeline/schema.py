@@ -59,5 +59,23 @@ VARIABLES = {
     "y_mean": ((), "float64", {"long_name": "mean vertical journal displacement over the orbit", "units": "m"}),
     "amplitude_x": ((), "float64", {"long_name": "half peak-to-peak horizontal displacement over the orbit", "units": "m"}),
     "amplitude_y": ((), "float64", {"long_name": "half peak-to-peak vertical displacement over the orbit", "units": "m"}),
+    "orbit_state": (("state",), "float64", {
+        "long_name": "periodic orbit state at t = 0 in the kernel's scaled units", "units": "1",
+        "comment": "lengths in units of 1e-6 m, time in units of forcing_period; for "
+                   "jeffcott_clearance: x, y, dx/dtau, dy/dtau (tau = t / forcing_period)"}),
     "compute_time": ((), "float64", {"long_name": "wall time spent on this point", "units": "s"}),
+}
+
+# The boundary table: one entry per stability change between neighbouring speeds of a line,
+# refined far below the grid step (dimension `boundary`; the other axes' values are stored as
+# boundary_<axis>).
+BOUNDARY_STATUS = ("refined", "not_refined")
+BOUNDARY_DIRECTION = ("loses_stability", "regains_stability")  # with increasing speed
+BOUNDARY_VARIABLES = {
+    "boundary_speed": ("float64", {"long_name": "refined speed where max |multiplier| = 1", "units": "Hz"}),
+    "boundary_type": ("int8", {"long_name": "how the leading multiplier crosses the unit circle", **_flag(BIFURCATION)}),
+    "boundary_direction": ("int8", {"long_name": "stability change with increasing speed", **_flag(BOUNDARY_DIRECTION)}),
+    "boundary_status": ("int8", {"long_name": "whether the crossing could be refined", **_flag(BOUNDARY_STATUS)}),
+    "boundary_grid_low": ("float64", {"long_name": "grid speed below the crossing", "units": "Hz"}),
+    "boundary_grid_high": ("float64", {"long_name": "grid speed above the crossing", "units": "Hz"}),
 }

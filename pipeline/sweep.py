@@ -17,7 +17,7 @@ from datetime import datetime, timezone
 
 import numpy as np
 
-from pipeline import compute, cube, schema
+from pipeline import boundaries, compute, cube
 
 VERSION = "0.1.0"
 
@@ -194,6 +194,7 @@ def run(cfg, output, workers=None, scheduler=None, resume=False, overwrite=False
         _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points, bar)
     ds = cube.assemble(cfg.axes, _fixed_coords(cfg), cube.read_parts(parts), _provenance(cfg),
                        n_multipliers=compute.MODELS[cfg.data["scene"]["model"]].n_state)
+    ds = boundaries.add_boundary_table(cfg.data, ds)
     path = cube.write_cube(ds, output, overwrite=True)
     _remove_parts(parts)
     return path

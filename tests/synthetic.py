@@ -38,16 +38,18 @@ def synthetic_cube(speed=None, clearance=None, n_multipliers=4):
     lam = (mu[..., None] * (0.5 ** k)) * np.exp(1j * angle * np.where(k % 2 == 0, 1, -1))
     data["multiplier_real"] = lam.real
     data["multiplier_imag"] = lam.imag
+    data["orbit_state"] = np.stack([data["x_mean"], data["y_mean"], 0 * mu, 0 * mu], axis=-1)
     dims = ("speed", "clearance")
     ds = xr.Dataset(coords={
         "speed": ("speed", speed, {"units": "Hz", "long_name": "shaft speed"}),
         "clearance": ("clearance", clearance, {"units": "m", "long_name": "radial internal clearance"}),
         "multiplier": ("multiplier", k),
+        "state": ("state", np.arange(4)),
         "contact_angle": ((), np.nan, {"units": "degree", "long_name": "bearing contact angle (from clearance)"}),
         "preload": ((), 0.0, {"units": "N", "long_name": "axial preload"}),
     })
     for name, (extra, dtype, attrs) in schema.VARIABLES.items():
-        ds[name] = (dims + extra, np.asarray(data[name]).astype(dtype), dict(attrs))
+        ds[name] = (dims + tuple(extra), np.asarray(data[name]).astype(dtype), dict(attrs))
     ds.attrs.update({
         "Conventions": "CF-1.10",
         "title": "synthetic test cube",

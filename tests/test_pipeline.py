@@ -121,3 +121,20 @@ def test_bad_config_exits_2(tmp_path):
     bad.write_text(SMALL.replace('preset = "209"', 'preset = "208"'))
     proc = rotorsweep("run", bad, "-o", tmp_path / "x.nc", check=False)
     assert proc.returncode == 2 and "bearing.preset" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_boundary_table_refines_each_stability_change(small_cube):
+    import pipeline
+    from pipeline import boundaries
+
+    ds = cube.open_cube(small_cube)
+    table = boundaries.boundary_frame(ds)
+    assert table, "the small sweep crosses the period-doubling boundary at 7.6 um"
+    for row in table:
+        assert row["status"] == 0 and row["grid_low"] < row["speed"] < row["grid_high"]
+        # independent of the refinement: a cold solve at the refined speed sits on |lambda| = 1
+        at = pipeline.point(row["speed"], row["clearance"])
+        assert abs(at["max_abs_multiplier"] - 1.0) < 1e-5
+    intervals = json.loads(rotorsweep("query", small_cube, "--unstable", "--format", "json").stdout)
+    onsets = [iv["onset"] for iv in intervals if iv["onset"] is not None]
+    assert any(abs(o - table[0]["speed"]) < 1e-12 for o in onsets)

@@ -118,7 +118,7 @@ def test_html_is_offline_and_has_header_table_and_config(made):
     assert intervals
     for iv in intervals:
         row = (f"<tr><td>{iv['clearance'] * 1e6:.6g}</td><td>{iv['start']:.6g}</td>"
-               f"<td>{iv['end']:.6g}</td><td>{iv['n_points']}</td>")
+               f"<td>{iv['end']:.6g}</td><td>-</td><td>-</td><td>{iv['n_points']}</td>")
         assert row in text, row
     # table after the figures, config last
     assert text.index("Stability-region map") < text.index("Unstable speed intervals") < text.index("Configuration")
