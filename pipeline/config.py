@@ -22,6 +22,7 @@ AXES = ("speed", "clearance", "contact_angle", "preload")
 MODELS = ("jeffcott_clearance",)
 PRESETS = ("209", "angular_contact_medium")
 NOMINAL_ANGLES = (12, 15, 26, 36, 40)
+DEFAULT_NOMINAL_ANGLE = 26    # angular_contact_medium when bearing.nominal_angle is not given
 
 
 class ConfigError(Exception):
@@ -315,6 +316,13 @@ def _cross_checks(data, axes, errors):
                       "converge below the integration accuracy")
 
 
+def _fill_dependent_defaults(data):
+    """Defaults that depend on another key: the nominal angle exists only for the angular preset."""
+    b = data["bearing"]
+    if b["preset"] == "angular_contact_medium" and b["nominal_angle"] is None:
+        b["nominal_angle"] = DEFAULT_NOMINAL_ANGLE
+
+
 def parse_config(text, path=None, allow_large=False):
     """Validate a TOML scene; returns a Config or raises ConfigError listing every problem."""
     label = str(path) if path is not None else "<config>"
@@ -347,7 +355,8 @@ def parse_config(text, path=None, allow_large=False):
     if n > limit and not allow_large:
         raise ConfigError(f"{label}: sweep: the grid has {n} points, above numerics.max_points = "
                           f"{limit}; raise numerics.max_points or pass --yes", grid_points=n)
-    return Config(path, text, data, axes)
+    _fill_dependent_defaults(data)
+    return Config(None if path is None else str(path), text, data, axes)
 
 
 def load_config(path, allow_large=False):

@@ -2,12 +2,14 @@
 what is allowed, all problems at once; the scene hash ignores formatting."""
 import random
 import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from pipeline import config
-from tests.test_pipeline import CLI
+CLI = [str(Path(sys.executable).with_name("rotorsweep"))]
 
 BASE = """
 [scene]
@@ -53,6 +55,14 @@ def test_zero_clearance_without_angle_is_radial_contact():
     assert compute.point_params(cfg.data, 50.0, 0.0, None, 0.0).contact_angle == 0.0
 
 
+def test_dependent_defaults_and_path():
+    angular = edit('preset = "209"', 'preset = "angular_contact_medium"')
+    assert config.parse_config(angular).data["bearing"]["nominal_angle"] == 26
+    assert config.parse_config(BASE).data["bearing"]["nominal_angle"] is None
+    from pathlib import Path
+    assert config.load_config(Path("configs/demo.toml")).path == "configs/demo.toml"
+
+
 def edit(old, new):
     assert old in BASE
     return BASE.replace(old, new)
@@ -84,6 +94,7 @@ MALFORMED = [
     ("TOML syntax", BASE + "\n[numerics\n", ["not valid TOML", "line"]),
     ("nominal angle with 209", edit('preset = "209"', 'preset = "209"\nnominal_angle = 26'), ["bearing.nominal_angle", "angular_contact_medium"]),
     ("huge grid", edit("clearance = [3.8e-6, 7.6e-6]", "clearance = {start = 1e-6, stop = 2e-5, num = 30000}"), ["max_points", "--yes"]),
+    ("nominal angle not a preset angle", edit('preset = "209"', 'preset = "angular_contact_medium"\nnominal_angle = 20'), ["bearing.nominal_angle", "12, 15, 26, 36, 40"]),
     ("float for int", BASE + "\n[numerics]\nmax_newton_iter = 30.0\n", ["numerics.max_newton_iter", "integer"]),
     ("newton below rtol", BASE + "\n[numerics]\nrtol = 1e-6\nnewton_tol = 1e-9\n", ["numerics.newton_tol", "rtol"]),
     ("bad stiffness word", edit('stiffness = "bai2006"', 'stiffness = "soft"'), ["bearing.stiffness", '"hertz"', "a number"]),
@@ -149,9 +160,20 @@ def test_fuzzed_configs_never_raise_anything_but_config_error():
 
 
 @pytest.mark.parametrize("text", [MALFORMED[2][1], MALFORMED[11][1], MALFORMED[22][1]])
-def test_cli_rejects_bad_config_with_exit_2(tmp_path, text):
+def test_cli_rejects_bad_config_with_exit_2(tmp_path, capsys, text):
+    from pipeline import cli
+
     path = tmp_path / "bad.toml"
     path.write_text(text)
+    assert cli.main(["run", str(path), "-o", str(tmp_path / "x.nc")]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and str(path) in err
+    assert not (tmp_path / "x.nc").exists()
+
+
+def test_cli_subprocess_bad_config_exits_2_without_traceback(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text(MALFORMED[2][1])
     proc = subprocess.run(CLI + ["run", str(path), "-o", str(tmp_path / "x.nc")], capture_output=True,
                           text=True, timeout=120)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr and str(path) in proc.stderr
