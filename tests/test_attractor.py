@@ -1,0 +1,287 @@
+"""Attractor diagnostics: Poincare samples, period detection, Lyapunov exponents, classification.
+
+Independent values: Floquet multipliers from shooting (a different integration, with Newton),
+eigenvalues of a constant matrix, Liouville's formula for the divergence, synthetic sequences.
+"""
+import numpy as np
+import pytest
+
+from rotorkernels import attractor as at, continuation, floquet, integrators as ig, models, shooting
+from tests.reference import BaiPoint
+from tests.test_kernels import JEFF, bai_params
+
+OPTS = ig.settings(rtol=1e-10, atol=1e-12)
+TIGHT = ig.settings(rtol=1e-12, atol=1e-14)
+LINEAR = models.LINEAR_OSCILLATOR
+CHAOTIC_POINT = BaiPoint(36.5, 19.0e-6)      # chaotic attractor, reached from the static guess
+
+
+def stable_orbit(point, opts=OPTS):
+    p, period = bai_params(point)
+    sol = continuation.solve_orbit(JEFF, p, opts, cold_guess=models.static_guess, tol=1e-11,
+                                   transient_periods=100)
+    assert sol.status == shooting.CONVERGED and sol.stable, sol
+    return sol, p, period
+
+
+# --- Lyapunov exponents ---------------------------------------------------------------------
+
+@pytest.mark.parametrize("point, weighted, align, rtol", [
+    # the brief's point: the four multipliers share one modulus (two complex pairs), so the
+    # individual Benettin exponents oscillate; the weighted average settles them
+    (BaiPoint(60.0, 3.8e-6), True, 20.0, 1e-3),
+    # a real leading multiplier (-0.88, just above the period doubling): once the frame is
+    # aligned (gap 0.19 per period: 100 periods), every period's R_11 is |lambda_1| exactly,
+    # so even the plain running mean matches to integration accuracy
+    (BaiPoint(66.0, 19.0e-6), False, 100.0, 1e-6),
+], ids=["60Hz-3.8um", "66Hz-19um"])
+def test_lle_of_stable_orbit_matches_floquet_multipliers(point, weighted, align, rtol):
+    sol, p, period = stable_orbit(point)
+    expected = at.derived_lle(sol.max_abs, period)                     # 1/s
+    res = at.lyapunov_si(JEFF, models.static_guess(p), p, period, OPTS, n_transient=200,
+                         max_periods=1000, rtol_stop=0.0, min_periods=1000, weighted=weighted,
+                         align_periods=align)
+    assert res.status == ig.STATUS_OK and res.periods_used == 1000
+    assert abs(res.lle - expected) < rtol * abs(expected), (res.lle, expected)
+
+
+def linear_system(p):
+    a = np.zeros((4, 4))
+    models.jac(LINEAR.id, 0.0, np.zeros(4), p, a)
+    return a
+
+
+def test_linear_oscillator_spectrum_is_real_parts_of_eigenvalues():
+    """Real eigenvalues (overdamped): once the frame is aligned on the invariant flag (gap 0.15
+    per period: 200 periods), each interval's R_ii is exp(lambda_i) exactly."""
+    p = np.array([2.0, 0.5, 3.0, 6.0, 9.0])
+    expected = np.sort(np.linalg.eigvals(linear_system(p)).real)[::-1]
+    assert np.all(np.diff(expected) < -0.1)                       # distinct, real
+    for weighted in (True, False):
+        expo, stderr, used, status = at.lyapunov_spectrum(
+            LINEAR, np.array([1.0, -2.0, 0.5, 0.3]), p, TIGHT, n_transient=0, max_periods=200,
+            rtol_stop=0.0, min_periods=200, weighted=weighted, align_periods=200.0)
+        assert status == ig.STATUS_OK and used == 200
+        np.testing.assert_allclose(expo, expected, rtol=1e-6)
+
+
+def test_linear_oscillator_with_complex_pairs():
+    """A complex pair has no invariant line: each of its two Benettin exponents carries a
+    bounded oscillating error (slowly averaged out, slower still when the rotation per period is
+    close to a rational: here 6.282 rad, almost 2 pi), while the pair's sum -- the growth of the
+    invariant plane -- is exact."""
+    p = np.array([40.0, 5.0, 90.0, 0.4, 0.9])
+    expected = np.sort(np.linalg.eigvals(linear_system(p)).real)[::-1]   # two equal pairs
+    expo, _, _, status = at.lyapunov_spectrum(LINEAR, np.ones(4), p, TIGHT, n_transient=0,
+                                              max_periods=400, rtol_stop=0.0, min_periods=400)
+    assert status == ig.STATUS_OK
+    np.testing.assert_allclose([expo[0] + expo[1], expo[2] + expo[3]],
+                               [expected[0] + expected[1], expected[2] + expected[3]], rtol=1e-8)
+    np.testing.assert_allclose(expo, expected, rtol=3e-2)
+    assert expo.sum() == pytest.approx(np.trace(linear_system(p)), rel=1e-10)
+
+
+@pytest.mark.parametrize("point", [BaiPoint(60.0, 3.8e-6), CHAOTIC_POINT], ids=["stable", "chaotic"])
+def test_sum_of_spectrum_is_the_divergence(point):
+    p, period = bai_params(point)
+    expo, _, _, status = at.lyapunov_spectrum(JEFF, models.static_guess(p), p, OPTS, n_transient=100,
+                                              max_periods=300, rtol_stop=0.0)
+    assert status == ig.STATUS_OK
+    divergence = -2.0 * point.damping * period / point.mass               # per unit tau
+    assert abs(expo.sum() - divergence) < 1e-6 * abs(divergence)
+    si = at.lyapunov_si(JEFF, models.static_guess(p), p, period, OPTS, n_transient=100, max_periods=300,
+                        rtol_stop=0.0)
+    divergence_si = -2.0 * point.damping / point.mass                        # 1/s
+    assert abs(si.exponents.sum() - divergence_si) < 1e-6 * abs(divergence_si)
+
+
+def test_chaotic_exponents_do_not_depend_on_the_renormalization_interval():
+    p, period = bai_params(CHAOTIC_POINT)
+    u0 = at.poincare(JEFF, models.static_guess(p), p, OPTS, 200, 1)[0][-1]
+    runs = {}
+    for renorm in (0.5, 1.0, 2.0):
+        expo, stderr, used, status = at.lyapunov_spectrum(JEFF, u0, p, OPTS, 0, renorm, 1000,
+                                                          rtol_stop=0.0)
+        assert status == ig.STATUS_OK and used == 1000
+        runs[renorm] = expo, stderr
+    assert runs[1.0][0][0] > 0.1                                          # clearly chaotic
+    for a, b in [(0.5, 1.0), (1.0, 2.0), (0.5, 2.0)]:
+        (ea, sa), (eb, sb) = runs[a], runs[b]
+        assert np.all(np.abs(ea - eb) <= 4.0 * np.hypot(sa, sb)), (a, b, ea, eb, sa, sb)
+
+
+def test_early_stop_and_largest_lyapunov_is_the_first_component():
+    p, period = bai_params(CHAOTIC_POINT)
+    u0 = at.poincare(JEFF, models.static_guess(p), p, OPTS, 200, 1)[0][-1]
+    kw = dict(n_transient=0, renorm_periods=1.0, max_periods=3000, n_blocks=10, rtol_stop=0.1,
+              min_periods=200)
+    expo, stderr, used, status = at.lyapunov_spectrum(JEFF, u0, p, OPTS, **kw)
+    lle, lle_err, used2, status2 = at.largest_lyapunov(JEFF, u0, p, OPTS, **kw)
+    assert (lle, lle_err, used2, status2) == (expo[0], stderr[0], used, status)
+    assert 200 <= used < 3000                                  # stopped on its uncertainty
+    assert stderr[0] <= 0.1 * abs(expo[0]) + 1e-4
+
+
+def test_diverging_run_reports_its_status():
+    p = np.array([-40.0, 0.0, -40.0, 0.0, 0.0])                 # x'' = 40 x: unstable
+    opts = ig.settings(amplitude_limit=1e3)
+    expo, _, _, status = at.lyapunov_spectrum(LINEAR, np.ones(4), p, opts, n_transient=10)
+    assert status == ig.STATUS_AMPLITUDE and np.all(np.isnan(expo))
+    samples, status = at.poincare(LINEAR, np.ones(4), p, opts, 0, 8)
+    assert status == ig.STATUS_AMPLITUDE
+    assert np.all(np.isfinite(samples[0])) and np.all(np.isnan(samples[-1]))
+    assert at.classify(samples, np.nan, np.nan, 0, status) == (at.DIVERGED, 0)
+
+
+def test_derived_lle():
+    assert at.derived_lle(np.exp(-0.5), 0.01) == pytest.approx(-50.0)
+
+
+# --- Poincare samples and period detection --------------------------------------------------
+
+def test_poincare_samples_of_a_stable_orbit_are_the_shooting_state():
+    sol, p, _ = stable_orbit(BaiPoint(60.0, 3.8e-6), TIGHT)
+    samples, status = at.poincare(JEFF, models.static_guess(p), p, TIGHT, 200, 32)
+    assert status == ig.STATUS_OK and samples.shape == (32, 4)
+    scale = np.abs(sol.state).max()
+    np.testing.assert_allclose(samples, np.broadcast_to(sol.state, samples.shape), rtol=0,
+                               atol=1e-9 * scale)
+    assert at.detect_period(samples) == 1
+
+
+def test_poincare_samples_of_a_period_two_orbit_alternate_between_its_points():
+    p, _ = bai_params(BaiPoint(55.0, 19.0e-6))
+    samples, status = at.poincare(JEFF, models.static_guess(p), p, TIGHT, 300, 16)
+    assert status == ig.STATUS_OK and at.detect_period(samples) == 2
+    orbit = shooting.periodic_orbit(JEFF, samples[-1], p, TIGHT, periods=2, tol=1e-11)
+    assert orbit.status == shooting.CONVERGED
+    assert floquet.multipliers(orbit.monodromy)[0].real != 0       # a genuine period-2 solve
+    scale = np.abs(orbit.state).max()
+    np.testing.assert_allclose(samples[-1::-2], np.broadcast_to(orbit.state, samples[-1::-2].shape),
+                               rtol=0, atol=1e-8 * scale)
+    assert np.abs(samples[-1] - samples[-2]).max() > 1.0          # the two points are distinct
+
+
+def periodic_sequence(k, n=128, noise=0.0, seed=0):
+    rng = np.random.default_rng(seed)
+    base = rng.normal(scale=5.0, size=(k, 4)) + 20.0
+    seq = base[np.arange(n) % k]
+    return seq + noise * rng.normal(size=seq.shape)
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 4, 8, 32])
+def test_detect_period_of_synthetic_sequences(k):
+    assert at.detect_period(periodic_sequence(k)) == k
+    spread = 10.0 if k > 1 else 20.0
+    assert at.detect_period(periodic_sequence(k, noise=1e-9 * spread)) == k      # below tolerance
+    if k > 1:
+        assert at.detect_period(periodic_sequence(k, noise=1e-3 * spread)) == 0  # above it
+
+
+def test_detect_period_rejects_an_irrational_rotation_and_nan():
+    n = np.arange(128)
+    golden = (np.sqrt(5.0) - 1.0) / 2.0
+    circle = np.column_stack([np.cos(2 * np.pi * golden * n), np.sin(2 * np.pi * golden * n)])
+    assert at.detect_period(circle) == 0
+    assert at.detect_period(circle, max_period=64) == 0
+    rational = np.column_stack([np.cos(2 * np.pi * 3 * n / 7), np.sin(2 * np.pi * 3 * n / 7)])
+    assert at.detect_period(rational) == 7
+    seq = periodic_sequence(2)
+    seq[-1, 0] = np.nan
+    assert at.detect_period(seq) == 0
+    assert at.detect_period(periodic_sequence(32, n=64)) == 0      # not seen twice in the tail
+
+
+# --- classification and spectrum ------------------------------------------------------------
+
+def test_classify():
+    rng = np.random.default_rng(2)
+    n = np.arange(128)
+    golden = (np.sqrt(5.0) - 1.0) / 2.0
+    torus = np.column_stack([np.cos(2 * np.pi * golden * n), 0.6 * np.sin(2 * np.pi * golden * n),
+                             np.zeros(128), np.zeros(128)]) + 5.0
+    cloud = rng.normal(size=(128, 4))
+    assert at.classify(periodic_sequence(4), np.nan, np.nan, 4) == (at.DIVERGED, 0)
+    assert at.classify(periodic_sequence(4), -0.3, 0.01, 4) == (at.PERIODIC, 4)
+    assert at.classify(cloud, 0.3, 0.01, 0) == (at.CHAOTIC, 0)
+    assert at.classify(cloud, 0.02, 0.01, 0) == (at.PERIODIC, 0)            # within 3 sigma
+    assert at.classify(cloud, 0.033, 0.01, 0)[0] == at.CHAOTIC              # 3 sigma + floor
+    assert at.classify(torus, 1e-4, 2e-4, 0) == (at.QUASI_PERIODIC, 0)
+    assert at.classify(torus, -0.2, 1e-3, 0) == (at.PERIODIC, 0)            # unresolved period
+    # zero exponent but no closed curve: a slowly settling orbit (two clusters), not a torus
+    settling = periodic_sequence(2) + 1e-3 * rng.normal(size=(128, 4))
+    assert at.classify(settling, -1e-3, 1e-4, 0) == (at.PERIODIC, 0)
+    assert at.classify(settling, -1e-3, 1e-4, 0, check_curve=False) == (at.QUASI_PERIODIC, 0)
+    assert at.classify(torus, 0.0, 0.0, 0, ig.STATUS_NAN) == (at.DIVERGED, 0)
+    assert at.ATTRACTOR[at.QUASI_PERIODIC] == "quasi_periodic"
+
+
+def test_closed_curve():
+    n = np.arange(200)
+    golden = (np.sqrt(5.0) - 1.0) / 2.0
+    theta = 2 * np.pi * golden * n
+    r = 1.0 + 0.3 * np.cos(3 * theta)
+    curve = np.column_stack([r * np.cos(theta), r * np.sin(theta), 0.1 * np.sin(theta), np.ones(200)])
+    assert at.closed_curve(curve)
+    assert not at.closed_curve(np.random.default_rng(1).normal(size=(200, 4)))
+    assert not at.closed_curve(periodic_sequence(5, n=200))
+    assert not at.closed_curve(curve[:20])
+
+
+def test_power_spectrum_peak():
+    dt = 1e-3
+    t = np.arange(4096) * dt
+    x = 0.7 * np.sin(2 * np.pi * 125.0 * t) + 0.1 * np.sin(2 * np.pi * 40.0 * t) + 3.0
+    freqs, power = at.power_spectrum(x, dt)
+    assert freqs[np.argmax(power)] == pytest.approx(125.0, abs=1.0 / (4096 * dt))
+    assert power.max() == pytest.approx(0.7 ** 2, rel=0.2)
+    assert freqs[-1] == pytest.approx(0.5 / dt)
+
+
+# --- one point ------------------------------------------------------------------------------
+
+def test_diagnose_periodic_and_chaotic_points():
+    p, period = bai_params(BaiPoint(55.0, 19.0e-6))                     # period 2
+    res = at.diagnose(JEFF, models.static_guess(p), p, period, OPTS, n_transient=300)
+    assert (res.code, res.period, res.periods_used) == (at.PERIODIC, 2, 0.0)
+    bench = at.diagnose(JEFF, models.static_guess(p), p, period, OPTS, n_transient=300,
+                        lyapunov_always=True, max_periods=1000, rtol_stop=0.0)
+    assert (bench.code, bench.period, bench.periods_used) == (at.PERIODIC, 2, 1000.0)
+    assert res.lle < 0 and abs(res.lle - bench.lle) < 1e-3 * abs(res.lle), (res.lle, bench.lle)
+    np.testing.assert_allclose(res.end_state, res.samples[-1])
+    p, period = bai_params(CHAOTIC_POINT)
+    res = at.diagnose(JEFF, models.static_guess(p), p, period, OPTS, max_periods=400)
+    assert res.code == at.CHAOTIC and res.period == 0 and res.lle > 3 * res.lle_stderr > 0
+    assert 100 <= res.periods_used <= 400 and res.status == ig.STATUS_OK
+    # the end state is on the attractor at a whole period: restarting there stays chaotic
+    again = at.diagnose(JEFF, res.end_state, p, period, OPTS, n_transient=0, max_periods=400)
+    assert again.code == at.CHAOTIC
+
+
+# --- the period-doubling route to chaos of Bai 2006 (19 um) --------------------------------
+
+CASCADE_SPEEDS = np.concatenate([np.arange(70.0, 43.0, -2.0), np.arange(43.0, 38.95, -0.1),
+                                 np.arange(38.5, 30.9, -0.5)])
+
+
+@pytest.mark.slow
+def test_period_doubling_cascade_to_chaos_at_19um():
+    """Attractor continuation downwards in speed (each speed starts from the previous end state):
+    period 1 -> 2 -> 4 -> 8 in order, then chaos (positive exponent) with periodic windows."""
+    u = None
+    found = []
+    for speed in CASCADE_SPEEDS:
+        p, period = bai_params(BaiPoint(speed, 19.0e-6))
+        u = models.static_guess(p) if u is None else u
+        res = at.diagnose(JEFF, u, p, period, OPTS, n_transient=400, n_samples=128, max_periods=1000,
+                          min_periods=200)
+        assert res.status == ig.STATUS_OK
+        u = res.end_state
+        found.append((speed, res.code, res.period, res.lle))
+    codes = [(c, k) for _, c, k, _ in found]
+    first = {k: next(i for i, ck in enumerate(codes) if ck == (at.PERIODIC, k)) for k in (1, 2, 4, 8)}
+    first_chaos = next(i for i, (c, _) in enumerate(codes) if c == at.CHAOTIC)
+    assert first[1] < first[2] < first[4] < first[8] < first_chaos, found
+    assert all(lle > 0 for _, c, _, lle in found if c == at.CHAOTIC)
+    windows = [k for c, k in codes[first_chaos:] if c == at.PERIODIC and k > 0]
+    assert windows and sum(c == at.CHAOTIC for c, _ in codes[first_chaos:]) >= 10, found
