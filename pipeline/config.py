@@ -87,9 +87,14 @@ SCHEMA = {
     },
     "sweep": {name: Key("axis") for name in AXES},
     "analysis": {
-        "floquet": Key("bool", default=True),
-        "poincare": Key("bool", default=False),
-        "lyapunov": Key("bool", default=False),
+        "floquet": Key("bool", default=True, help="periodic orbit by shooting, Floquet multipliers"),
+        "attractor": Key("bool", default=False, help="Poincare section, period, attractor class, Lyapunov exponents"),
+        "derive_when_stable": Key("bool", default=True),
+        "sweep_direction": Key("choice", default="up", choices=("up", "down", "both")),
+        "transient_periods": _num(0, kind="int", default=200),
+        "poincare_samples": _num(8, 4096, kind="int", default=128),
+        "max_period": _num(1, 1024, kind="int", default=32),
+        "lyapunov_max_periods": _num(20, 1e6, kind="int", default=2000),
     },
     "numerics": {
         "integrator": Key("choice", default="dop853", choices=("dop853", "rk4")),
@@ -310,6 +315,13 @@ def _cross_checks(data, axes, errors):
         errors.append(f"bearing.nominal_angle: only for preset \"angular_contact_medium\" (preset is {b['preset']!r})")
     if b["preload_constant"] == "filipkovsky" and max(axes.get("preload", [b["preload"] or 0.0])) <= 0:
         errors.append("bearing.preload_constant: \"filipkovsky\" needs a preload > 0")
+    ana = data["analysis"]
+    if not (ana["floquet"] or ana["attractor"]):
+        errors.append("analysis: floquet and attractor are both false; nothing to compute")
+    if ana["poincare_samples"] < 4 * ana["max_period"]:
+        errors.append(f"analysis.poincare_samples: must be >= 4 x analysis.max_period "
+                      f"(= {4 * ana['max_period']}): a period is detected on the second half of "
+                      "the samples and must repeat there at least twice")
     num = data["numerics"]
     if num["integrator"] == "dop853" and num["newton_tol"] < num["rtol"]:
         errors.append(f"numerics.newton_tol: must be >= numerics.rtol ({num['rtol']:g}); Newton cannot "

@@ -290,7 +290,7 @@ def _empty(name, shape, values, n_multipliers):
     if name not in schema.VARIABLES:
         raise CubeError(f"part files hold variable {name!r}, which the cube schema does not know")
     extra_dims, dtype, _ = schema.VARIABLES[name]
-    extra = tuple(n_multipliers if d in ("multiplier", "state") else n
+    extra = tuple(n_multipliers if d in ("multiplier", "state", "exponent") else n
                   for d, n in zip(extra_dims, values.shape[1:]))
     dtype = np.dtype(dtype)
     fill = schema.INT_FILL if dtype.kind in "iu" else schema.FLOAT_FILL

@@ -66,6 +66,36 @@ VARIABLES = {
     "compute_time": ((), "float64", {"long_name": "wall time spent on this point", "units": "s"}),
 }
 
+# Attractor diagnostics ([analysis] attractor = true): what the rotor actually settles on, found by
+# integrating from the previous speed's end state (continuation of the attractor along speed).
+LLE_METHOD = ("integrated", "derived")
+_MODULUS = "Floquet multiplier of the attractor's period-k orbit (shooting over k forcing periods)"
+ATTRACTOR_VARIABLES = {
+    "attractor": ((), "int8", {"long_name": "attractor class after the transient", **_flag(ATTRACTOR)}),
+    "period": ((), "int16", {"long_name": "attractor period in forcing periods (0: none up to max_period)", "units": "1"}),
+    "lle": ((), "float64", {"long_name": "largest Lyapunov exponent", "units": "s-1"}),
+    "lle_stderr": ((), "float64", {"long_name": "standard error of the largest Lyapunov exponent (block averages; 0 when derived)", "units": "s-1"}),
+    "lle_method": ((), "int8", {"long_name": "how lle was obtained: integrated (Benettin/QR) or derived as ln|multiplier| / (k T)", **_flag(LLE_METHOD)}),
+    "lyapunov_exponents": (("exponent",), "float64", {"long_name": "Lyapunov spectrum, largest first", "units": "s-1"}),
+    "poincare_x": (("sample",), "float64", {"long_name": "horizontal journal displacement once per forcing period (Poincare section)", "units": "m"}),
+    "poincare_y": (("sample",), "float64", {"long_name": "vertical journal displacement once per forcing period (Poincare section)", "units": "m"}),
+    "attractor_multiplier_real": (("multiplier",), "float64", {"long_name": f"{_MODULUS}, real part", "units": "1"}),
+    "attractor_multiplier_imag": (("multiplier",), "float64", {"long_name": f"{_MODULUS}, imaginary part", "units": "1"}),
+    "attractor_state": (("state",), "float64", {
+        "long_name": "state on the attractor at the end of the run (a whole forcing period), in the kernel's scaled units",
+        "units": "1", "comment": "the start of the next speed in the continuation; see orbit_state for the units"}),
+    "lyapunov_periods": ((), "float64", {"long_name": "forcing periods integrated for the Lyapunov estimate (0 when derived)", "units": "1"}),
+}
+# sweep_direction = "both": the same diagnostics sweeping speed downwards, as <name>_down, plus
+# where the two directions end on different attractors (coexisting attractors, hysteresis).
+DOWN_SUFFIX = "_down"
+ATTRACTOR_VARIABLES.update({
+    name + DOWN_SUFFIX: (extra, dtype, {**attrs, "long_name": attrs["long_name"] + ", sweeping speed down"})
+    for name, (extra, dtype, attrs) in list(ATTRACTOR_VARIABLES.items())})
+ATTRACTOR_VARIABLES["hysteresis"] = ((), "int8", {
+    "long_name": "up and down sweeps end on different attractors (class, period or orbit differ)", **_flag(("no", "yes"))})
+VARIABLES.update(ATTRACTOR_VARIABLES)
+
 # The boundary table: one entry per stability change between neighbouring speeds of a line,
 # refined far below the grid step (dimension `boundary`; the other axes' values are stored as
 # boundary_<axis>).

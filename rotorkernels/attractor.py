@@ -55,7 +55,11 @@ LLE_FLOOR = 2e-3
 PERIOD_FLOOR = 1.0
 
 Lyapunov = namedtuple("Lyapunov", "exponents stderr lle lle_stderr periods_used status")
-Attractor = namedtuple("Attractor", "code period lle lle_stderr samples end_state status periods_used")
+# exponents, lle, lle_stderr in 1/s; multipliers: of the period-k orbit when the attractor is
+# periodic and its orbit was refined by shooting on k T (else NaN); derived: the exponents come
+# from those multipliers, not from a Lyapunov run.
+Attractor = namedtuple("Attractor", "code period lle lle_stderr samples end_state status periods_used "
+                                    "exponents multipliers derived")
 
 
 # --- Poincare samples -----------------------------------------------------------------------
@@ -413,6 +417,12 @@ def classify(samples, lle, lle_stderr, period_k, status=ig.STATUS_OK, *, sigmas=
 
 # --- one point ------------------------------------------------------------------------------
 
+def _shoot_k(model, state, p, opts, k):
+    """Newton on k forcing periods from a state already on (or next to) the orbit."""
+    return shooting.shoot(model.id, state.copy(), p, model.n_state, model.n_position, float(k),
+                          opts, max(1e-9, 10.0 * float(opts[ig.S_RTOL])), 10)
+
+
 def _minimal_period(model, state, p, opts, k, rel_tol):
     """Smallest divisor d of k for which the converged period-k orbit through `state` returns
     after d periods (within rel_tol x max(1, max|state|)). Samples that settle slowly onto a
@@ -429,46 +439,105 @@ def _minimal_period(model, state, p, opts, k, rel_tol):
     return k
 
 
+def periodic_orbit_of(model, state, p, opts, k, rel_tol):
+    """Refine a period-k attractor through `state` by shooting on k T: (k_min, orbit state,
+    multipliers of the k_min-periodic orbit), or None when Newton does not converge. k is
+    reduced to the orbit's minimal period (`_minimal_period`)."""
+    orbit = _shoot_k(model, state, p, opts, k)
+    if orbit[2] != shooting.CONVERGED:
+        return None
+    d = _minimal_period(model, orbit[0], p, opts, k, rel_tol)
+    if d < k:
+        again = _shoot_k(model, orbit[0], p, opts, d)
+        if again[2] == shooting.CONVERGED:
+            orbit, k = again, d
+    return k, orbit[0], floquet.multipliers(orbit[1])
+
+
+def exponents_of_orbit(multipliers, k, period):
+    """The Lyapunov spectrum of a periodic orbit: ln|lambda_i| / (k T), largest first."""
+    return np.sort(np.log(np.abs(np.asarray(multipliers))))[::-1] / (k * period)
+
+
+def settle_on_orbit(model, u0, p, opts, orbit_state, max_periods, rel_tol):
+    """Integrate from u0 one forcing period at a time until the state is within rel_tol x
+    max(1, max|orbit_state|) of the periodic orbit's state. Returns (state, periods used,
+    reached). A start in the orbit's basin converges like max|lambda|^n; one on another
+    attractor does not, and its periods then count as that attractor's transient."""
+    u = np.asarray(u0, float).copy()
+    scale = rel_tol * max(1.0, float(np.abs(orbit_state).max()))
+    h = 0.0
+    for n in range(int(max_periods) + 1):
+        if np.abs(u - orbit_state).max() <= scale:
+            return u, n, True
+        if n == max_periods:
+            break
+        u, status, _, h = ig.flow(model.id, 0.0, 1.0, u, p, model.n_state, model.n_position,
+                                  False, opts, h)
+        if status != ig.STATUS_OK:
+            break
+    return u, n, False
+
+
+def _on_stable_orbit(model, orbit_state, multipliers, period, n_samples, end_state):
+    lle_all = exponents_of_orbit(multipliers, 1, period)
+    samples = np.tile(orbit_state, (n_samples, 1))
+    return Attractor(PERIODIC, 1, float(lle_all[0]), 0.0, samples, end_state, ig.STATUS_OK, 0.0,
+                     lle_all, np.asarray(multipliers, complex), True)
+
+
 def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_period=32,
-             period_rtol=None, orbit_lle=True, lyapunov_always=False, renorm_periods=1.0,
-             max_periods=2000, n_blocks=10, rtol_stop=0.02, min_periods=None, atol_stop=1e-4,
-             align_periods=20.0, weighted=True):
+             period_rtol=None, orbit_lle=True, lyapunov_always=False, stable_orbit=None,
+             renorm_periods=1.0, max_periods=2000, n_blocks=10, rtol_stop=0.02, min_periods=None,
+             atol_stop=1e-4, align_periods=20.0, weighted=True):
     """One parameter point from u0 at tau = 0: Poincare samples after a transient, their period
     (tolerance `default_period_rtol(opts)` unless given), the largest exponent, and `classify`.
 
-    The exponent of a periodic attractor (period k found) comes from its orbit when orbit_lle is
-    set: Newton shooting over k periods from the last sample (already on the orbit: one or two
-    iterations), lle = ln max|lambda| / (k T), stderr 0 -- the `derived_lle` shortcut for any k;
-    k is then reduced to the orbit's minimal period (`_minimal_period`).
+    A periodic attractor (period k found) is refined by shooting on k T from the last sample
+    (already on the orbit: one or two iterations; `periodic_orbit_of`), and its multipliers are
+    returned. When orbit_lle is set and the orbit is stable, the exponents follow from them,
+    ln|lambda_i| / (k T), stderr 0 (derived=True) -- unless lyapunov_always.
+    stable_orbit = (state, multipliers) of a stable period-1 orbit found by shooting: the
+    transient stops as soon as the state reaches it (`settle_on_orbit`), and the point is that
+    orbit (samples = its state) with derived exponents -- the 'derive when stable' shortcut.
     Otherwise (no period, the shooting fails, or lyapunov_always) a Lyapunov run starts where the
     samples end (no second transient). Returns an Attractor: code, period k, lle and lle_stderr
     in 1/s (NaN when not computed), samples, end_state (the state at the last whole period
     reached: the start of the next speed in a continuation of the attractor), status,
-    periods_used (measured Lyapunov periods; 0 when none ran)."""
-    samples, status, end = _poincare(model.id, np.asarray(u0, float), p, model.n_state,
-                                     model.n_position, opts, int(n_transient), int(n_samples))
-    if status != ig.STATUS_OK:
-        return Attractor(DIVERGED, 0, np.nan, np.nan, samples, end, int(status), 0.0)
+    periods_used (measured Lyapunov periods; 0 when none ran), exponents [1/s], multipliers,
+    derived."""
     if period_rtol is None:
         period_rtol = default_period_rtol(opts)
+    u0 = np.asarray(u0, float)
+    if stable_orbit is not None and not lyapunov_always:
+        state, lams = stable_orbit
+        u0, used, reached = settle_on_orbit(model, u0, p, opts, state, n_transient, period_rtol)
+        if reached:
+            return _on_stable_orbit(model, state, lams, period, int(n_samples), state.copy())
+        n_transient -= used
+    samples, status, end = _poincare(model.id, u0, p, model.n_state, model.n_position, opts,
+                                     int(n_transient), int(n_samples))
+    nan = np.full(model.n_state, np.nan)
+    if status != ig.STATUS_OK:
+        return Attractor(DIVERGED, 0, np.nan, np.nan, samples, end, int(status), 0.0, nan,
+                         nan + 0j, False)
     k = detect_period(samples, max_period, period_rtol)
-    if k > 0 and not lyapunov_always:
-        lle = np.nan
-        if orbit_lle:
-            orbit = shooting.shoot(model.id, end.copy(), p, model.n_state, model.n_position, float(k),
-                                   opts, max(1e-9, 10.0 * float(opts[ig.S_RTOL])), 10)
-            if orbit[2] == shooting.CONVERGED:
-                max_abs = abs(floquet.multipliers(orbit[1])[0])
-                if max_abs < 1.0:
-                    lle = derived_lle(max_abs, k * period)
-                    k = _minimal_period(model, orbit[0], p, opts, k, period_rtol)
-        if np.isfinite(lle):
-            return Attractor(PERIODIC, k, lle, 0.0, samples, end, int(status), 0.0)
-        if not orbit_lle:
-            return Attractor(PERIODIC, k, np.nan, np.nan, samples, end, int(status), 0.0)
+    orbit = periodic_orbit_of(model, end, p, opts, k, period_rtol) if k > 0 and orbit_lle else None
+    lams = nan + 0j
+    if orbit is not None:
+        k, _, lams = orbit
+        if np.abs(lams).max() < 1.0 and not lyapunov_always:
+            expo = exponents_of_orbit(lams, k, period)
+            return Attractor(PERIODIC, k, float(expo[0]), 0.0, samples, end, int(status), 0.0,
+                             expo, lams, True)
+    if k > 0 and not orbit_lle and not lyapunov_always:
+        return Attractor(PERIODIC, k, np.nan, np.nan, samples, end, int(status), 0.0, nan, lams, False)
     expo, stderr, n_done, lstatus, end2, _ = _run_benettin(
         model, end, p, opts, 0, renorm_periods, max_periods, n_blocks, rtol_stop, min_periods,
         atol_stop, align_periods, weighted)
     code, k = classify(samples, expo[0], stderr[0], k, lstatus)
+    if code != PERIODIC or k == 0:
+        lams = nan + 0j
     return Attractor(code, k, float(expo[0]) / period, float(stderr[0]) / period, samples, end2,
-                     int(lstatus), n_done * float(renorm_periods))
+                     int(lstatus), n_done * float(renorm_periods), np.asarray(expo) / period, lams,
+                     False)

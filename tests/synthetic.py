@@ -48,8 +48,9 @@ def synthetic_cube(speed=None, clearance=None, n_multipliers=4):
         "contact_angle": ((), np.nan, {"units": "degree", "long_name": "bearing contact angle (from clearance)"}),
         "preload": ((), 0.0, {"units": "N", "long_name": "axial preload"}),
     })
-    for name, (extra, dtype, attrs) in schema.VARIABLES.items():
-        ds[name] = (dims + tuple(extra), np.asarray(data[name]).astype(dtype), dict(attrs))
+    for name, values in data.items():
+        extra, dtype, attrs = schema.VARIABLES[name]
+        ds[name] = (dims + tuple(extra), np.asarray(values).astype(dtype), dict(attrs))
     ds.attrs.update({
         "Conventions": "CF-1.10",
         "title": "synthetic test cube",
