@@ -258,6 +258,49 @@ def test_diagnose_periodic_and_chaotic_points():
     assert again.code == at.CHAOTIC
 
 
+def test_derive_when_stable_shortcut_matches_the_integrated_exponents():
+    """The shortcut (transient stops on the shooting orbit, exponents ln|lambda_i| / T) against
+    a full Benettin run of the whole spectrum from the same start: 1e-3 relative."""
+    sol, p, period = stable_orbit(BaiPoint(66.0, 19.0e-6))
+    start = sol.state + 0.05 * np.abs(sol.state).max()                 # off the orbit, in its basin
+    fast = at.diagnose(JEFF, start, p, period, OPTS, stable_orbit=(sol.state, sol.multipliers))
+    assert fast.derived and (fast.code, fast.period, fast.periods_used) == (at.PERIODIC, 1, 0.0)
+    np.testing.assert_array_equal(fast.samples, np.tile(sol.state, (128, 1)))
+    full = at.diagnose(JEFF, start, p, period, OPTS, lyapunov_always=True, max_periods=1000,
+                       rtol_stop=0.0, min_periods=1000, weighted=False, align_periods=100.0)
+    assert not full.derived and full.periods_used == 1000 and full.code == at.PERIODIC
+    np.testing.assert_allclose(fast.exponents, full.exponents, rtol=1e-3)
+    assert fast.exponents.sum() == pytest.approx(-2 * 300.0 / 2.0, rel=1e-9)   # -2 D / M
+
+
+def test_settle_on_orbit_stops_only_on_the_orbit():
+    sol, p, _ = stable_orbit(BaiPoint(66.0, 19.0e-6))
+    start = sol.state + 0.05 * np.abs(sol.state).max()
+    u, used, reached = at.settle_on_orbit(JEFF, start, p, OPTS, sol.state, 400, 1e-6)
+    assert reached and 0 < used < 400
+    assert np.abs(u - sol.state).max() <= 1e-6 * np.abs(sol.state).max()
+    # too few periods to converge: not reached (the state then continues as a plain transient)
+    _, _, reached = at.settle_on_orbit(JEFF, start, p, OPTS, sol.state, 3, 1e-6)
+    assert not reached
+
+
+def test_period_two_attractor_is_refined_and_stable_although_period_one_is_not():
+    """After the period doubling, the period-1 orbit is unstable while the attractor is a stable
+    period-2 orbit. Its multipliers (shooting on 2 T) are checked against a separate Newton solve
+    at tighter tolerance."""
+    point = BaiPoint(55.0, 19.0e-6)
+    p, period = bai_params(point)
+    p1 = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=models.static_guess, tol=1e-10)
+    assert p1.status == shooting.CONVERGED and not p1.stable and p1.bifurcation == floquet.PERIOD_DOUBLING
+    res = at.diagnose(JEFF, p1.state, p, period, OPTS, n_transient=300)
+    assert (res.code, res.period) == (at.PERIODIC, 2) and res.derived
+    assert np.abs(res.multipliers).max() < 1.0
+    ref = shooting.periodic_orbit(JEFF, res.end_state, p, TIGHT, periods=2, tol=1e-12)
+    ref_lams = floquet.multipliers(ref.monodromy)
+    np.testing.assert_allclose(np.sort_complex(res.multipliers), np.sort_complex(ref_lams), atol=1e-7)
+    assert res.lle == pytest.approx(np.log(np.abs(ref_lams).max()) / (2 * period), rel=1e-6)
+
+
 # --- the period-doubling route to chaos of Bai 2006 (19 um) --------------------------------
 
 CASCADE_SPEEDS = np.concatenate([np.arange(70.0, 43.0, -2.0), np.arange(43.0, 38.95, -0.1),

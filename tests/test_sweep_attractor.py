@@ -1,0 +1,119 @@
+"""Attractor diagnostics inside sweeps: config keys, the derive-when-stable shortcut against the
+integrated exponents, continuation of the attractor with up/down sweeps (hysteresis), and the
+cube variables a sweep writes."""
+import numpy as np
+import pytest
+
+from pipeline import compute, config, cube, schema, sweep
+from rotorkernels import attractor as at
+
+SCENE = """
+[scene]
+name = "attractor"
+model = "jeffcott_clearance"
+
+[bearing]
+preset = "209"
+stiffness = "bai2006"
+
+[sweep]
+speed = {{start = {start}, stop = {stop}, step = {step}}}
+clearance = [{clearance}]
+
+[analysis]
+attractor = true
+{analysis}
+
+[numerics]
+segment_length = 64
+"""
+
+
+def scene(start=60.0, stop=62.0, step=1.0, clearance="3.8e-6", analysis=""):
+    return config.parse_config(SCENE.format(start=start, stop=stop, step=step, clearance=clearance,
+                                            analysis=analysis))
+
+
+def points(cfg):
+    c = cfg.axes["clearance"][0]
+    return [{"speed": s, "clearance": c, "contact_angle": None, "preload": 0.0} for s in cfg.axes["speed"]]
+
+
+def test_analysis_keys_are_validated():
+    cfg = scene()
+    assert cfg.data["analysis"] == {
+        "floquet": True, "attractor": True, "derive_when_stable": True, "sweep_direction": "up",
+        "transient_periods": 200, "poincare_samples": 128, "max_period": 32,
+        "lyapunov_max_periods": 2000}
+    bad = {
+        'sweep_direction = "sideways"': "analysis.sweep_direction",
+        "poincare_samples = 64": "analysis.poincare_samples: must be >= 4 x analysis.max_period",
+        "max_period = 0": "analysis.max_period",
+        "lyapunov_max_periods = 5": "analysis.lyapunov_max_periods",
+    }
+    for line, message in bad.items():
+        with pytest.raises(config.ConfigError, match=message.replace(".", r"\.")):
+            scene(analysis=line)
+    with pytest.raises(config.ConfigError, match="nothing to compute"):
+        config.parse_config(SCENE.format(start=60, stop=61, step=1, clearance="3.8e-6", analysis="")
+                            .replace("attractor = true", "attractor = false\nfloquet = false"))
+
+
+def test_derived_exponents_of_stable_points_match_the_integrated_ones():
+    """derive_when_stable = true (exponents from the multipliers, no Lyapunov run) against
+    false (Benettin/QR for every point, stopped at the pipeline's 2 % standard error) on a stable
+    stretch: largest exponent to 1e-3 relative (or its stated uncertainty), and the sum of the spectrum is the flow's
+    divergence -2 D / M (D = 300 N s/m, M = 2 kg) in both."""
+    cfg = scene(66.0, 70.0, 2.0, "19.0e-6")       # leading multiplier real (-0.88 at 66 Hz)
+    fast = compute.solve_segment(cfg.data, points(cfg))
+    slow_cfg = scene(66.0, 70.0, 2.0, "19.0e-6", "derive_when_stable = false")
+    slow = compute.solve_segment(slow_cfg.data, points(slow_cfg))
+    assert np.all(fast["stable"] == 1) and np.all(fast["attractor"] == at.PERIODIC)
+    assert np.all(fast["lle_method"] == schema.LLE_METHOD.index("derived"))
+    assert np.all(slow["lle_method"] == schema.LLE_METHOD.index("integrated"))
+    assert np.all(fast["lyapunov_periods"] == 0) and np.all(slow["lyapunov_periods"] >= 100)
+    # within 1e-3 relative, or within the integrated value's own uncertainty where the early
+    # stop (2 % standard error) ends a run on a complex pair of equal-modulus multipliers
+    assert np.all(np.abs(fast["lle"] - slow["lle"]) <= np.maximum(1e-3 * np.abs(fast["lle"]),
+                                                                  3 * slow["lle_stderr"])), (fast["lle"], slow["lle"], slow["lle_stderr"])
+    assert abs(fast["lle"][0] - slow["lle"][0]) < 1e-6 * abs(fast["lle"][0])      # real multiplier
+    np.testing.assert_allclose(fast["lle"], np.log(fast["max_abs_multiplier"]) / fast["forcing_period"],
+                               rtol=1e-12)
+    for run in (fast, slow):
+        np.testing.assert_allclose(run["lyapunov_exponents"].sum(axis=1), -300.0, rtol=1e-6)
+    # the section of a stable period-1 attractor is the orbit's point
+    np.testing.assert_allclose(fast["poincare_x"], np.repeat(fast["orbit_state"][:, :1] * 1e-6, 128, axis=1))
+    assert fast["compute_time"].sum() < 0.5 * slow["compute_time"].sum()
+
+
+def test_up_and_down_sweeps_expose_coexisting_attractors():
+    """19 um, 27.8-28.6 Hz: sweeping up, the rotor stays on the stable period-1 orbit until it
+    vanishes; sweeping down from the chaotic attractor above, it stays chaotic (boundary crisis
+    below ~27.6 Hz). Where the two differ, hysteresis = 1."""
+    cfg = scene(27.8, 28.6, 0.4, "19.0e-6", 'sweep_direction = "both"\nlyapunov_max_periods = 300')
+    r = compute.solve_segment(cfg.data, points(cfg))
+    P, C = at.PERIODIC, at.CHAOTIC
+    assert list(r["attractor"]) == [P, P, C] and list(r["period"]) == [1, 1, 0]
+    assert list(r["attractor_down"]) == [C, C, C]
+    assert list(r["hysteresis"]) == [1, 1, 0]
+    assert r["stable"][0] == 1                                     # shooting sees only the orbit
+    chaotic = r["attractor_down"] == C
+    assert np.all(r["lle_down"][chaotic] > 3 * r["lle_stderr_down"][chaotic])
+    assert np.all(np.isnan(r["attractor_multiplier_real_down"][chaotic]))
+
+
+def test_sweep_writes_the_attractor_variables(tmp_path):
+    cfg = scene(60.0, 64.0, 2.0, "3.8e-6, 19.0e-6", "poincare_samples = 32\nmax_period = 8")
+    path = sweep.run(cfg, tmp_path / "a.nc", workers=2, progress=False)
+    ds = cube.open_cube(path)
+    assert ds["poincare_x"].dims == ("speed", "clearance", "sample") and ds.sizes["sample"] == 32
+    assert ds["lyapunov_exponents"].dims == ("speed", "clearance", "exponent")
+    assert ds["lle"].attrs["units"] == "s-1" and ds["poincare_x"].attrs["units"] == "m"
+    assert list(ds["attractor"].attrs["flag_meanings"].split()) == list(schema.ATTRACTOR)
+    assert "hysteresis" not in ds and "lle_down" not in ds
+    assert np.all(ds["attractor"].values == at.PERIODIC)
+    # 19 um, 60-64 Hz: period 2 after the period doubling at ~64.9 Hz (period-1 orbit unstable)
+    line = ds.sel(clearance=19.0e-6)
+    assert list(line["period"].values) == [2, 2, 2] and np.all(line["stable"].values == 0)
+    assert np.all(np.abs(line["attractor_multiplier_real"].values + 1j * line["attractor_multiplier_imag"].values).max(axis=1) < 1)
+    assert np.all(ds.sel(clearance=3.8e-6)["period"].values == 1)
