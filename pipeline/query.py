@@ -215,3 +215,45 @@ def unstable_intervals(ds):
                 "max_abs_multiplier": float(np.nanmax(mu)) if np.isfinite(mu).any() else float("nan"),
             })
     return out
+
+
+def attractor_label(code, k):
+    """'period-k', 'periodic' (k unresolved), 'quasi_periodic', 'chaotic', 'diverged', 'not_computed'."""
+    if code == schema.ATTRACTOR.index("periodic"):
+        return f"period-{k}" if k > 0 else "periodic"
+    return schema.ATTRACTOR[code] if 0 <= code < len(schema.ATTRACTOR) else "not_computed"
+
+
+def attractor_intervals(ds, direction="up"):
+    """Maximal runs of consecutive speeds on which the attractor keeps its class and period, per
+    combination of the other swept axes (the bifurcation diagram as a table). direction "down"
+    reads the down sweep (`*_down`) of a sweep_direction = "both" cube.
+
+    Each entry: the other axes' values, `start`/`end` (Hz), `n_points`, `attractor` (see
+    attractor_label) and the run's largest exponent `max_lle` [1/s]."""
+    suffix = schema.DOWN_SUFFIX if direction == "down" else ""
+    if "attractor" + suffix not in ds:
+        raise ValueError("the cube has no attractor diagnostics"
+                         + (" for the down sweep" if suffix and "attractor" in ds else
+                            "; run the scene with [analysis] attractor = true"))
+    others = _other_axes(ds)
+    speed = ds["speed"].values
+    out = []
+    for values in itertools.product(*(ds[a].values for a in others)):
+        where = dict(zip(others, values))
+        line = ds.sel(where) if where else ds
+        labels = np.array([attractor_label(int(c), int(k)) for c, k in
+                           zip(line["attractor" + suffix].values, line["period" + suffix].values)])
+        lle = line["lle" + suffix].values
+        cuts = np.flatnonzero(labels[1:] != labels[:-1]) + 1
+        for i0, i1 in zip(np.concatenate(([0], cuts)), np.concatenate((cuts, [len(labels)])) - 1):
+            seg = lle[i0:i1 + 1]
+            out.append({
+                **{a: float(v) for a, v in where.items()},
+                "start": float(speed[i0]),
+                "end": float(speed[i1]),
+                "n_points": int(i1 - i0 + 1),
+                "attractor": str(labels[i0]),
+                "max_lle": float(np.nanmax(seg)) if np.isfinite(seg).any() else float("nan"),
+            })
+    return out

@@ -4,7 +4,7 @@ cube variables a sweep writes."""
 import numpy as np
 import pytest
 
-from pipeline import compute, config, cube, schema, sweep
+from pipeline import compute, config, cube, query, schema, sweep
 from rotorkernels import attractor as at
 
 SCENE = """
@@ -117,3 +117,8 @@ def test_sweep_writes_the_attractor_variables(tmp_path):
     assert list(line["period"].values) == [2, 2, 2] and np.all(line["stable"].values == 0)
     assert np.all(np.abs(line["attractor_multiplier_real"].values + 1j * line["attractor_multiplier_imag"].values).max(axis=1) < 1)
     assert np.all(ds.sel(clearance=3.8e-6)["period"].values == 1)
+    runs = query.attractor_intervals(ds)
+    assert [(r["clearance"], r["start"], r["end"], r["attractor"]) for r in runs] == [
+        (3.8e-6, 60.0, 64.0, "period-1"), (19.0e-6, 60.0, 64.0, "period-2")]
+    with pytest.raises(ValueError, match="down sweep"):
+        query.attractor_intervals(ds, "down")
