@@ -249,10 +249,15 @@ SAME_ORBIT_RTOL = 1e-3
 
 def _differs(row, suffix):
     """1 where the up and down sweeps ended on different attractors: class or period differ, or
-    two periodic ones are different orbits (e.g. two coexisting stable period-1 orbits)."""
+    two periodic ones are different orbits (e.g. two coexisting stable period-1 orbits). A
+    periodic attractor whose period was not resolved (k = 0: still settling, as next to a
+    bifurcation) cannot be compared: 0."""
+    unresolved = [row["attractor" + s] == attractor.PERIODIC and row["period" + s] <= 0 for s in ("", suffix)]
+    if any(unresolved):
+        return 0
     if row["attractor"] != row["attractor" + suffix] or row["period"] != row["period" + suffix]:
         return 1
-    if row["attractor"] != attractor.PERIODIC or row["period"] <= 0:
+    if row["attractor"] != attractor.PERIODIC:
         return 0
     up = np.stack([row["poincare_x"], row["poincare_y"]], axis=1)
     down = np.array([row["poincare_x" + suffix][-1], row["poincare_y" + suffix][-1]])

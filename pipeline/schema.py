@@ -93,7 +93,7 @@ ATTRACTOR_VARIABLES.update({
     name + DOWN_SUFFIX: (extra, dtype, {**attrs, "long_name": attrs["long_name"] + ", sweeping speed down"})
     for name, (extra, dtype, attrs) in list(ATTRACTOR_VARIABLES.items())})
 ATTRACTOR_VARIABLES["hysteresis"] = ((), "int8", {
-    "long_name": "up and down sweeps end on different attractors (class, period or orbit differ)", **_flag(("no", "yes"))})
+    "long_name": "up and down sweeps end on different attractors (class, period or orbit differ; 0 where a period is unresolved)", **_flag(("no", "yes"))})
 VARIABLES.update(ATTRACTOR_VARIABLES)
 
 # The boundary table: one entry per stability change between neighbouring speeds of a line,
