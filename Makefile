@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow bench fig13 clean
+.PHONY: demo test test-slow bench bench-scaling fig13 clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -26,6 +26,9 @@ fig13: $(STAMP)  ## the Bai 2006 Fig. 13 sweep (2401 speeds x 5 clearances)
 
 bench: $(STAMP)  ## work-precision and baseline benchmarks -> docs/benchmarks/
 	$(BIN)/python -m workflows.bench_kernels
+
+bench-scaling: $(STAMP)  ## 1 vs 2 workers, chunk sizes, memory of the Fig. 13 sweep (~7 min, quiet machine) -> docs/benchmarks/scaling.*
+	$(BIN)/python -m workflows.bench_scaling
 
 clean:
 	rm -rf out .pytest_cache

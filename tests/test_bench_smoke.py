@@ -1,0 +1,50 @@
+"""Smoke tests of the benchmark workflows on tiny grids (the real runs: `make bench`,
+`make bench-scaling`)."""
+import importlib
+import json
+
+import pytest
+
+
+def test_bench_kernels_imports():
+    mod = importlib.import_module("workflows.bench_kernels")
+    assert callable(mod.main)
+
+
+@pytest.mark.timeout(180)
+def test_scaling_bench_core_on_a_tiny_grid(tmp_path):
+    """1 and 2 workers with default chunks plus one chunk size on 2 workers, 8 points: the JSON
+    holds every section and a complete record per run, the Markdown and the plot exist."""
+    from workflows import bench_scaling as bs
+
+    cfg = bs.scene_config(speed=(100.0, 114.0, 2.0), clearances=(7.6e-6,), name="bench_smoke",
+                          segment_length=4)
+    assert cfg.n_points == 8 and cfg.data["scene"]["name"] == "bench_smoke"
+    out = tmp_path / "out"
+    res = bs.run_benchmark(cfg, out, worker_counts=(1, 2), chunk_sizes=[4], mode="quick",
+                           work_dir=tmp_path / "work")
+    data = json.loads((out / "scaling.json").read_text())
+    assert data == json.loads(json.dumps(res))
+    assert set(bs.RESULT_KEYS) <= set(data)
+    assert data["mode"] == "quick" and data["scene"]["n_points"] == 8
+    assert [(r["workers"], r["chunk_points"]) for r in data["runs"]] == [(1, None), (2, None), (2, 4)]
+    for run in data["runs"]:
+        assert set(bs.RUN_KEYS) <= set(run)
+        assert run["wall_s"] > 0 and run["points_per_s"] == pytest.approx(8 / run["wall_s"], rel=1e-2)
+        assert len(run["worker_max_rss_kib"]) == run["workers"]
+        assert all(kib > 10_000 for kib in run["worker_max_rss_kib"])     # > 10 MB: real numbers
+        assert run["driver_max_rss_kib"] > 10_000
+        assert run["cluster_start_s"] > 0 and run["worker_warmup_s"] > 0
+        assert {"compute", "boundaries", "write"} <= set(run["phases"])
+        assert run["tasks"]["n_tasks"] == run["n_chunks"] >= 1
+        assert run["n_not_converged"] == 0
+    assert data["runs"][2]["n_chunks"] == 2                                # 2 segments of 4
+    sc = data["scaling"]
+    assert sc["speedup"] == pytest.approx(sc["wall_1_worker_s"] / sc["wall_2_workers_s"], rel=1e-2)
+    assert sc["target"] == 1.8 and isinstance(sc["meets_target"], bool)
+    assert [d["chunk_points_used"] for d in data["chunk_sensitivity"]] == [4, 8]
+    assert len(data["load_average"]["start"]) == 3 and data["machine"]["cores"] >= 1
+    text = (out / "scaling.md").read_text()
+    assert "QUICK" in text and "| w2_chunk4 |" in text and "## Verdict" in text
+    assert (out / "scaling.png").stat().st_size > 1000
+    assert not (tmp_path / "work" / "bench_smoke").exists()               # cubes removed
