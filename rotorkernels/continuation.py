@@ -32,6 +32,8 @@ def _settle(model, u0, p, opts, n_periods):
 # Newton from a neighbour's orbit converges in a few iterations or not at all: give such starts
 # this many iterations before falling back, so a wandering Newton costs little.
 QUICK_ITERATIONS = 6
+# Further cold starts, one forcing period apart, when Newton fails from the settled transient.
+COLD_RETRIES = 4
 
 
 def _guesses(model, p, opts, history, transient_periods, cold_guess):
@@ -45,6 +47,13 @@ def _guesses(model, p, opts, history, transient_periods, cold_guess):
             yield z, n_rhs, False
     z, ok, n_rhs = _settle(model, cold_guess(p), p, opts, transient_periods)
     yield (z if ok else cold_guess(p)), n_rhs, False
+    # On a chaotic attractor Newton's basin around the unstable orbit is small: some transient
+    # states lie in it and others do not, so try the next few states one period apart.
+    for _ in range(COLD_RETRIES if ok else 0):
+        z, ok, n_rhs = _settle(model, z, p, opts, 1)
+        if not ok:
+            return
+        yield z, n_rhs, False
 
 
 def solve_orbit(model, p, opts, history=(), *, cold_guess, periods=1, tol=1e-9, max_iter=30,

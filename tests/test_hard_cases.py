@@ -223,6 +223,8 @@ def test_chaotic_regime_shooting_fails_gracefully(speed):
     assert cold.status in (shooting.CONVERGED, shooting.NOT_CONVERGED)
     if cold.status != shooting.CONVERGED:
         assert np.isnan(cold.max_abs) and np.all(np.isnan(cold.multipliers)) and cold.samples is None
+    if speed == 29.0:   # the first transient state misses Newton's basin; a retry one period on hits it
+        assert cold.status == shooting.CONVERGED
     converged = [o for o in outcomes if o.status == shooting.CONVERGED]
     if speed == 29.0:                       # Newton's basin is small here: some starts fail
         assert len(converged) < len(outcomes)
