@@ -47,11 +47,13 @@ def unstable_intervals(cube_or_path):
     return query.unstable_intervals(_dataset(cube_or_path))
 
 
-def make_report(cube_or_path, out_dir):
-    """HTML + PNG report of a cube (rotorsweep report); returns the written paths."""
+def make_report(cube_or_path, out_dir, points=None):
+    """HTML + PNG report of a cube (rotorsweep report); returns the written paths.
+    points: grid points to show in detail (orbit, Poincare section, spectrum, table), each a
+    dict {axis: value} or "speed=36 clearance=19e-6" (nearest grid point)."""
     from pipeline import report
 
-    return report.make_report(_dataset(cube_or_path), out_dir)
+    return report.make_report(_dataset(cube_or_path), out_dir, points=points)
 
 
 def point(speed, clearance, contact_angle=None, preload=None, config=None):

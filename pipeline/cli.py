@@ -12,6 +12,7 @@ import numpy as np
 import pipeline
 from pipeline import config as config_mod
 from pipeline import cube, query, schema
+from pipeline import report as report_mod
 
 EXIT_USAGE = 2
 
@@ -43,8 +44,41 @@ def cmd_run(args):
     return 0
 
 
+def _attractor_row(args):
+    """The point's cube variables with the attractor diagnostics (compute.point_detail; the
+    trajectory it also returns is not needed here, so it is kept short)."""
+    from pipeline import compute
+
+    cfg = pipeline._config(args.config)
+    fixed = compute.fixed_values(cfg.data)
+    pt = {"speed": args.speed, "clearance": args.clearance,
+          "contact_angle": fixed["contact_angle"] if args.contact_angle is None else args.contact_angle,
+          "preload": fixed["preload"] if args.preload is None else args.preload}
+    config_mod.check_point(pt)
+    return compute.point_detail(cfg.data, pt, periods=16, steps_per_period=8)["row"]
+
+
+def _attractor_result(row):
+    code, k, method = int(row["attractor"]), int(row["period"]), int(row["lle_method"])
+    lam = [[_num(re), _num(im)] for re, im in zip(row["attractor_multiplier_real"], row["attractor_multiplier_imag"])]
+    mods = np.hypot(row["attractor_multiplier_real"], row["attractor_multiplier_imag"])
+    return {
+        "class": schema.ATTRACTOR[code] if 0 <= code < len(schema.ATTRACTOR) else None,
+        "period": k,
+        "lle": _num(row["lle"]),
+        "lle_stderr": _num(row["lle_stderr"]),
+        "lle_method": schema.LLE_METHOD[method] if 0 <= method < len(schema.LLE_METHOD) else None,
+        "lyapunov_exponents": [_num(x) for x in row["lyapunov_exponents"]],
+        "multipliers": lam,
+        "max_abs_multiplier": _num(np.nanmax(mods)) if np.isfinite(mods).any() else None,
+    }
+
+
 def cmd_point(args):
-    row = pipeline.point(args.speed, args.clearance, args.contact_angle, args.preload, args.config)
+    if args.attractor:
+        row = _attractor_row(args)
+    else:
+        row = pipeline.point(args.speed, args.clearance, args.contact_angle, args.preload, args.config)
     status = schema.ORBIT_STATUS[row["orbit_status"]]
     lam = [[float(re), float(im)] for re, im in zip(row["multiplier_real"], row["multiplier_imag"])]
     bif = schema.BIFURCATION[row["bifurcation"]] if row["bifurcation"] >= 0 else "none"
@@ -60,11 +94,41 @@ def cmd_point(args):
         "period": float(row["forcing_period"]),
         "contact_angle": float(row["contact_angle_used"]),
     }
+    if args.attractor:
+        result["attractor"] = _attractor_result(row)
     if args.json:
         print(json.dumps(result, indent=2))
     else:
         print(_point_text(result))
+        if args.attractor:
+            print(_attractor_text(result["attractor"]))
     return 0
+
+
+def _attractor_text(a):
+    k = a["period"]
+    if a["class"] == "periodic":
+        period = f"{k} forcing period{'s' if k != 1 else ''}" if k > 0 else "not resolved (up to max_period)"
+    else:
+        period = "-"
+    if a["lle"] is None:
+        lle = "-"
+    else:
+        err = f" +- {a['lle_stderr']:.3g}" if a["lle_stderr"] is not None else ""
+        lle = f"{a['lle']:+.6g}{err} 1/s ({a['lle_method']})"
+    lines = [
+        f"attractor         {a['class']}",
+        f"attractor period  {period}",
+        f"largest Lyapunov  {lle}",
+        "Lyapunov spectrum " + ", ".join("-" if x is None else f"{x:+.5g}" for x in a["lyapunov_exponents"]) + " 1/s",
+        "attractor multipliers (orbit over k forcing periods; real, imag, modulus)",
+    ]
+    if a["max_abs_multiplier"] is None:
+        lines.append("  - (no periodic attractor)")
+    else:
+        for re, im in a["multipliers"]:
+            lines.append("  -" if re is None else f"  {re:+.10f} {im:+.10f}  |{np.hypot(re, im):.10f}|")
+    return "\n".join(lines)
 
 
 def _num(x):
@@ -105,7 +169,8 @@ def cmd_query(args):
 
 def cmd_report(args):
     out = args.output or str(args.cube).rsplit(".", 1)[0] + "_report"
-    files = pipeline.make_report(args.cube, out)
+    points = [report_mod.parse_point(items) for items in args.point or []]
+    files = pipeline.make_report(args.cube, out, points=points or None)
     print(f"report: {files['html']}")
     for png in files["png"]:
         print(f"figure: {png}")
@@ -140,6 +205,8 @@ def build_parser():
     p.add_argument("--clearance", type=float, required=True, help="radial clearance [m]")
     p.add_argument("--contact-angle", type=float, help="contact angle [deg] (default: from clearance)")
     p.add_argument("--preload", type=float, help="axial preload [N] (default: the scene's, 0)")
+    p.add_argument("--attractor", action="store_true",
+                   help="also diagnose the attractor: class, period, largest Lyapunov exponent, multipliers")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_point)
 
@@ -155,6 +222,9 @@ def build_parser():
     rp = sub.add_parser("report", help="HTML + PNG stability-map report of a cube")
     rp.add_argument("cube")
     rp.add_argument("-o", "--output", help="report directory (default <cube>_report)")
+    rp.add_argument("--point", action="append", nargs="+", metavar="AXIS=VALUE",
+                    help="a grid point to show in detail (orbit, Poincare section, spectrum): "
+                         "speed=36 clearance=19e-6 (nearest grid point); repeatable")
     rp.set_defaults(func=cmd_report)
 
     i = sub.add_parser("info", help="what a cube holds")

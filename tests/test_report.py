@@ -2,6 +2,7 @@
 report is made once per module and shared by the tests."""
 import csv
 import importlib
+import re
 
 import matplotlib.image as mpimg
 import numpy as np
@@ -49,12 +50,18 @@ def cube_4d(angles=(15.0, 40.0), preloads=(0.0, 200.0), step=6.0):
     return ds.transpose(*schema.AXES, ...)
 
 
+def attractor_cube():
+    """Attractor diagnostics of both sweep directions, a boundary table (tests/synthetic.py)."""
+    return synthetic_cube(attractor=True, sweep_direction="both", boundaries=True)
+
+
 @pytest.fixture(scope="module")
 def made(tmp_path_factory):
-    """{name: (cube, make_report result)} for the base, all-stable and 4-D cubes."""
+    """{name: (cube, make_report result)} for the base, all-stable, 4-D and attractor cubes."""
     hv = report._hv()   # importing the plotting backends itself sets one
     before = hv.Store.current_backend
-    cubes = {"base": synthetic_cube(), "stable": all_stable_cube(), "4d": cube_4d()}
+    cubes = {"base": synthetic_cube(), "stable": all_stable_cube(), "4d": cube_4d(),
+             "attractor": attractor_cube()}
     out = {k: (ds, report.make_report(ds, tmp_path_factory.mktemp(k) / "rep")) for k, ds in cubes.items()}
     assert hv.Store.current_backend == before, "make_report must restore the HoloViews backend"
     return out
@@ -70,37 +77,113 @@ def _colour_pixels(img, hex_colour, tol=0.02):
 
 
 def test_writes_all_files(made):
-    for _, res in made.values():
+    for name, (_, res) in made.items():
         assert res["html"].name == "report.html" and res["html"].stat().st_size > 100_000
-        assert [p.name for p in res["png"]] == [name for name, _ in report.FIGURES]
+        figures = report.FIGURES + (report.ATTRACTOR_FIGURES if name == "attractor" else ())
+        assert [p.name for p in res["png"]] == [png for png, _ in figures]
         assert res["csv"].name == "unstable_intervals.csv"
+        assert res["points"] == []
         assert all(p.parent == res["html"].parent for p in [*res["png"], res["csv"]])
+
+
+def test_cubes_without_attractor_variables_keep_the_old_figure_set(made):
+    for name in ("base", "stable", "4d"):
+        ds, res = made[name]
+        assert not report.has_attractor(ds)
+        assert [p.name for p in res["png"]] == ["stability_map.png", "max_multiplier.png",
+                                                "multiplier_paths.png"]
+        text = _read_html(res)
+        assert "Bifurcation diagram" not in text and "Lyapunov" not in text
+        assert "attractor (" not in text
+
+
+def _not_blank(img, min_colours=10):
+    return len(np.unique(img[::3, ::3, :3].reshape(-1, 3), axis=0)) > min_colours
 
 
 def test_pngs_are_real_images_of_sane_size(made):
     for _, res in made.values():
         for p in res["png"]:
             assert p.read_bytes()[:8] == PNG_MAGIC
-            h, w = mpimg.imread(p).shape[:2]
+            img = mpimg.imread(p)
+            h, w = img.shape[:2]
             assert 600 <= w <= 1600, (p.name, w)
-            assert 200 <= h <= 1600, (p.name, h)
-            # not a blank canvas
-            assert len(np.unique(mpimg.imread(p)[..., :3].reshape(-1, 3), axis=0)) > 10
+            assert 200 <= h <= 1800, (p.name, h)
+            assert _not_blank(img), p.name
 
 
 def test_stability_map_shows_the_classes(made):
     base = mpimg.imread(made["base"][1]["png"][0])
     stable = mpimg.imread(made["stable"][1]["png"][0])
     assert not (base.shape == stable.shape and np.allclose(base, stable))
-    # the synthetic cube has period-doubling, Neimark-Sacker and fold bands: their cells add
-    # many pixels of the class colour beyond the colorbar swatch both maps share
+    # the synthetic cube has period-doubling, Neimark-Sacker and fold bands; the all-stable cube
+    # has none, and its legend names only the classes it has
     for cls in ("fold", "period doubling", "Neimark-Sacker"):
         colour = report.PALETTE[report.CLASSES.index(cls)]
         n_base, n_stable = _colour_pixels(base, colour), _colour_pixels(stable, colour)
-        assert n_stable > 0, cls  # legend swatch
-        assert n_base > 2 * n_stable, (cls, n_base, n_stable)
+        assert n_stable == 0, cls
+        assert n_base > 2000, (cls, n_base)
     stable_colour = report.PALETTE[0]
     assert _colour_pixels(stable, stable_colour) > _colour_pixels(base, stable_colour)
+
+
+def _elements(fig, kind):
+    """Elements of one type in a figure (an overlay, or a layout of overlays)."""
+    panels = list(fig) if type(fig).__name__ == "Layout" else [fig]
+    return [el for panel in panels for el in panel if type(el).__name__ == kind]
+
+
+def _interior_edges(rects):
+    """Speed edges where two rectangles of one band meet."""
+    edges = set()
+    for r in rects:
+        for x0, y0, x1, y1 in r.array(["x0", "y0", "x1", "y1"]):
+            if x1 > x0:
+                edges.update({(round(y0, 6), x0), (round(y0, 6), x1)})
+    return edges
+
+
+def test_map_edges_are_the_refined_boundaries():
+    """The stability map draws runs of one class as rectangles whose speed edges are the
+    boundary table's refined speeds, not the grid (the data drawn, not pixels)."""
+    ds = synthetic_cube(boundaries=True)
+    assert ds.sizes["boundary"] == 10
+    fig = report.fig_stability_map(ds, "matplotlib")
+    rects = _elements(fig, "Rectangles")
+    assert {r.label for r in rects} == {"stable", "fold", "period doubling", "Neimark-Sacker"}
+    edges = _interior_edges(rects)
+    clearances = list(ds["clearance"].values)
+    for k in range(ds.sizes["boundary"]):
+        band = clearances.index(ds["boundary_clearance"].values[k])
+        speed = float(ds["boundary_speed"].values[k])
+        assert (round(band - report.RECT_HALF, 6), speed) in edges, (band, speed)
+        # strictly between the grid speeds: not a staircase edge
+        assert ds["boundary_grid_low"].values[k] < speed < ds["boundary_grid_high"].values[k]
+    # every interior edge (outside the grid ends) is a refined boundary
+    first, last = report._speed_edges(ds["speed"].values)
+    inner = {x for _, x in edges if first < x < last}
+    assert inner == set(ds["boundary_speed"].values.tolist())
+    # the refined edges are also drawn as segments (legend: refined boundary)
+    (segs,) = _elements(fig, "Segments")
+    assert sorted(segs.array(["x0"])[:, 0]) == sorted(ds["boundary_speed"].values)
+    # same data for bokeh
+    bk = _interior_edges(_elements(report.fig_stability_map(ds, "bokeh"), "Rectangles"))
+    assert bk == edges
+
+
+def test_map_without_boundary_table_puts_edges_midway():
+    ds = synthetic_cube(speed=np.arange(70.0, 110.0, 2.0), clearance=[3.8e-6])
+    segments, refined = report.line_segments(ds, {})
+    assert refined == []
+    (iv,) = query.unstable_intervals(ds)
+    assert [s[2] for s in segments] == [0.0, 2.0, 0.0]
+    assert segments[1][:2] == (iv["start"] - 1.0, iv["end"] + 1.0)
+    assert segments[0][0] == 69.0 and segments[-1][1] == 109.0
+    # with a table: the same runs, edges moved to the refined speeds
+    ds_b = synthetic_cube(speed=np.arange(70.0, 110.0, 2.0), clearance=[3.8e-6], boundaries=True)
+    seg_b, refined_b = report.line_segments(ds_b, {"clearance": 3.8e-6})
+    (iv_b,) = query.unstable_intervals(ds_b)
+    assert seg_b[1][:2] == (iv_b["onset"], iv_b["offset"]) and refined_b == [iv_b["onset"], iv_b["offset"]]
 
 
 def test_html_is_offline_and_has_header_table_and_config(made):
@@ -193,3 +276,225 @@ def test_boundaries_are_capped_deterministic_and_inside_the_grid():
     assert iv["start"] == 84.0
     kinds = [b["kind"] for b in report.stability_boundaries(ds2)]
     assert kinds == ["end"]
+
+
+# ----------------------------------------------------------------------------- attractor figures
+
+def test_attractor_figures_are_nontrivial_pngs_in_the_html(made):
+    ds, res = made["attractor"]
+    pngs = {p.name: p for p in res["png"]}
+    for name in ("bifurcation.png", "lle.png"):
+        img = mpimg.imread(pngs[name])
+        assert pngs[name].stat().st_size > 50_000, name
+        assert _not_blank(img, 50), name
+        assert img.shape[0] > 5 * 150       # one panel per clearance, stacked
+    text = _read_html(res)
+    for caption in ("Bifurcation diagram", "Largest Lyapunov exponent vs shaft speed"):
+        assert f"<h2>{caption}</h2>" in text
+    assert text.count('<div class="figure">') == 5
+    # bifurcation dots: both sweep colours and the shading of the unstable intervals
+    img = mpimg.imread(pngs["bifurcation.png"])
+    for colour in report.SWEEP_COLOURS:
+        assert _colour_pixels(img, colour, tol=0.08) > 200, colour
+
+
+def test_header_counts_attractor_classes(made):
+    ds, res = made["attractor"]
+    text = _read_html(res)
+    up, down = report.attractor_counts(ds), report.attractor_counts(ds, schema.DOWN_SUFFIX)
+    assert up["chaotic"] > 0 and up["quasi-periodic"] > 0 and up["diverged"] == 0
+    assert up["periodic, period 1"] > 0 and up["periodic, period 2"] > 0
+    assert sum(up.values()) == ds.sizes["speed"] * ds.sizes["clearance"]
+    assert "<b>attractor (sweep up)</b>" in text and "<b>attractor (sweep down)</b>" in text
+    for key, n in up.items():
+        assert f"<li>{key}: {n}</li>" in text
+    n_hyst = int((ds["hysteresis"] == 1).sum())
+    assert n_hyst > 0
+    assert f"<li>hysteresis (sweeps end on different attractors): {n_hyst}</li>" in text
+    assert down["periodic, period 2"] > up["periodic, period 2"]
+
+
+def test_bifurcation_shading_uses_the_refined_onsets_and_offsets():
+    ds = attractor_cube()
+    fig = report.fig_bifurcation(ds, "matplotlib")
+    assert len(fig) == ds.sizes["clearance"]
+    intervals = query.unstable_intervals(ds)
+    for panel, c in zip(fig, ds["clearance"].values):
+        spans = sorted((x0, x1) for r in _elements(panel, "Rectangles")
+                       for x0, _, x1, _ in r.array(["x0", "y0", "x1", "y1"]) if x1 > x0)
+        want = sorted((iv["onset"], iv["offset"]) for iv in intervals if iv["clearance"] == c)
+        assert spans == want
+        labels = {el.label for el in panel}
+        assert {"sweep up", "sweep down", "hysteresis (up and down differ)"} <= labels
+
+
+def test_poincare_points_are_thinned_per_speed():
+    rng = np.random.default_rng(0)
+    speed = np.arange(5.0)
+    values = np.empty((5, 128))
+    values[0] = 1.0                                     # period 1
+    values[1] = np.tile([1.0, 2.0], 64)                 # period 2
+    values[2] = rng.uniform(0, 1, 128)                  # chaos
+    values[3] = np.nan                                  # diverged
+    values[4] = np.tile([0.0, 1.0, 1.0 + 1e-9, 3.0], 32)   # period 4, two values within resolution
+    sp, val = report.thin_points(speed, values, cap=16, resolution=1e-6)
+    per = {s: np.sort(val[sp == s]) for s in speed}
+    assert list(per[0.0]) == [1.0] and list(per[1.0]) == [1.0, 2.0]
+    assert per[3.0].size == 0 and per[4.0].size == 3
+    assert 8 <= per[2.0].size <= 16
+    # the thinning keeps the spread of the cloud
+    assert per[2.0].min() < 0.1 and per[2.0].max() > 0.9
+
+
+def test_bifurcation_of_a_fig13_size_cube_stays_small():
+    """2401 speeds x 5 clearances x 128 samples (1.5 M points, both directions 3 M): the figure
+    draws at most BIF_POINTS per panel."""
+    ds = synthetic_cube(speed=np.round(np.arange(10.0, 250.01, 0.1), 6), attractor=True,
+                        sweep_direction="both")
+    for backend in ("bokeh", "matplotlib"):
+        fig = report.fig_bifurcation(ds, backend)
+        for panel in fig:
+            n = sum(len(p) for p in _elements(panel, "Points") if p.label.startswith("sweep"))
+            assert 2401 <= n <= report.BIF_POINTS[backend], (backend, n)
+
+
+def test_lle_figure_marks_methods_and_chaos():
+    ds = attractor_cube()
+    fig = report.fig_lle(ds, "matplotlib")
+    assert len(fig) == ds.sizes["clearance"]
+    for panel, c in zip(fig, ds["clearance"].values):
+        line = ds.sel(clearance=c)
+        pts = {p.label: p for p in _elements(panel, "Points")}
+        integ, derived, chaos = (pts[k] for k in ("integrated (Benettin/QR)", "derived ln|λ|/(kT)",
+                                                  "chaotic attractor"))
+        finite = lambda p: p.array()[np.isfinite(p.array()[:, 0])]   # noqa: E731
+        assert len(finite(integ)) == int((line["lle_method"] == 0).sum())
+        assert len(finite(derived)) == int((line["lle_method"] == 1).sum())
+        assert len(finite(chaos)) == int((line["attractor"] == 3).sum())
+        assert np.all(finite(chaos)[:, 1] > 0)
+        (spread,) = _elements(panel, "Spread")
+        assert len(spread) == int(np.isfinite(line["lle"]).sum())
+        assert len(_elements(panel, "HLine")) == 1
+
+
+# ----------------------------------------------------------------------------- --point
+
+def test_parse_and_resolve_points():
+    ds = synthetic_cube()
+    assert report.parse_point(["speed=36", "clearance=19e-6"]) == {"speed": 36.0, "clearance": 1.9e-5}
+    assert report.parse_point("speed=36,clearance=19e-6") == {"speed": 36.0, "clearance": 1.9e-5}
+    r = report.resolve_point(ds, {"speed": 36.9, "clearance": 12e-6})
+    assert r["values"] == {"speed": 36.0, "clearance": 1.14e-5}
+    assert report.point_filename(r) == "point_36Hz_11.4um.png"
+    # a trailing comma is harmless; values between grid points take the nearest one
+    assert report.resolve_point(ds, "speed=50 clearance=1e-5,")["values"] == {"speed": 50.0,
+                                                                                "clearance": 1.14e-5}
+    bad = {"speed=500 clearance=3.8e-6": "speed=500 is outside the cube's grid: speed spans 10 .. 250 Hz (121 values)",
+           "speed=50": "give clearance=VALUE too; the cube sweeps clearance over 3.8e-06 .. 1.9e-05 m",
+           "speed=50 clearance=40e-6": "clearance=4e-05 is outside",
+           "speed=50 clearance=4e-6 preload=10": "preload is not swept",
+           "clearance=4e-6": "give speed=VALUE too",
+           "speed=fast": "bad number 'fast'",
+           "speed": "expected AXIS=VALUE",
+           "speed=1 speed=2": "speed is given twice",
+           "sped=40": "unknown axis 'sped'"}
+    for spec, message in bad.items():
+        with pytest.raises(query.QueryError, match=re.escape(message)):
+            report.resolve_point(ds, spec)
+
+
+def _cli(args, capsys):
+    from pipeline import cli
+    code = cli.main([str(a) for a in args])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_point_outside_the_grid_exits_2_before_drawing(tmp_path, capsys):
+    from pipeline import cube
+    path = cube.write_cube(synthetic_cube(), tmp_path / "syn.nc")
+    code, out, err = _cli(["report", path, "-o", tmp_path / "rep", "--point", "speed=500",
+                           "clearance=3.8e-6"], capsys)
+    assert code == 2
+    assert "rotorsweep report: error: point speed=500 is outside the cube's grid: speed spans 10 .. 250 Hz" in err
+    assert "Traceback" not in err and not (tmp_path / "rep").exists()
+    # a synthetic cube has no usable scene to recompute a point from
+    code, _, err = _cli(["report", path, "-o", tmp_path / "rep", "--point", "speed=50",
+                         "clearance=3.8e-6"], capsys)
+    assert code == 2 and "config_toml" in err
+
+
+# A real sweep, small: 19 um, 62-66 Hz (period 2 after the period doubling, period 1 above the
+# refined boundary at ~64.9 Hz), both directions. Built in-process as sweep.run does it, without
+# starting a Dask cluster.
+TINY_SCENE = """
+[scene]
+name = "tiny_attractor"
+model = "jeffcott_clearance"
+[bearing]
+preset = "209"
+stiffness = "bai2006"
+[sweep]
+speed = {start = 62.0, stop = 66.0, step = 2.0}
+clearance = [19.0e-6]
+[analysis]
+attractor = true
+sweep_direction = "both"
+poincare_samples = 32
+max_period = 8
+lyapunov_max_periods = 300
+"""
+
+
+@pytest.fixture(scope="module")
+def tiny_cube(tmp_path_factory):
+    from pipeline import boundaries, config, cube, sweep
+    cfg = config.parse_config(TINY_SCENE)
+    segs = sweep.segments(cfg)
+    ids, index, results = sweep.compute_chunk(cfg.data, segs)
+    ds = cube.assemble(cfg.axes, sweep._fixed_coords(cfg), [(ids, index, results, None)],
+                       sweep._provenance(cfg), n_multipliers=4)
+    ds = boundaries.add_boundary_table(cfg.data, ds)
+    return cube.write_cube(ds, tmp_path_factory.mktemp("tiny") / "tiny.nc")
+
+
+def test_point_detail_on_a_real_attractor_cube(tiny_cube, tmp_path, capsys):
+    from pipeline import cube
+    out = tmp_path / "rep"
+    code, stdout, err = _cli(["report", tiny_cube, "-o", out, "--point", "speed=63.4",
+                              "clearance=19e-6"], capsys)
+    assert code == 0, err
+    png = out / "point_64Hz_19um.png"
+    assert f"figure: {png}" in stdout
+    img = mpimg.imread(png)
+    assert png.stat().st_size > 50_000 and _not_blank(img, 50)
+    assert 800 <= img.shape[1] <= 1800 and 600 <= img.shape[0] <= 1600
+    text = (out / "report.html").read_text(encoding="utf-8")
+    assert "<h2>Points in detail</h2>" in text
+    assert "<h3>Point shaft speed 64 Hz, radial clearance 19 µm</h3>" in text
+    assert "(nearest grid point to speed=63.4)" in text
+    # the cube's attractor at 64 Hz: period 2 (the period-1 orbit is unstable there)
+    assert "<tr><th>attractor (sweep up, cube)</th><td>periodic</td></tr>" in text
+    assert "<tr><th>  period</th><td>2 forcing periods</td></tr>" in text
+    assert "from the cube&#x27;s attractor_state" in text
+    assert text.count('<div class="figure">') == 6
+    # the real boundary table drives the map: its refined speed is a rectangle edge
+    ds = cube.open_cube(tiny_cube)
+    (speed,) = ds["boundary_speed"].values
+    assert 64.0 < speed < 66.0
+    segments, refined = report.line_segments(ds, {"clearance": 19e-6})
+    assert refined == [speed] and segments[0][1] == speed
+
+
+def test_point_attractor_flag(capsys):
+    import json
+    code, out, err = _cli(["point", "--speed", "45", "--clearance", "19e-6", "--attractor", "--json"], capsys)
+    assert code == 0, err
+    a = json.loads(out)["attractor"]
+    assert a["class"] == "periodic" and a["period"] == 2 and a["lle_method"] == "derived"
+    assert a["lle"] < 0 and a["lle_stderr"] == 0.0 and a["max_abs_multiplier"] < 1
+    assert len(a["multipliers"]) == 4 and len(a["lyapunov_exponents"]) == 4
+    code, out, _ = _cli(["point", "--speed", "45", "--clearance", "19e-6", "--attractor"], capsys)
+    assert code == 0
+    assert "attractor         periodic" in out and "attractor period  2 forcing periods" in out
+    assert "(derived)" in out and "periodic orbit    unstable (period_doubling)" in out
