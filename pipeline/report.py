@@ -697,7 +697,7 @@ def _bif_panel(hv, ds, where, backend, title, legend, show_x, show_y, span_keys)
     return overlay
 
 
-def _line_figure(ds, backend, head, panel, **size):
+def _line_figure(ds, backend, head, panel):
     """One panel per line (line_plan), stacked in one column (two beyond six lines)."""
     hv = _hv()
     plan = line_plan(ds)
@@ -711,9 +711,9 @@ def _line_figure(ds, backend, head, panel, **size):
         title = _where_label(where) if where else _figure_title(head, plan)
         p = panel(hv, ds, where, backend, title, legend, show_x, show_y)
         if backend == "bokeh":
-            p = p.opts(width=1150 if ncols == 1 else 620, height=size.get("height", 300), backend=backend)
+            p = p.opts(width=1150 if ncols == 1 else 620, height=440 if n == 1 else 300, backend=backend)
         else:
-            p = p.opts(aspect=size.get("aspect", 4.6) if ncols == 1 else 2.2, backend=backend)
+            p = p.opts(aspect=2.6 if n == 1 else 4.6 if ncols == 1 else 2.2, backend=backend)
         panels.append(p)
     rows = -(-n // ncols)
     inches = (11, 2.1 * rows + 0.8)
@@ -722,7 +722,7 @@ def _line_figure(ds, backend, head, panel, **size):
             title=_figure_title(head, plan), sublabel_format="", fig_inches=inches, hspace=0.15,
             vspace=0.45, fontsize={"title": 13}, backend=backend)
     return _layout(hv, panels, backend, ncols, _figure_title(head, plan),
-                   fig_inches=(11, 3.6 if n == 1 else inches[1]))
+                   fig_inches=(11, 4.6 if n == 1 else inches[1]))
 
 
 def fig_bifurcation(ds, backend="bokeh"):
