@@ -9,12 +9,47 @@ from preload (0 without preload) and c the radial clearance. Only balls with del
 load, Q_j = delta_j^{3/2} (the caller multiplies by K L^{3/2}); a ball out of contact carries
 nothing. With s0 = 0 this is the clearance law of Bai 2006; with c = 0, s0 = z0 it is the
 preloaded law of the Filipkovsky papers.
+
+`ring_force` (forces only, for the right-hand side) and `ring_load` (forces and stiffness, for
+the Jacobian) share the per-ball geometry below. All are inlined into their callers at the Numba
+IR level (`inline="always"`): the integrators evaluate the force law millions of times, and a
+separate compiled function costs more in call overhead than the ball sum itself.
 """
 import numpy as np
 from numba import njit
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
+def _deformation(x, y, z, e, cos_a, sin_a, c, s):
+    """delta of the ball at angle (c, s) = (cos phi, sin phi)."""
+    return (x * c + y * s) * cos_a + z * sin_a + e
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _next_ball(c, s, cos_d, sin_d):
+    """(cos, sin) of the next ball's angle: rotation by the ball spacing."""
+    return c * cos_d - s * sin_d, s * cos_d + c * sin_d
+
+
+@njit(cache=True, nogil=True, inline="always")
+def ring_force(x, y, z, e, cos_a, sin_a, n_balls, cos_t, sin_t, cos_d, sin_d):
+    """Summed ball loads (fx, fy, fz) of one bearing: the first three entries of `ring_load`,
+    without the stiffness work."""
+    fx = fy = fz = 0.0
+    c = cos_t
+    s = sin_t
+    for _ in range(n_balls):
+        delta = _deformation(x, y, z, e, cos_a, sin_a, c, s)
+        if delta > 0.0:
+            q = delta * np.sqrt(delta)
+            fx += q * (c * cos_a)
+            fy += q * (s * cos_a)
+            fz += q * sin_a
+        c, s = _next_ball(c, s, cos_d, sin_d)
+    return fx, fy, fz
+
+
+@njit(cache=True, nogil=True, inline="always")
 def ring_load(x, y, z, e, cos_a, sin_a, n_balls, cos_t, sin_t, cos_d, sin_d):
     """Summed ball loads of one bearing and their derivatives, as a tuple (no allocation):
 
@@ -27,7 +62,7 @@ def ring_load(x, y, z, e, cos_a, sin_a, n_balls, cos_t, sin_t, cos_d, sin_d):
     c = cos_t
     s = sin_t
     for _ in range(n_balls):
-        delta = (x * c + y * s) * cos_a + z * sin_a + e
+        delta = _deformation(x, y, z, e, cos_a, sin_a, c, s)
         if delta > 0.0:
             root = np.sqrt(delta)
             q = delta * root
@@ -43,5 +78,5 @@ def ring_load(x, y, z, e, cos_a, sin_a, n_balls, cos_t, sin_t, cos_d, sin_d):
             kxz += dq * ux * sin_a
             kyz += dq * uy * sin_a
             kzz += dq * sin_a * sin_a
-        c, s = c * cos_d - s * sin_d, s * cos_d + c * sin_d
+        c, s = _next_ball(c, s, cos_d, sin_d)
     return fx, fy, fz, kxx, kxy, kyy, kxz, kyz, kzz

@@ -10,6 +10,13 @@ call over a similar interval.
 - dop853: Dormand-Prince 8(5,3) with the step-size control of Hairer/scipy (error measured on
   every component of z, so the monodromy is as accurate as the orbit).
 - rk4: classical fixed-step Runge-Kutta, n_steps over the interval.
+
+Cost (docs/benchmarks): the step loops (`_dop853_steps`, `_rk4_steps`) contain the model
+inlined once (`_derivative`), take only arrays allocated by their caller and are compiled without
+Numba's reference counting, so a stage costs the model's arithmetic plus the vectorised stage
+sums; with the variational equations the model's right-hand side and Jacobian come from one
+contact sum (`models.rhs_jac`) and J Phi uses the block form [[0, I], [A, B]] of the models. The
+results are those of the straightforward formulation, operation by operation.
 """
 import numpy as np
 from numba import njit
@@ -20,30 +27,67 @@ from rotorkernels import models
 STATUS_OK, STATUS_NAN, STATUS_AMPLITUDE, STATUS_STEP_UNDERFLOW = range(4)
 
 _N_STAGES = _dop.N_STAGES
-_A = np.ascontiguousarray(_dop.A[:_N_STAGES, :_N_STAGES])
-_B = np.ascontiguousarray(_dop.B)
-_C = np.ascontiguousarray(_dop.C[:_N_STAGES])
+# Stage s = 1..11 of a step evaluates at t + C[s] h, z + h sum_j A[s, j] K[j]; the solution
+# z + h sum_j B[j] K[j] is evaluated as stage 12 (row 12 of _A is B, _C[12] = 1), which makes the
+# stage loop one loop with one (inlined) evaluation of the model.
+_A = np.zeros((_N_STAGES + 1, _N_STAGES))
+_A[:_N_STAGES] = _dop.A[:_N_STAGES, :_N_STAGES]
+_A[_N_STAGES] = _dop.B
+_C = np.ones(_N_STAGES + 1)
+_C[:_N_STAGES] = _dop.C[:_N_STAGES]
 _E3 = np.ascontiguousarray(_dop.E3)
 _E5 = np.ascontiguousarray(_dop.E5)
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
 _ERR_EXPONENT = -1.0 / 8.0
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _tangent_product(model, z, n, jac, dz):
+    h = n // 2 if models.velocity_form(model) else 0
+    for i in range(h):
+        for j in range(n):
+            dz[n + i * n + j] = z[n + (h + i) * n + j]
+    for i in range(h, n):
+        for j in range(n):
+            acc = 0.0
+            for k in range(n):
+                acc += jac[i, k] * z[n + k * n + j]
+            dz[n + i * n + j] = acc
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _tangent(model, z, n, jac, dz):
+    """dz[n:] = J Phi with Phi = z[n:] (n x n, row-major) and J = jac.
+
+    For a model in velocity form (J = [[0, I], [A, B]]) the upper half of J Phi is the lower half
+    of Phi and only the lower block rows are multiplied: half the dense product's work. n = 4
+    (every model here) gets its own copy with a constant size, which the compiler unrolls."""
+    if n == 4:
+        _tangent_product(model, z, 4, jac, dz)
+    else:
+        _tangent_product(model, z, n, jac, dz)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _derivative(model, t, z, p, n, variational, dz, jbuf):
+    """dz/dt of the (possibly augmented) system, inlined into the step loops: no call and no
+    array views of z and dz (the models read and write the first n entries). With the
+    variational equations the model's right-hand side and Jacobian come from one evaluation
+    (`models.rhs_jac`, one ball sum)."""
+    if variational:
+        models.rhs_jac(model, t, z, p, dz, jbuf)
+        _tangent(model, z, n, jbuf, dz)
+    else:
+        models.rhs(model, t, z, p, dz)
+
+
 @njit(cache=True, nogil=True)
 def derivative(model, t, z, p, n, variational, dz, jbuf):
-    """dz/dt of the (possibly augmented) system."""
-    models.rhs(model, t, z[:n], p, dz[:n])
-    if variational:
-        models.jac(model, t, z[:n], p, jbuf)
-        for i in range(n):
-            for j in range(n):
-                acc = 0.0
-                for k in range(n):
-                    acc += jbuf[i, k] * z[n + k * n + j]
-                dz[n + i * n + j] = acc
+    """dz/dt of the (possibly augmented) system (jbuf: n x n scratch for the Jacobian)."""
+    _derivative(model, t, z, p, n, variational, dz, jbuf)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def state_status(z, n, n_position, amplitude_limit):
     """NaN/inf anywhere in the state, or a displacement beyond the physical limit."""
     for i in range(n):
@@ -67,20 +111,59 @@ def initial_state(u0, n, variational):
     return z
 
 
-@njit(cache=True, nogil=True)
-def _error_norm(K, h, z, znew, rtol, atol):
+@njit(cache=True, nogil=True, inline="always")
+def _combine_m(K, coef, n_terms, z, step, out, m):
+    c = coef[0]
+    if n_terms == 1:
+        for i in range(m):
+            out[i] = z[i] + step * (c * K[0, i])
+        return
+    for i in range(m):
+        out[i] = c * K[0, i]
+    for j in range(1, n_terms - 1):
+        c = coef[j]
+        if c != 0.0:
+            for i in range(m):
+                out[i] += c * K[j, i]
+    c = coef[n_terms - 1]
+    for i in range(m):
+        out[i] = z[i] + step * (out[i] + c * K[n_terms - 1, i])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _combine(K, coef, n_terms, z, step, out):
+    """out = z + step * sum_{j < n_terms} coef[j] K[j] (coef[0] != 0 and coef[n_terms - 1] != 0).
+
+    Row by row over K (contiguous, vectorised), each component summed in the order j = 0, 1, ...
+    as a per-component dot product would; terms with a zero coefficient are skipped (a quarter
+    of the Dormand-Prince tableau). One pass over `out` per term: the first assigns, the last
+    adds z. The state of a 4-state model (m = 4) gets a copy with a constant size."""
     m = z.size
+    if m == 4:
+        _combine_m(K, coef, n_terms, z, step, out, 4)
+    else:
+        _combine_m(K, coef, n_terms, z, step, out, m)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _error_norm(K, h, z, znew, rtol, atol, w5, w3):
+    """Hairer's DOP853 error norm of the step (w5, w3: work arrays of size z.size)."""
+    m = z.size
+    for i in range(m):
+        w5[i] = 0.0
+        w3[i] = 0.0
+    for j in range(_N_STAGES + 1):
+        c5 = _E5[j]
+        c3 = _E3[j]
+        for i in range(m):
+            w5[i] += K[j, i] * c5
+            w3[i] += K[j, i] * c3
     e5 = 0.0
     e3 = 0.0
     for i in range(m):
         scale = atol + rtol * max(abs(z[i]), abs(znew[i]))
-        s5 = 0.0
-        s3 = 0.0
-        for j in range(_N_STAGES + 1):
-            s5 += K[j, i] * _E5[j]
-            s3 += K[j, i] * _E3[j]
-        e5 += (s5 / scale) ** 2
-        e3 += (s3 / scale) ** 2
+        e5 += (w5[i] / scale) ** 2
+        e3 += (w3[i] / scale) ** 2
     if e5 == 0.0 and e3 == 0.0:
         return 0.0
     return abs(h) * e5 / np.sqrt((e5 + 0.01 * e3) * m)
@@ -95,38 +178,48 @@ def dop853(model, t0, t1, z0, p, n, n_position, variational, rtol, atol, h0, max
     status = state_status(z, n, n_position, amplitude_limit)
     if status != STATUS_OK:
         return z, status, 0, h0
-    znew = np.empty(m)
-    stage = np.empty(m)
     K = np.empty((_N_STAGES + 1, m))
+    work = np.empty((4, m))
     jbuf = np.empty((n, n))
     derivative(model, t0, z, p, n, variational, K[0], jbuf)
+    status, n_rhs, h = _dop853_steps(model, t0, t1, z, p, n, n_position, variational, rtol, atol, h0,
+                                     max_steps, amplitude_limit, K, work, jbuf)
+    return z, status, n_rhs, h
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def _dop853_steps(model, t0, t1, z, p, n, n_position, variational, rtol, atol, h0, max_steps,
+                  amplitude_limit, K, work, jbuf):
+    """The step loop of `dop853`, advancing z in place from K[0] = f(t0, z): (status, n_rhs,
+    h_next).
+
+    It only reads and writes the caller's arrays (K: stage derivatives, work: 4 rows of scratch,
+    jbuf: the Jacobian), so it is compiled without Numba's reference counting (`_nrt=False`):
+    with the model inlined, the reference counts of the arrays and views passed around in every
+    stage would otherwise cost atomic updates that take longer than the stage's arithmetic."""
+    znew = work[0]
+    stage = work[1]
+    w5 = work[2]
+    w3 = work[3]
     n_rhs = 1
     t = t0
     h = h0 if h0 > 0.0 else 0.01 * (t1 - t0)
+    m = z.size
     for _ in range(max_steps):
         if t >= t1:
-            return z, STATUS_OK, n_rhs, h
+            return STATUS_OK, n_rhs, h
         last = t + h >= t1
         step = t1 - t if last else h
         rejected = False
         while True:
             if step < 10.0 * np.spacing(max(abs(t), 1.0)):
-                return z, STATUS_STEP_UNDERFLOW, n_rhs, h
-            for s in range(1, _N_STAGES):
-                for i in range(m):
-                    acc = 0.0
-                    for j in range(s):
-                        acc += _A[s, j] * K[j, i]
-                    stage[i] = z[i] + step * acc
-                derivative(model, t + _C[s] * step, stage, p, n, variational, K[s], jbuf)
-            for i in range(m):
-                acc = 0.0
-                for j in range(_N_STAGES):
-                    acc += _B[j] * K[j, i]
-                znew[i] = z[i] + step * acc
-            derivative(model, t + step, znew, p, n, variational, K[_N_STAGES], jbuf)
+                return STATUS_STEP_UNDERFLOW, n_rhs, h
+            for s in range(1, _N_STAGES + 1):
+                target = znew if s == _N_STAGES else stage
+                _combine(K, _A[s], s if s < _N_STAGES else _N_STAGES, z, step, target)
+                _derivative(model, t + _C[s] * step, target, p, n, variational, K[s], jbuf)
             n_rhs += _N_STAGES
-            err = _error_norm(K, step, z, znew, rtol, atol)
+            err = _error_norm(K, step, z, znew, rtol, atol, w5, w3)
             if err < 1.0:
                 break
             # a NaN error (overflow inside a too-large step) shrinks the step like a huge error
@@ -134,16 +227,17 @@ def dop853(model, t0, t1, z0, p, n, n_position, variational, rtol, atol, h0, max
             last = False
             rejected = True
         t = t1 if last else t + step
-        z[:] = znew
-        K[0, :] = K[_N_STAGES, :]
+        for i in range(m):
+            z[i] = znew[i]
+            K[0, i] = K[_N_STAGES, i]
         status = state_status(z, n, n_position, amplitude_limit)
         if status != STATUS_OK:
-            return z, status, n_rhs, h
+            return status, n_rhs, h
         factor = _MAX_FACTOR if err == 0.0 else min(_MAX_FACTOR, _SAFETY * err ** _ERR_EXPONENT)
         if rejected:
             factor = min(1.0, factor)
         h = step * factor
-    return z, STATUS_STEP_UNDERFLOW, n_rhs, h
+    return STATUS_STEP_UNDERFLOW, n_rhs, h
 
 
 @njit(cache=True, nogil=True)
@@ -151,34 +245,47 @@ def rk4(model, t0, t1, z0, p, n, n_position, variational, n_steps, amplitude_lim
     """Integrate z from t0 to t1 with n_steps classical RK4 steps."""
     m = z0.size
     z = z0.copy()
-    k1 = np.empty(m)
-    k2 = np.empty(m)
-    k3 = np.empty(m)
-    k4 = np.empty(m)
-    stage = np.empty(m)
-    jbuf = np.empty((n, n))
     h = (t1 - t0) / n_steps
     status = state_status(z, n, n_position, amplitude_limit)
     if status != STATUS_OK:
         return z, status, 0, h
+    work = np.empty((5, m))
+    jbuf = np.empty((n, n))
+    status, n_rhs = _rk4_steps(model, t0, z, p, n, n_position, variational, n_steps, h,
+                               amplitude_limit, work, jbuf)
+    return z, status, n_rhs, h
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def _rk4_steps(model, t0, z, p, n, n_position, variational, n_steps, h, amplitude_limit, work,
+               jbuf):
+    """The step loop of `rk4`, advancing z in place: (status, n_rhs). Like `_dop853_steps`, it
+    touches only the caller's arrays and is compiled without reference counting."""
+    m = z.size
+    stage = work[4]
     for step in range(n_steps):
         t = t0 + step * h
-        derivative(model, t, z, p, n, variational, k1, jbuf)
+        for q in range(4):
+            # stage q at t + c_q h, z + a_q h k_{q-1}, with (c, a) = (0, -), (1/2, 1/2), (1/2, 1/2), (1, 1)
+            if q == 0:
+                for i in range(m):
+                    stage[i] = z[i]
+                tq = t
+            elif q < 3:
+                for i in range(m):
+                    stage[i] = z[i] + 0.5 * h * work[q - 1, i]
+                tq = t + 0.5 * h
+            else:
+                for i in range(m):
+                    stage[i] = z[i] + h * work[2, i]
+                tq = t + h
+            _derivative(model, tq, stage, p, n, variational, work[q], jbuf)
         for i in range(m):
-            stage[i] = z[i] + 0.5 * h * k1[i]
-        derivative(model, t + 0.5 * h, stage, p, n, variational, k2, jbuf)
-        for i in range(m):
-            stage[i] = z[i] + 0.5 * h * k2[i]
-        derivative(model, t + 0.5 * h, stage, p, n, variational, k3, jbuf)
-        for i in range(m):
-            stage[i] = z[i] + h * k3[i]
-        derivative(model, t + h, stage, p, n, variational, k4, jbuf)
-        for i in range(m):
-            z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+            z[i] += h / 6.0 * (work[0, i] + 2.0 * work[1, i] + 2.0 * work[2, i] + work[3, i])
         status = state_status(z, n, n_position, amplitude_limit)
         if status != STATUS_OK:
-            return z, status, 4 * (step + 1), h
-    return z, STATUS_OK, 4 * n_steps, h
+            return status, 4 * (step + 1)
+    return STATUS_OK, 4 * n_steps
 
 
 # Integrator settings travel as one float vector so that every caller passes the same thing.

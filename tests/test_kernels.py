@@ -255,3 +255,118 @@ def test_preloaded_law_linearizes_to_the_bearing_radial_stiffness(preload):
     np.testing.assert_allclose(-jac[2, 0] * mass / period ** 2, state.radial_stiffness, rtol=1e-12)
     np.testing.assert_allclose(-jac[3, 1] * mass / period ** 2, state.radial_stiffness, rtol=1e-12)
     np.testing.assert_allclose(scaled_rhs(p, 0.3, np.zeros(4)), 0.0, atol=1e-9)
+
+
+# --- fused and structured kernels (issue 5) --------------------------------------------------
+
+def _model_cases(rng):
+    """(model, p, tau, u) over all three models; Bai states include grazing contacts."""
+    p_bai, _ = bai_params(BaiPoint(120.0, 7.6e-6))
+    cases = [(JEFF, p_bai, rng.uniform(0, 1), rng.normal(scale=15.0, size=4)) for _ in range(20)]
+    cases += [(JEFF, p_bai, tau, u) for tau, u in grazing_states(p_bai, rng, 10)]
+    cases += [(LINEAR, np.array([40.0, 5.0, 90.0, 0.4, 0.9]), rng.uniform(0, 1), rng.normal(size=4))
+              for _ in range(5)]
+    cases += [(MATHIEU, np.array([0.05, 4.0, 2.5]), rng.uniform(0, 3), rng.normal(size=4))
+              for _ in range(5)]
+    return cases
+
+
+def test_fused_rhs_jac_equals_rhs_and_jac():
+    rng = np.random.default_rng(5)
+    for model, p, tau, u in _model_cases(rng):
+        du, jac = np.empty(4), np.empty((4, 4))
+        models.rhs(model.id, tau, u, p, du)
+        models.jac(model.id, tau, u, p, jac)
+        du2, jac2 = np.full(4, np.nan), np.full((4, 4), np.nan)
+        models.rhs_jac(model.id, tau, u, p, du2, jac2)
+        np.testing.assert_allclose(du2, du, rtol=1e-15, atol=1e-15 * np.abs(du).max())
+        np.testing.assert_allclose(jac2, jac, rtol=1e-15, atol=1e-15 * np.abs(jac).max())
+        assert models.velocity_form(model.id)
+        np.testing.assert_array_equal(jac[:2], [[0, 0, 1, 0], [0, 0, 0, 1]])   # [[0, I], [A, B]]
+
+
+def test_force_only_contact_sum_equals_ring_load():
+    from rotorkernels.contact import ring_force, ring_load
+
+    rng = np.random.default_rng(6)
+    for _ in range(50):
+        x, y, z = rng.normal(scale=10.0, size=3)
+        a, t = rng.uniform(0, 0.6), rng.uniform(0, 2 * np.pi)
+        n = int(rng.integers(5, 15))
+        args = (x, y, z, rng.normal(scale=3.0), np.cos(a), np.sin(a), n, np.cos(t), np.sin(t),
+                np.cos(2 * np.pi / n), np.sin(2 * np.pi / n))
+        assert ring_force(*args) == ring_load(*args)[:3]
+
+
+def test_variational_derivative_is_rhs_and_dense_j_phi():
+    """The structured J Phi (only the lower block rows multiplied) equals the dense product."""
+    rng = np.random.default_rng(7)
+    for model, p, tau, u in _model_cases(rng):
+        phi = rng.normal(size=(4, 4))
+        z = np.concatenate([u, phi.ravel()])
+        dz, jbuf = np.full(20, np.nan), np.empty((4, 4))
+        ig.derivative(model.id, tau, z, p, 4, True, dz, jbuf)
+        du, jac = np.empty(4), np.empty((4, 4))
+        models.rhs(model.id, tau, u, p, du)
+        models.jac(model.id, tau, u, p, jac)
+        np.testing.assert_allclose(dz[:4], du, rtol=1e-15, atol=1e-15 * np.abs(du).max())
+        dense = (jac @ phi).ravel()
+        np.testing.assert_allclose(dz[4:], dense, rtol=1e-14, atol=1e-14 * np.abs(dense).max())
+        ds = np.full(4, np.nan)
+        ig.derivative(model.id, tau, u, p, 4, False, ds, jbuf)
+        np.testing.assert_array_equal(ds, du)
+
+
+# One variational period at 80 Hz, 7.6 um from (0.3, -10.5, 0.2, 1.9), computed by the kernels
+# before the fused/structured variational derivative (commit 73176ef): the restructured kernels
+# perform the same floating-point operations in the same order.
+_VARIATIONAL_BEFORE = {
+    "dop853": (1489, [
+        -0.4786083401041246, -11.027756101025354, 0.6360193953077452, -0.1000950555210518,
+        -0.6333562127564384, -0.3407560098170526, -0.02590697887323954, -0.04793946070988128,
+        0.01448395045667758, -0.06739382358807527, -0.061218110470487315, 0.1054046925214338,
+        -0.09787864135038835, -0.10955364498906833, -0.8955914799213586, -0.11004242589337478,
+        0.5941883841592004, -5.252598300603283, -0.2851028008545152, -0.16387524251740226]),
+    "rk4": (1024, [
+        -0.4786084932056083, -11.02775626431948, 0.6360208524170916, -0.1000931160459049,
+        -0.6333809308592169, -0.34080467443887974, -0.025914363623428627, -0.047937727799874125,
+        0.014503261784605304, -0.0673529678235188, -0.06122052633425472, 0.1054064449093561,
+        -0.09800225555338954, -0.10981947828181537, -0.8955659854357525, -0.1100574957622642,
+        0.5942072691721154, -5.252580424259392, -0.2850440899743956, -0.16389673942869354]),
+}
+
+
+@pytest.mark.parametrize("method", ["dop853", "rk4"])
+def test_variational_flow_is_unchanged_by_the_fast_kernels(method):
+    p, _ = bai_params(BaiPoint(80.0, 7.6e-6))
+    opts = ig.settings(rtol=1e-10, atol=1e-12) if method == "dop853" else ig.settings("rk4", steps_per_unit=256)
+    z0 = ig.initial_state(np.array([0.3, -10.5, 0.2, 1.9]), 4, True)
+    z, status, n_rhs, _ = ig.flow(JEFF.id, 0.0, 1.0, z0, p, 4, 2, True, opts, 0.0)
+    n_before, z_before = _VARIATIONAL_BEFORE[method]
+    assert status == ig.STATUS_OK and n_rhs == n_before
+    np.testing.assert_allclose(z, z_before, rtol=0, atol=1e-12)
+
+
+def test_step_loops_without_reference_counting_do_not_leak():
+    """The step loops are compiled with _nrt=False: every array they use is owned by the caller,
+    so repeated flows allocate and free the same number of arrays."""
+    from numba.core.runtime import _nrt_python, rtsys
+
+    p, _ = bai_params(BaiPoint(80.0, 7.6e-6))
+    z0 = ig.initial_state(np.array([0.3, -10.5, 0.2, 1.9]), 4, True)
+    was_enabled = _nrt_python.memsys_stats_enabled()
+    _nrt_python.memsys_enable_stats()
+    try:
+        for opts in (ig.settings(), ig.settings("rk4", steps_per_unit=64)):
+            ig.flow(JEFF.id, 0.0, 1.0, z0, p, 4, 2, True, opts, 0.0)
+            before = rtsys.get_allocation_stats()
+            for _ in range(5):
+                z, *_ = ig.flow(JEFF.id, 0.0, 1.0, z0, p, 4, 2, True, opts, 0.0)
+            del z
+            after = rtsys.get_allocation_stats()
+            assert after.alloc - before.alloc > 0
+            assert after.alloc - before.alloc == after.free - before.free
+            assert after.mi_alloc - before.mi_alloc == after.mi_free - before.mi_free
+    finally:
+        if not was_enabled:
+            _nrt_python.memsys_disable_stats()
