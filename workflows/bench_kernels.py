@@ -925,6 +925,12 @@ def _python_rhs_cost(p, taus, states, n=2000):
     return t_rhs / n * 1e9, t_aug / n * 1e9
 
 
+FLOW_COSTS = (("flow_dop853_ns", ig.settings(rtol=1e-10, atol=1e-12), 20.0, False),
+              ("flow_rk4_ns", ig.settings("rk4", steps_per_unit=512), 20.0, False),
+              ("flow_dop853_var_ns", ig.settings(rtol=1e-10, atol=1e-12), 1.0, True),
+              ("flow_rk4_var_ns", ig.settings("rk4", steps_per_unit=512), 1.0, True))
+
+
 def c_floor(refs, n_states, passes, repeats):
     """Cost per right-hand-side evaluation: C, Numba in an njit loop, Numba inside `flow`."""
     out = dict(points=[], compiler=None, skipped=None)
@@ -971,20 +977,17 @@ def c_floor(refs, n_states, passes, repeats):
             numba_force = min(numba_force, t / n_states * 1e9)
             t, sums["numba_var"] = best_time(lambda: _variational_loop(JEFF.id, taus, states, p), repeats)
             numba_var = min(numba_var, t / n_states * 1e9)
+            # inside the integrators: time of `flow` divided by its n_rhs
+            for key, opts, t1, var in FLOW_COSTS:
+                z0 = ig.initial_state(s_ref, N, var)
+                t, (_, _, n_rhs, _) = best_time(
+                    lambda: ig.flow(JEFF.id, 0.0, t1, z0, p, N, NPOS, var, opts, 0.0), repeats)
+                row[key] = min(row.get(key, np.inf), t / n_rhs * 1e9)
         row.update(c_rhs_ns=c_rhs, c_var_ns=c_var, numba_rhs_ns=numba_rhs, numba_force_ns=numba_force,
                    numba_var_ns=numba_var)
         if out["compiler"]:
             row["checksum_rel_diff_rhs"] = abs(sums["c_rhs"] - sums["numba_rhs"]) / abs(sums["numba_rhs"])
             row["checksum_rel_diff_var"] = abs(sums["c_var"] - sums["numba_var"]) / abs(sums["numba_var"])
-        # inside the integrators: time of `flow` divided by its n_rhs
-        for key, opts, t1, var in (("flow_dop853_ns", ig.settings(rtol=1e-10, atol=1e-12), 20.0, False),
-                                   ("flow_rk4_ns", ig.settings("rk4", steps_per_unit=512), 20.0, False),
-                                   ("flow_dop853_var_ns", ig.settings(rtol=1e-10, atol=1e-12), 1.0, True),
-                                   ("flow_rk4_var_ns", ig.settings("rk4", steps_per_unit=512), 1.0, True)):
-            z0 = ig.initial_state(s_ref, N, var)
-            t, (_, _, n_rhs, _) = best_time(
-                lambda: ig.flow(JEFF.id, 0.0, t1, z0, p, N, NPOS, var, opts, 0.0), repeats)
-            row[key] = t / n_rhs * 1e9
         row["python_rhs_ns"], row["python_aug_ns"] = _python_rhs_cost(p, taus, states)
         out["points"].append(row)
         log(f"  C floor {e['name']}: done")
@@ -1001,16 +1004,14 @@ def integrator_overhead(taus, states, repeats):
     p = np.array([40.0, 5.0, 90.0, 0.4, 0.9])
     u0 = np.array([1.0, -2.0, 0.5, 0.3])
     out = {}
-    for key, opts, var in (("flow_dop853_ns", ig.settings(rtol=1e-10, atol=1e-12), False),
-                           ("flow_rk4_ns", ig.settings("rk4", steps_per_unit=512), False),
-                           ("flow_dop853_var_ns", ig.settings(rtol=1e-10, atol=1e-12), True),
-                           ("flow_rk4_var_ns", ig.settings("rk4", steps_per_unit=512), True)):
-        z0 = ig.initial_state(u0, lin.n_state, var)
-        t, (_, _, n_rhs, _) = best_time(
-            lambda: ig.flow(lin.id, 0.0, 1.0, z0, p, lin.n_state, lin.n_position, var, opts, 0.0), repeats)
-        out[key] = t / n_rhs * 1e9
-    t, _ = best_time(lambda: _variational_loop(lin.id, taus, states, p), repeats)
-    out["derivative_var_ns"] = t / taus.size * 1e9
+    for _ in range(3):      # three interleaved rounds, best of each: the machine is shared
+        for key, opts, _, var in FLOW_COSTS:
+            z0 = ig.initial_state(u0, lin.n_state, var)
+            t, (_, _, n_rhs, _) = best_time(
+                lambda: ig.flow(lin.id, 0.0, 1.0, z0, p, lin.n_state, lin.n_position, var, opts, 0.0), repeats)
+            out[key] = min(out.get(key, np.inf), t / n_rhs * 1e9)
+        t, _ = best_time(lambda: _variational_loop(lin.id, taus, states, p), repeats)
+        out["derivative_var_ns"] = min(out.get("derivative_var_ns", np.inf), t / taus.size * 1e9)
     return out
 
 
@@ -1486,8 +1487,9 @@ def interpretation(ctx):
         met = min(rs) >= 200
         out.append(f"- **Peer ratio**: scipy DOP853 makes {nf:.2f}x as many RHS calls as ours (same method, same "
                    f"steps up to the step-placement scatter), so the ratio is the ratio of the cost per "
-                   f"evaluation, everything included: {scipy_per / 1e3:.1f} us per call for scipy (~{per / 1e3:.0f} us "
-                   f"of it the user's numpy augmented RHS, the rest solve_ivp's per-step Python work) against "
+                   f"evaluation, everything included: {scipy_per / 1e3:.1f} us per call for scipy (the user's numpy "
+                   f"augmented RHS alone costs ~{per / 1e3:.0f} us per call, measured separately; the rest is "
+                   f"solve_ivp's per-step Python work) against "
                    f"{ours_per:.0f} ns per evaluation for one of our points (shooting + Floquet, divided by its "
                    f"RHS count). Hence {np.median(rs):.0f}x median ({min(rs):.0f}-{max(rs):.0f}x) at identical "
                    f"settings: the 200x target is {'met at every point' if met else 'NOT met at every point'}"
@@ -1525,9 +1527,10 @@ def interpretation(ctx):
                        f"costs {io['flow_dop853_var_ns']:.0f} ns, of which {io['derivative_var_ns']:.0f} ns is the "
                        f"derivative (mostly J Phi), leaving ~{max(own, 0):.0f} ns for the 12 stage sums over 20 "
                        f"components, the error norm and the step control (rk4: "
-                       f"~{max(io['flow_rk4_var_ns'] - io['derivative_var_ns'], 0):.0f} ns); so {fv:.0f} ns per "
-                       f"evaluation inside DOP853 is about {nv:.0f} ns of derivative plus ~{max(fv - nv, 0):.0f} "
-                       f"ns of integrator. (3) The peer ratio is per-evaluation cost against scipy's, at the same "
+                       f"~{max(io['flow_rk4_var_ns'] - io['derivative_var_ns'], 0):.0f} ns); so an evaluation "
+                       f"inside the DOP853 orbit solves (median {ctx['per_rhs'][1]:.0f} ns over all points and "
+                       f"tolerances, Newton included) is about {nv:.0f} ns of derivative plus "
+                       f"~{max(ctx['per_rhs'][1] - nv, 0):.0f} ns of integrator. (3) The peer ratio is per-evaluation cost against scipy's, at the same "
                        f"number of evaluations; every further halving of our cost per evaluation doubles it.")
     return out
 
