@@ -28,8 +28,9 @@ STATUS_OK, STATUS_NAN, STATUS_AMPLITUDE, STATUS_STEP_UNDERFLOW = range(4)
 
 _N_STAGES = _dop.N_STAGES
 # Stage s = 1..11 of a step evaluates at t + C[s] h, z + h sum_j A[s, j] K[j]; the solution
-# z + h sum_j B[j] K[j] is evaluated as stage 12 (row 12 of _A is B, _C[12] = 1), which makes the
-# stage loop one loop with one (inlined) evaluation of the model.
+# z + h sum_j B[j] K[j] is evaluated as stage 12 (row 12 of _A is B, _C[12] = 1) and the very
+# first K[0] = f(t0, z0) as stage 0 (C[0] = 0): the stage loop is one loop with one (inlined)
+# evaluation of the model, which keeps compilation time down.
 _A = np.zeros((_N_STAGES + 1, _N_STAGES))
 _A[:_N_STAGES] = _dop.A[:_N_STAGES, :_N_STAGES]
 _A[_N_STAGES] = _dop.B
@@ -181,7 +182,6 @@ def dop853(model, t0, t1, z0, p, n, n_position, variational, rtol, atol, h0, max
     K = np.empty((_N_STAGES + 1, m))
     work = np.empty((4, m))
     jbuf = np.empty((n, n))
-    derivative(model, t0, z, p, n, variational, K[0], jbuf)
     status, n_rhs, h = _dop853_steps(model, t0, t1, z, p, n, n_position, variational, rtol, atol, h0,
                                      max_steps, amplitude_limit, K, work, jbuf)
     return z, status, n_rhs, h
@@ -190,8 +190,7 @@ def dop853(model, t0, t1, z0, p, n, n_position, variational, rtol, atol, h0, max
 @njit(cache=True, nogil=True, _nrt=False)
 def _dop853_steps(model, t0, t1, z, p, n, n_position, variational, rtol, atol, h0, max_steps,
                   amplitude_limit, K, work, jbuf):
-    """The step loop of `dop853`, advancing z in place from K[0] = f(t0, z): (status, n_rhs,
-    h_next).
+    """The step loop of `dop853`, advancing z in place: (status, n_rhs, h_next).
 
     It only reads and writes the caller's arrays (K: stage derivatives, work: 4 rows of scratch,
     jbuf: the Jacobian), so it is compiled without Numba's reference counting (`_nrt=False`):
@@ -201,7 +200,8 @@ def _dop853_steps(model, t0, t1, z, p, n, n_position, variational, rtol, atol, h
     stage = work[1]
     w5 = work[2]
     w3 = work[3]
-    n_rhs = 1
+    n_rhs = 0
+    first_stage = 0     # K[0] = f(t0, z) is evaluated as stage 0 of the first step
     t = t0
     h = h0 if h0 > 0.0 else 0.01 * (t1 - t0)
     m = z.size
@@ -214,11 +214,15 @@ def _dop853_steps(model, t0, t1, z, p, n, n_position, variational, rtol, atol, h
         while True:
             if step < 10.0 * np.spacing(max(abs(t), 1.0)):
                 return STATUS_STEP_UNDERFLOW, n_rhs, h
-            for s in range(1, _N_STAGES + 1):
-                target = znew if s == _N_STAGES else stage
-                _combine(K, _A[s], s if s < _N_STAGES else _N_STAGES, z, step, target)
+            for s in range(first_stage, _N_STAGES + 1):
+                if s == 0:
+                    target = z
+                else:
+                    target = znew if s == _N_STAGES else stage
+                    _combine(K, _A[s], s, z, step, target)
                 _derivative(model, t + _C[s] * step, target, p, n, variational, K[s], jbuf)
-            n_rhs += _N_STAGES
+            n_rhs += _N_STAGES + 1 - first_stage
+            first_stage = 1
             err = _error_norm(K, step, z, znew, rtol, atol, w5, w3)
             if err < 1.0:
                 break
