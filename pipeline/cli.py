@@ -162,6 +162,8 @@ def cmd_query(args):
     ds = query.select(ds, query.parse_where(args.where or []))
     if args.unstable:
         print(query.intervals_table(query.unstable_intervals(ds), fmt=args.format))
+    elif args.attractors:
+        print(query.intervals_table(query.attractor_intervals(ds, args.attractors), fmt=args.format))
     else:
         print(query.to_table(ds, args.var or None, fmt=args.format))
     return 0
@@ -216,6 +218,9 @@ def build_parser():
                    help="speed=80:120 (range), clearance=3.8e-6 (value), preload=0,100 (list); repeatable")
     q.add_argument("--var", action="append", metavar="NAME", help="variable to print; repeatable")
     q.add_argument("--unstable", action="store_true", help="print the unstable speed intervals")
+    q.add_argument("--attractors", nargs="?", const="up", choices=["up", "down"],
+                   help="print the speed intervals of constant attractor class and period "
+                        "(the up sweep, or the down sweep of a sweep_direction = \"both\" cube)")
     q.add_argument("--format", choices=["table", "csv", "json"], default="table")
     q.set_defaults(func=cmd_query)
 

@@ -4,7 +4,7 @@ cube variables a sweep writes."""
 import numpy as np
 import pytest
 
-from pipeline import compute, config, cube, query, schema, sweep
+from pipeline import cli, compute, config, cube, query, schema, sweep
 from rotorkernels import attractor as at
 
 SCENE = """
@@ -102,7 +102,7 @@ def test_up_and_down_sweeps_expose_coexisting_attractors():
     assert np.all(np.isnan(r["attractor_multiplier_real_down"][chaotic]))
 
 
-def test_sweep_writes_the_attractor_variables(tmp_path):
+def test_sweep_writes_the_attractor_variables(tmp_path, capsys):
     cfg = scene(60.0, 64.0, 2.0, "3.8e-6, 19.0e-6", "poincare_samples = 32\nmax_period = 8")
     path = sweep.run(cfg, tmp_path / "a.nc", workers=2, progress=False)
     ds = cube.open_cube(path)
@@ -122,3 +122,9 @@ def test_sweep_writes_the_attractor_variables(tmp_path):
         (3.8e-6, 60.0, 64.0, "period-1"), (19.0e-6, 60.0, 64.0, "period-2")]
     with pytest.raises(ValueError, match="down sweep"):
         query.attractor_intervals(ds, "down")
+    assert cli.main(["query", str(path), "--attractors", "--format", "csv"]) == 0
+    assert capsys.readouterr().out.splitlines()[1:] == [
+        "3.8e-06,60.0,64.0,3,period-1," + f"{runs[0]['max_lle']!r}",
+        "1.9e-05,60.0,64.0,3,period-2," + f"{runs[1]['max_lle']!r}"]
+    assert cli.main(["query", str(path), "--attractors", "down"]) == 2
+    assert "no attractor diagnostics for the down sweep" in capsys.readouterr().err
