@@ -1,0 +1,24 @@
+"""Numba kernels of rotorsweep: models, integrators, shooting, Floquet, Lyapunov.
+
+Numba's on-disk cache checks only the source file of the function it caches, yet a cached
+function holds the machine code of every kernel it calls (shooting holds the integrator, the
+integrator holds the models), so editing one module would leave stale code in the others' caches.
+The cache therefore lives in a directory named after a hash of all kernel sources:
+$ROTORSWEEP_CACHE (default ~/.cache/rotorsweep)/numba/<hash>. NUMBA_CACHE_DIR, if set, wins.
+"""
+import hashlib
+import os
+from pathlib import Path
+
+import numba
+
+
+def _cache_dir(src=Path(__file__).parent):
+    sources = sorted(Path(src).glob("*.py"))
+    digest = hashlib.sha256(b"".join(p.name.encode() + p.read_bytes() for p in sources)).hexdigest()
+    base = os.environ.get("ROTORSWEEP_CACHE") or os.path.join(os.path.expanduser("~"), ".cache", "rotorsweep")
+    return os.path.join(base, "numba", digest[:16])
+
+
+if not os.environ.get("NUMBA_CACHE_DIR"):
+    numba.config.CACHE_DIR = _cache_dir()

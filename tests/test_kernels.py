@@ -1,4 +1,7 @@
 """Kernel numerics against independent values: finite differences, linear algebra, scipy."""
+import os
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -370,3 +373,20 @@ def test_step_loops_without_reference_counting_do_not_leak():
     finally:
         if not was_enabled:
             _nrt_python.memsys_disable_stats()
+
+
+def test_numba_cache_is_keyed_on_all_kernel_sources(tmp_path):
+    """Editing any kernel module moves the cache: cached callers never keep a stale callee."""
+    import shutil
+
+    import numba
+    import rotorkernels
+
+    src = Path(rotorkernels.__file__).parent
+    for f in src.glob("*.py"):
+        shutil.copy(f, tmp_path / f.name)
+    assert rotorkernels._cache_dir(tmp_path) == rotorkernels._cache_dir(src)
+    if not os.environ.get("NUMBA_CACHE_DIR"):
+        assert numba.config.CACHE_DIR == rotorkernels._cache_dir(src)
+    (tmp_path / "models.py").write_text((src / "models.py").read_text() + "\n# edited\n")
+    assert rotorkernels._cache_dir(tmp_path) != rotorkernels._cache_dir(src)
