@@ -486,6 +486,14 @@ def _on_stable_orbit(model, orbit_state, multipliers, period, n_samples, end_sta
                      lle_all, np.asarray(multipliers, complex), True)
 
 
+# diagnose(): periodic samples whose refined orbit has max|lambda| > 1 + UNSTABLE_MARGIN sit on an
+# unstable orbit, not an attractor; up to ESCAPES new transients follow, each from the state
+# kicked by ESCAPE_KICK x its size.
+UNSTABLE_MARGIN = 1e-6
+ESCAPES = 2
+ESCAPE_KICK = 1e-3
+
+
 def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_period=32,
              period_rtol=None, orbit_lle=True, lyapunov_always=False, stable_orbit=None,
              renorm_periods=1.0, max_periods=2000, n_blocks=10, rtol_stop=0.02, min_periods=None,
@@ -500,8 +508,9 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
     stable_orbit = (state, multipliers) of a stable period-1 orbit found by shooting: the
     transient stops as soon as the state reaches it (`settle_on_orbit`), and the point is that
     orbit (samples = its state) with derived exponents -- the 'derive when stable' shortcut.
-    Otherwise (no period, the shooting fails, or lyapunov_always) a Lyapunov run starts where the
-    samples end (no second transient). Returns an Attractor: code, period k, lle and lle_stderr
+    Samples that repeat on an unstable orbit (a start on or next to it) are retaken after a kick
+    off it (ESCAPES). Otherwise (no period, the shooting fails, or lyapunov_always) a Lyapunov
+    run starts where the samples end (no second transient). Returns an Attractor: code, period k, lle and lle_stderr
     in 1/s (NaN when not computed), samples, end_state (the state at the last whole period
     reached: the start of the next speed in a continuation of the attractor), status,
     periods_used (measured Lyapunov periods; 0 when none ran), exponents [1/s], multipliers,
@@ -515,14 +524,21 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
         if reached:
             return _on_stable_orbit(model, state, lams, period, int(n_samples), state.copy())
         n_transient -= used
-    samples, status, end = _poincare(model.id, u0, p, model.n_state, model.n_position, opts,
-                                     int(n_transient), int(n_samples))
     nan = np.full(model.n_state, np.nan)
-    if status != ig.STATUS_OK:
-        return Attractor(DIVERGED, 0, np.nan, np.nan, samples, end, int(status), 0.0, nan,
-                         nan + 0j, False)
-    k = detect_period(samples, max_period, period_rtol)
-    orbit = periodic_orbit_of(model, end, p, opts, k, period_rtol) if k > 0 and orbit_lle else None
+    for attempt in range(1 + ESCAPES):
+        samples, status, end = _poincare(model.id, u0, p, model.n_state, model.n_position, opts,
+                                         int(n_transient), int(n_samples))
+        if status != ig.STATUS_OK:
+            return Attractor(DIVERGED, 0, np.nan, np.nan, samples, end, int(status), 0.0, nan,
+                             nan + 0j, False)
+        k = detect_period(samples, max_period, period_rtol)
+        orbit = periodic_orbit_of(model, end, p, opts, k, period_rtol) if k > 0 and orbit_lle else None
+        # Samples that repeat on an unstable orbit only show a start too close to it (a weakly
+        # unstable orbit is left slowly): kick the state off it and take a new transient.
+        if orbit is None or np.abs(orbit[2]).max() <= 1.0 + UNSTABLE_MARGIN or attempt == ESCAPES:
+            break
+        u0 = end + ESCAPE_KICK * max(1.0, float(np.abs(end).max()))
+        n_transient = max(int(n_transient), 1)
     lams = nan + 0j
     if orbit is not None:
         k, _, lams = orbit
@@ -536,6 +552,16 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
         model, end, p, opts, 0, renorm_periods, max_periods, n_blocks, rtol_stop, min_periods,
         atol_stop, align_periods, weighted)
     code, k = classify(samples, expo[0], stderr[0], k, lstatus)
+    if code == PERIODIC and k == 0 and lstatus == ig.STATUS_OK:
+        # a contracting attractor whose samples had not settled: by the end of the Lyapunov run
+        # they have, so sample again there
+        again, status2, end3 = _poincare(model.id, end2, p, model.n_state, model.n_position, opts,
+                                         0, int(n_samples))
+        k2 = detect_period(again, max_period, period_rtol) if status2 == ig.STATUS_OK else 0
+        orbit = periodic_orbit_of(model, end3, p, opts, k2, period_rtol) if k2 > 0 else None
+        if orbit is not None and np.abs(orbit[2]).max() < 1.0:
+            k, _, lams = orbit
+            samples, end2 = again, end3
     if code != PERIODIC or k == 0:
         lams = nan + 0j
     return Attractor(code, k, float(expo[0]) / period, float(stderr[0]) / period, samples, end2,

@@ -301,6 +301,23 @@ def test_period_two_attractor_is_refined_and_stable_although_period_one_is_not()
     assert res.lle == pytest.approx(np.log(np.abs(ref_lams).max()) / (2 * period), rel=1e-6)
 
 
+@pytest.mark.parametrize("point, expected", [
+    (BaiPoint(148.0, 7.6e-6), (at.QUASI_PERIODIC, 0)),   # past the Neimark-Sacker: a torus
+    (BaiPoint(84.0, 7.6e-6), (at.PERIODIC, 2)),          # past the period doubling
+], ids=["torus-148Hz", "period2-84Hz"])
+def test_a_start_on_the_unstable_orbit_still_finds_the_attractor(point, expected):
+    """A segment's first speed starts on its periodic orbit even when that is unstable; a weakly
+    unstable orbit is left so slowly that the samples first repeat on it (kicked off, retaken),
+    or have not settled on the attractor yet (sampled again after the Lyapunov run)."""
+    p, period = bai_params(point)
+    p1 = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=models.static_guess, tol=1e-10)
+    assert p1.status == shooting.CONVERGED and not p1.stable
+    res = at.diagnose(JEFF, p1.state, p, period, OPTS)
+    assert (res.code, res.period) == expected
+    if res.code == at.PERIODIC:
+        assert np.abs(res.multipliers).max() < 1.0
+
+
 # --- the period-doubling route to chaos of Bai 2006 (19 um) --------------------------------
 
 CASCADE_SPEEDS = np.concatenate([np.arange(70.0, 43.0, -2.0), np.arange(43.0, 38.95, -0.1),
