@@ -68,5 +68,7 @@ def point(speed, clearance, contact_angle=None, preload=None, config=None):
           "contact_angle": fixed["contact_angle"] if contact_angle is None else contact_angle,
           "preload": fixed["preload"] if preload is None else preload}
     config_mod.check_point(pt)
-    row = compute.solve_segment(cfg.data, [pt])
+    # the periodic orbit only, even where the scene also asks for attractors (`point --attractor`)
+    data = {**cfg.data, "analysis": {**cfg.data["analysis"], "floquet": True, "attractor": False}}
+    row = compute.solve_segment(data, [pt])
     return {k: v[0] for k, v in row.items()}

@@ -131,6 +131,10 @@ gravity = 9.8
 [sweep]
 speed = {start = 20.0, stop = 220.0, step = 2.0}
 clearance = [7.6e-6, 19.0e-6]
+
+[analysis]
+attractor = true             # also what the rotor settles on: Poincare section, period, chaos
+lyapunov_max_periods = 500
 """
 
 
