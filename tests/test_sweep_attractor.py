@@ -83,7 +83,6 @@ def test_derived_exponents_of_stable_points_match_the_integrated_ones():
         np.testing.assert_allclose(run["lyapunov_exponents"].sum(axis=1), -300.0, rtol=1e-6)
     # the section of a stable period-1 attractor is the orbit's point
     np.testing.assert_allclose(fast["poincare_x"], np.repeat(fast["orbit_state"][:, :1] * 1e-6, 128, axis=1))
-    assert fast["compute_time"].sum() < 0.5 * slow["compute_time"].sum()
 
 
 def test_up_and_down_sweeps_expose_coexisting_attractors():
