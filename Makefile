@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow bench bench-scaling fig13 clean
+.PHONY: demo test test-slow bench bench-scaling fig13 cascade clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -23,6 +23,10 @@ test-slow: $(STAMP)  ## long tests (full sweeps, cascades)
 
 fig13: $(STAMP)  ## the Bai 2006 Fig. 13 sweep (2401 speeds x 5 clearances)
 	$(BIN)/rotorsweep run configs/bai2006_fig13.toml -o out/bai2006_fig13.nc --overwrite --report out/bai2006_fig13_report
+
+cascade: $(STAMP)  ## 19 um route to chaos, attractors swept up and down, with the 28 Hz point in detail
+	$(BIN)/rotorsweep run configs/bai2006_cascade.toml -o out/bai2006_cascade.nc --overwrite
+	$(BIN)/rotorsweep report out/bai2006_cascade.nc -o out/bai2006_cascade_report --point speed=28
 
 bench: $(STAMP)  ## work-precision and baseline benchmarks -> docs/benchmarks/
 	$(BIN)/python -m workflows.bench_kernels
