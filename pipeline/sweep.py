@@ -52,12 +52,18 @@ def segments(cfg):
     return out
 
 
+CHUNKS_PER_WORKER = 32
+
+
 def plan_chunks(segs, n_workers, chunk_points=None):
-    """Group segments into chunks of about chunk_points points (default: enough chunks for
-    load balance, about 8 per worker, each big enough that Dask's ~1 ms per task is noise)."""
+    """Group segments into chunks of about chunk_points points (default: about CHUNKS_PER_WORKER
+    per worker, at least 64 points each so that Dask's ~1 ms per task stays noise). Point costs
+    vary 100-fold (a stable orbit ~5 ms, a chaotic attractor ~400 ms) and cluster along speed, so
+    many chunks are needed for balance: Fig. 13 with attractors on 2 workers took 115 s with 8
+    chunks per worker (one chunk held a quarter of the work) and 93 s with 47."""
     total = sum(len(s.points) for s in segs)
     if chunk_points is None:
-        chunk_points = max(64, total // max(1, 8 * n_workers))
+        chunk_points = max(64, total // max(1, CHUNKS_PER_WORKER * n_workers))
     chunks, current, size = [], [], 0
     for seg in segs:
         current.append(seg)
