@@ -127,3 +127,29 @@ def test_sweep_writes_the_attractor_variables(tmp_path, capsys):
         "1.9e-05,60.0,64.0,3,period-2," + f"{runs[1]['max_lle']!r}"]
     assert cli.main(["query", str(path), "--attractors", "down"]) == 2
     assert "no attractor diagnostics for the down sweep" in capsys.readouterr().err
+
+
+def test_cascade_scene_period_doubling_to_chaos_and_coexistence(tmp_path):
+    """The shipped configs/bai2006_cascade.toml (19 um, 26-70 Hz, up and down): sweeping down
+    from 70 Hz the attractor has periods 1, 2, 4, 8 in this order, then chaos with a positive
+    exponent beyond its error, with periodic windows (period 3, period 5) between chaotic runs;
+    up and down sweeps differ where a stable orbit and a chaotic attractor coexist (~27.6-28.4 Hz)."""
+    cfg = config.load_config("configs/bai2006_cascade.toml")
+    ds = cube.open_cube(sweep.run(cfg, tmp_path / "cascade.nc", workers=2, progress=False))
+    runs = query.attractor_intervals(ds)[::-1]                  # from 70 Hz down
+    labels = [r["attractor"] for r in runs]
+    first = {k: labels.index(f"period-{k}") for k in (1, 2, 4, 8)}
+    first_chaos = labels.index("chaotic")
+    assert first[1] < first[2] < first[4] < first[8] < first_chaos, labels
+    chaotic = ds["attractor"].values.ravel() == at.CHAOTIC
+    assert chaotic.sum() >= 40
+    assert np.all(ds["lle"].values.ravel()[chaotic] > 3 * ds["lle_stderr"].values.ravel()[chaotic])
+    last_chaos = len(labels) - 1 - labels[::-1].index("chaotic")
+    for window in ("period-5", "period-3"):                   # periodic windows inside the chaos
+        assert first_chaos < labels.index(window) < last_chaos, labels
+    speed = ds["speed"].values
+    hysteresis = speed[ds["hysteresis"].values.ravel() == 1]
+    assert np.any((hysteresis > 27.6) & (hysteresis < 28.4))
+    at28 = ds.sel(speed=28.0).squeeze()
+    assert int(at28["attractor"]) == at.PERIODIC and int(at28["attractor_down"]) == at.CHAOTIC
+    assert int(at28["stable"]) == 1
