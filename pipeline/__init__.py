@@ -56,18 +56,16 @@ def make_report(cube_or_path, out_dir, points=None):
     return report.make_report(_dataset(cube_or_path), out_dir, points=points)
 
 
-def point(speed, clearance, contact_angle=None, preload=None, config=None):
+def point(speed=None, clearance=None, contact_angle=None, preload=None, config=None, **values):
     """Periodic orbit and Floquet multipliers at one point, as the cube variables of that point
-    (a dict of numpy values). contact_angle in degrees; None: the scene's (or from clearance)."""
+    (a dict of numpy values). The point's axis values: the keywords (speed, clearance,
+    contact_angle [deg], preload for jeffcott_clearance; any axis of the scene's model as
+    `**values`), else the scene's fixed values."""
     from pipeline import compute
-    from pipeline import config as config_mod
 
     cfg = _config(config)
-    fixed = compute.fixed_values(cfg.data)
-    pt = {"speed": speed, "clearance": clearance,
-          "contact_angle": fixed["contact_angle"] if contact_angle is None else contact_angle,
-          "preload": fixed["preload"] if preload is None else preload}
-    config_mod.check_point(pt)
+    given = {"speed": speed, "clearance": clearance, "contact_angle": contact_angle, "preload": preload, **values}
+    pt = compute.point_values(cfg, given)
     # the periodic orbit only, even where the scene also asks for attractors (`point --attractor`)
     data = {**cfg.data, "analysis": {**cfg.data["analysis"], "floquet": True, "attractor": False}}
     row = compute.solve_segment(data, [pt])

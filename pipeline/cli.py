@@ -50,12 +50,21 @@ def _attractor_row(args):
     from pipeline import compute
 
     cfg = pipeline._config(args.config)
-    fixed = compute.fixed_values(cfg.data)
-    pt = {"speed": args.speed, "clearance": args.clearance,
-          "contact_angle": fixed["contact_angle"] if args.contact_angle is None else args.contact_angle,
-          "preload": fixed["preload"] if args.preload is None else args.preload}
-    config_mod.check_point(pt)
+    pt = compute.point_values(cfg, _given(args))
     return compute.point_detail(cfg.data, pt, periods=16, steps_per_period=8)["row"]
+
+
+def _given(args):
+    """The point's axis values from --speed/--clearance/--contact-angle/--preload and --at."""
+    given = {"speed": args.speed, "clearance": args.clearance, "contact_angle": args.contact_angle,
+             "preload": args.preload}
+    for item in args.at or []:
+        name, sep, value = item.partition("=")
+        try:
+            given[name.strip()] = float(value)
+        except ValueError:
+            raise config_mod.ConfigError(f"--at {item}: expected AXIS=NUMBER, e.g. speed=100") from None
+    return given
 
 
 def _attractor_result(row):
@@ -78,7 +87,7 @@ def cmd_point(args):
     if args.attractor:
         row = _attractor_row(args)
     else:
-        row = pipeline.point(args.speed, args.clearance, args.contact_angle, args.preload, args.config)
+        row = pipeline.point(config=args.config, **_given(args))
     status = schema.ORBIT_STATUS[row["orbit_status"]]
     lam = [[float(re), float(im)] for re, im in zip(row["multiplier_real"], row["multiplier_imag"])]
     bif = schema.BIFURCATION[row["bifurcation"]] if row["bifurcation"] >= 0 else "none"
@@ -92,8 +101,9 @@ def cmd_point(args):
         "stable": bool(row["stable"] == 1),
         "bifurcation": bif,
         "period": float(row["forcing_period"]),
-        "contact_angle": float(row["contact_angle_used"]),
     }
+    if "contact_angle_used" in row:
+        result["contact_angle"] = float(row["contact_angle_used"])
     if args.attractor:
         result["attractor"] = _attractor_result(row)
     if args.json:
@@ -142,9 +152,10 @@ def _point_text(r):
         f"newton iterations {r['newton_iterations']}",
         f"residual          {r['residual']:.3e}" if r["residual"] is not None else "residual          -",
         f"forcing period    {r['period']:.6e} s",
-        f"contact angle     {r['contact_angle']:.4f} deg",
-        "multipliers       (real, imag, modulus)",
     ]
+    if "contact_angle" in r:
+        lines.append(f"contact angle     {r['contact_angle']:.4f} deg")
+    lines.append("multipliers       (real, imag, modulus)")
     for re, im in r["multipliers"]:
         if re is None:
             lines.append("  -")
@@ -203,10 +214,12 @@ def build_parser():
 
     p = sub.add_parser("point", help="periodic orbit and Floquet multipliers at one point")
     p.add_argument("--config", help="scene TOML (default: Bai 2006, 209 bearing, the paper's constant)")
-    p.add_argument("--speed", type=float, required=True, help="shaft speed [Hz]")
-    p.add_argument("--clearance", type=float, required=True, help="radial clearance [m]")
+    p.add_argument("--speed", type=float, help="shaft speed [Hz]")
+    p.add_argument("--clearance", type=float, help="radial clearance [m] (default: the scene's)")
     p.add_argument("--contact-angle", type=float, help="contact angle [deg] (default: from clearance)")
     p.add_argument("--preload", type=float, help="axial preload [N] (default: the scene's, 0)")
+    p.add_argument("--at", action="append", metavar="AXIS=VALUE",
+                   help="value of any axis of the scene's model, e.g. --at speed=100; repeatable")
     p.add_argument("--attractor", action="store_true",
                    help="also diagnose the attractor: class, period, largest Lyapunov exponent, multipliers")
     p.add_argument("--json", action="store_true", help="machine-readable output")

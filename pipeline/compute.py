@@ -1,128 +1,112 @@
 """From a validated scene to kernel inputs, and from kernel outputs to cube variables.
 
-A *segment* is a run of consecutive speeds at fixed (clearance, contact angle, preload): the
-orbit is continued along it, each point starting from its neighbours. Segments are fixed by the
-config (numerics.segment_length), so results never depend on how they are scheduled.
+A *segment* is a run of consecutive values of the continued axis (shaft speed for
+jeffcott_clearance) at fixed values of the other axes: the orbit is continued along it, each
+point starting from its neighbours. Segments are fixed by the config (numerics.segment_length),
+so results never depend on how they are scheduled. The model is reached only through its
+`ModelSpec` (rotorkernels.models).
 """
 import time
-from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
 from pipeline import schema
-from rotorkernels import attractor, bearing, continuation, integrators, models, shooting
-
-MODELS = {"jeffcott_clearance": models.JEFFCOTT_CLEARANCE}
+from rotorkernels import attractor, continuation, integrators, models, shooting
 
 
-@dataclass(frozen=True)
-class PointParams:
-    p: np.ndarray           # kernel parameter vector
-    period: float           # forcing period T [s]
-    contact_angle: float    # angle used in the force law [rad]
+def model_of(data):
+    return models.get(data["scene"]["model"])
 
 
-@lru_cache(maxsize=8)
-def _geometry(preset, nominal_angle):
-    return bearing.preset(preset, nominal_angle)
+def scene_values(data, spec):
+    """The model's parameter values given by the scene (its sections), by parameter name."""
+    return {p.name: data[p.section][p.name] for p in spec.parameters if p.section is not None}
 
 
-def _free_angle(geom, clearance, contact_angle_deg):
-    """The unloaded contact angle: the user's, else from the clearance (Bai eq. 6), else nominal."""
-    if contact_angle_deg is not None and np.isfinite(contact_angle_deg):
-        return np.radians(contact_angle_deg)
-    if clearance > 0:
-        return bearing.free_contact_angle(geom, clearance)
-    return geom.nominal_contact_angle
+def point_params(data, point):
+    """Built kernel inputs (p, period, derived values) at one grid point {axis: value}."""
+    spec = model_of(data)
+    return spec.build({**scene_values(data, spec), **point})
 
 
-def _stiffness(option, geom, alpha):
-    if option == "hertz":
-        return bearing.hertz_constant(geom, alpha)
-    if option == "bai2006":
-        return bearing.BAI2006_CONTACT_CONSTANT
-    return float(option)
-
-
-def point_params(data, speed, clearance, contact_angle, preload):
-    """Kernel parameters at one grid point. contact_angle in degrees (None/NaN: not given)."""
-    b, rotor = data["bearing"], data["rotor"]
-    geom = _geometry(b["preset"], b.get("nominal_angle"))
-    alpha0 = _free_angle(geom, clearance, contact_angle)
-    stiffness = _stiffness(b["stiffness"], geom, alpha0)
-    alpha, approach = alpha0, 0.0
-    if preload > 0:
-        state = bearing.preload_state(geom, preload, clearance=clearance, free_angle=alpha0,
-                                      stiffness=stiffness, constant=b["preload_constant"])
-        alpha, approach, stiffness = state.contact_angle, state.axial_approach, state.contact_constant
-    load = rotor["mass"] * rotor["gravity"] if rotor["radial_load"] == "gravity" else rotor["radial_load"]
-    p, period = models.jeffcott_params(
-        speed=speed, stiffness=stiffness, clearance=clearance, contact_angle=alpha,
-        axial_approach=approach, mass=rotor["mass"], damping=rotor["damping"], radial_load=load,
-        n_balls=geom.n_balls, ball_diameter=geom.ball_diameter, pitch_diameter=geom.pitch_diameter,
-        cage_rotation=b["cage_rotation"])
-    return PointParams(p, period, alpha)
-
-
-def integrator_settings(numerics):
+def integrator_settings(data):
+    numerics = data["numerics"]
     return integrators.settings(numerics["integrator"], rtol=numerics["rtol"], atol=numerics["atol"],
                                 steps_per_unit=numerics["rk4_steps"],
-                                amplitude_limit=numerics["amplitude_limit"] / models.LENGTH_SCALE)
+                                amplitude_limit=numerics["amplitude_limit"] / model_of(data).length_scale)
 
 
 def fixed_values(data):
-    """Values of the parameters a scene does not sweep (contact angle None: from clearance)."""
-    b = data["bearing"]
-    return {"clearance": b.get("clearance") or 0.0, "contact_angle": b.get("contact_angle"),
-            "preload": b.get("preload") or 0.0}
+    """Values of the axis parameters a scene gives in their sections, else their `unset` value
+    (None: derived per point, e.g. a contact angle that follows from the clearance)."""
+    spec = model_of(data)
+    values = {p.name: data[p.section][p.name] for p in spec.parameters if p.axis and p.section is not None}
+    return {name: spec.parameter(name).unset if v is None else v for name, v in values.items()}
+
+
+def point_values(cfg, given):
+    """A point {axis: value} of the scene's model from `given` (None: not given) and the scene's
+    fixed values; raises config.ConfigError naming what is missing or out of range."""
+    from pipeline import config
+
+    spec = cfg.model
+    values = {**fixed_values(cfg.data), **{k: v for k, v in given.items() if v is not None}}
+    unknown = sorted(set(values) - set(spec.axes))
+    missing = [a for a in spec.axes if a not in values]
+    problems = [f"{name}: not an axis of model {spec.name} (axes: {', '.join(spec.axes)})" for name in unknown]
+    problems += [f"{name}: required (an axis of model {spec.name} that the scene does not fix)" for name in missing]
+    if problems:
+        raise config.ConfigError("\n".join(problems))
+    config.check_point(values, spec.name)
+    return values
 
 
 def solve_segment(data, points):
-    """Solve a continuation segment. points: list of dicts with keys speed, clearance,
-    contact_angle, preload (SI, angle in degrees). Returns schema variables, one row per point:
-    the periodic orbit ([analysis] floquet) and the attractor ([analysis] attractor)."""
-    model = MODELS[data["scene"]["model"]]
+    """Solve a continuation segment. points: list of dicts {axis: value} (SI, angles in degrees).
+    Returns schema variables, one row per point: the periodic orbit ([analysis] floquet) and the
+    attractor ([analysis] attractor)."""
+    model = model_of(data)
     ana = data["analysis"]
-    opts = integrator_settings(data["numerics"])
+    opts = integrator_settings(data)
     params, seconds, sols = [], [], []
     for pt in points:
         start = time.perf_counter()
-        params.append(point_params(data, pt["speed"], pt["clearance"], pt["contact_angle"], pt["preload"]))
+        params.append(point_params(data, pt))
         seconds.append(time.perf_counter() - start)
     if ana["floquet"]:
         sols = _orbit_chain(model, params, opts, data["numerics"], seconds)
     else:
         sols = [_not_requested(model)] * len(points)
-    rows = [point_variables(sol, par, 0.0) for sol, par in zip(sols, params)]
+    rows = [point_variables(model, sol, par, 0.0) for sol, par in zip(sols, params)]
     if ana["attractor"]:
         for direction, suffix in _directions(ana["sweep_direction"]):
             order = range(len(points)) if direction == "up" else range(len(points) - 1, -1, -1)
             for i, att in _attractor_chain(model, params, sols, opts, ana, order, seconds):
-                rows[i].update({name + suffix: v for name, v in attractor_variables(att).items()})
+                rows[i].update({name + suffix: v for name, v in attractor_variables(model, att, params[i].period).items()})
         if ana["sweep_direction"] == "both":
             for row in rows:
-                row["hysteresis"] = _differs(row, schema.DOWN_SUFFIX)
+                row["hysteresis"] = _differs(model, row, schema.DOWN_SUFFIX)
     for row, sec in zip(rows, seconds):
         row["compute_time"] = sec
     return {name: np.array([r[name] for r in rows]) for name in rows[0]}
 
 
+def newton_settings(model, num):
+    """Keyword arguments of continuation.solve_orbit from the scene's numerics."""
+    return {"cold_guess": model.cold_guess, "tol": num["newton_tol"],
+            "max_iter": num["max_newton_iter"], "transient_periods": num["transient_periods"]}
+
+
 def _orbit_chain(model, params, opts, num, seconds):
-    """Periodic orbits along the segment, each started from its neighbours (continuation)."""
-    history, sols = [], []
-    for i, par in enumerate(params):
-        start = time.perf_counter()
-        sol = continuation.solve_orbit(
-            model, par.p, opts, history[-2:], cold_guess=models.static_guess,
-            tol=num["newton_tol"], max_iter=num["max_newton_iter"],
-            transient_periods=num["transient_periods"])
-        if sol.status == shooting.CONVERGED:
-            history.append(sol.state)
-        else:
-            history.clear()
+    """Periodic orbits along the segment by natural continuation, timed per point."""
+    sols = []
+    chain = continuation.natural(model, [par.p for par in params], opts, **newton_settings(model, num))
+    start = time.perf_counter()
+    for i, sol in enumerate(chain):
         sols.append(sol)
-        seconds[i] += time.perf_counter() - start
+        now = time.perf_counter()
+        seconds[i] += now - start
+        start = now
     return sols
 
 
@@ -156,7 +140,7 @@ def _attractor_chain(model, params, sols, opts, ana, order, seconds):
         par, sol = params[i], sols[i]
         found = sol.status == shooting.CONVERGED
         if state is None:
-            state = sol.state if found else models.static_guess(par.p)
+            state = sol.state if found else model.cold_guess(par.p)
         stable_orbit = (sol.state, sol.multipliers) if found and sol.stable and ana["derive_when_stable"] else None
         att = attractor.diagnose(
             model, state, par.p, par.period, opts, n_transient=ana["transient_periods"],
@@ -170,7 +154,7 @@ def _attractor_chain(model, params, sols, opts, ana, order, seconds):
         yield i, att
 
 
-def point_variables(sol, params, seconds):
+def point_variables(model, sol, params, seconds):
     """Cube variables (schema.VARIABLES) of one solved point, SI units."""
     lam = np.asarray(sol.multipliers, complex)
     out = {
@@ -184,53 +168,60 @@ def point_variables(sol, params, seconds):
         "stable": int(sol.stable) if sol.status == shooting.CONVERGED else schema.INT_FILL,
         "bifurcation": sol.bifurcation if sol.status == shooting.CONVERGED else schema.INT_FILL,
         "forcing_period": params.period,
-        "contact_angle_used": np.degrees(params.contact_angle),
+        **params.derived,
         "orbit_state": sol.state if sol.status == shooting.CONVERGED else np.full(len(lam), np.nan),
         "compute_time": seconds,
     }
-    out.update(_orbit_extent(sol.samples))
+    out.update(_orbit_extent(model, sol.samples, params.period))
     return out
 
 
-def _orbit_extent(samples):
-    """Mean and half peak-to-peak of the journal displacement over the orbit [m]."""
+def _orbit_extent(model, samples, period):
+    """Mean and half peak-to-peak of each observable over the orbit (SI)."""
+    names = [o.name for o in model.observables]
     if samples is None:
-        return {k: np.nan for k in ("x_mean", "y_mean", "amplitude_x", "amplitude_y")}
-    xy = samples[:, :2] * models.LENGTH_SCALE
-    half = 0.5 * (xy.max(axis=0) - xy.min(axis=0))
-    mean = xy.mean(axis=0)
-    return {"x_mean": mean[0], "y_mean": mean[1], "amplitude_x": half[0], "amplitude_y": half[1]}
+        return {k: np.nan for name in names for k in (f"{name}_mean", f"amplitude_{name}")}
+    values = model.observe(samples, period)
+    half = 0.5 * (values.max(axis=0) - values.min(axis=0))
+    mean = values.mean(axis=0)
+    out = {}
+    for k, name in enumerate(names):
+        out[f"{name}_mean"] = mean[k]
+        out[f"amplitude_{name}"] = half[k]
+    return out
 
 
 def point_detail(data, point, start_state=None, periods=256, steps_per_period=32):
     """What `report --point` draws at one point: the cube variables of the point (orbit and
     attractor; a dict of numpy values), a trajectory on the attractor over `periods` forcing
-    periods, and the power spectrum of its horizontal displacement.
+    periods, and the power spectrum of its first observable.
 
     start_state: a state on the attractor (a cube's attractor_state) to start from instead of
     diagnosing the point afresh from its periodic orbit -- where attractors coexist, this picks
-    the one the sweep found. Returns dict(row, time [s], x, y [m], frequency [Hz], power [m^2])."""
+    the one the sweep found. Returns dict(row, time [s], one array per observable (SI; x and y
+    for jeffcott_clearance), frequency [Hz], power [unit^2])."""
     data = {**data, "analysis": {**data["analysis"], "attractor": True, "sweep_direction": "up"}}
     row = {k: v[0] for k, v in solve_segment(data, [point]).items()}
-    model = MODELS[data["scene"]["model"]]
-    par = point_params(data, point["speed"], point["clearance"], point["contact_angle"], point["preload"])
+    model = model_of(data)
+    par = point_params(data, point)
     state = np.asarray(row["attractor_state"] if start_state is None else start_state, float)
     n = int(periods) * int(steps_per_period)
     traj = np.full((n, model.n_state), np.nan)
     if np.all(np.isfinite(state)):
-        traj = shooting.sample_orbit(model.id, state, par.p, model.n_state, model.n_position,
-                                     float(periods), n, integrator_settings(data["numerics"]))
+        traj = shooting.sample_orbit(model.kernel, state, par.p, float(periods), n, integrator_settings(data))
     dt = par.period / steps_per_period
-    xy = traj[:, :2] * models.LENGTH_SCALE
-    ok = np.all(np.isfinite(xy), axis=1)
-    freq, power = attractor.power_spectrum(xy[ok, 0], dt) if ok.sum() > 8 else (np.array([]), np.array([]))
-    return {"row": row, "time": np.arange(n) * dt, "x": xy[:, 0], "y": xy[:, 1],
-            "frequency": freq, "power": power}
+    values = model.observe(traj, par.period)
+    ok = np.all(np.isfinite(values), axis=1)
+    freq, power = attractor.power_spectrum(values[ok, 0], dt) if ok.sum() > 8 else (np.array([]), np.array([]))
+    observed = {o.name: values[:, k] for k, o in enumerate(model.observables)}
+    return {"row": row, "time": np.arange(n) * dt, **observed, "frequency": freq, "power": power}
 
 
-def attractor_variables(att):
-    """Cube variables (schema.ATTRACTOR_VARIABLES) of one diagnosed point, SI units."""
+def attractor_variables(model, att, period):
+    """Cube variables (schema.ATTRACTOR_VARIABLES and the Poincare samples of the model's
+    observables) of one diagnosed point, SI units."""
     lam = np.asarray(att.multipliers, complex)
+    section = model.observe(att.samples, period)
     integrated = att.periods_used > 0
     has_lle = np.isfinite(att.lle)
     return {
@@ -241,8 +232,7 @@ def attractor_variables(att):
         "lle_method": (schema.LLE_METHOD.index("derived") if att.derived else
                        schema.LLE_METHOD.index("integrated") if has_lle and integrated else schema.INT_FILL),
         "lyapunov_exponents": np.asarray(att.exponents, float),
-        "poincare_x": att.samples[:, 0] * models.LENGTH_SCALE,
-        "poincare_y": att.samples[:, 1] * models.LENGTH_SCALE,
+        **{f"poincare_{o.name}": section[:, k] for k, o in enumerate(model.observables)},
         "attractor_multiplier_real": lam.real,
         "attractor_multiplier_imag": lam.imag,
         "lyapunov_periods": att.periods_used,
@@ -255,7 +245,7 @@ def attractor_variables(att):
 SAME_ORBIT_RTOL = 1e-3
 
 
-def _differs(row, suffix):
+def _differs(model, row, suffix):
     """1 where the up and down sweeps ended on different attractors: class or period differ, or
     two periodic ones are different orbits (e.g. two coexisting stable period-1 orbits). A
     periodic attractor whose period was not resolved (k = 0: still settling, as next to a
@@ -267,7 +257,8 @@ def _differs(row, suffix):
         return 1
     if row["attractor"] != attractor.PERIODIC:
         return 0
-    up = np.stack([row["poincare_x"], row["poincare_y"]], axis=1)
-    down = np.array([row["poincare_x" + suffix][-1], row["poincare_y" + suffix][-1]])
-    scale = SAME_ORBIT_RTOL * max(np.abs(up).max(), models.LENGTH_SCALE)
+    names = [f"poincare_{o.name}" for o in model.observables]
+    up = np.stack([row[name] for name in names], axis=1)
+    down = np.array([row[name + suffix][-1] for name in names])
+    scale = SAME_ORBIT_RTOL * max(np.abs(up).max(), model.length_scale)
     return int(np.abs(up - down).max(axis=1).min() > scale)

@@ -13,16 +13,16 @@ from pathlib import Path
 
 import numpy as np
 
+from rotorkernels import models
+from rotorkernels.models.spec import Parameter as Key
+
 try:
     import tomllib
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-AXES = ("speed", "clearance", "contact_angle", "preload")
-MODELS = ("jeffcott_clearance",)
-PRESETS = ("209", "angular_contact_medium")
-NOMINAL_ANGLES = (12, 15, 26, 36, 40)
-DEFAULT_NOMINAL_ANGLE = 26    # angular_contact_medium when bearing.nominal_angle is not given
+# Models a scene can run: those with an axis to continue along (the validation models have none).
+MODELS = tuple(name for name, spec in models.REGISTRY.items() if spec.continuation)
 
 
 class ConfigError(Exception):
@@ -37,31 +37,12 @@ class ConfigError(Exception):
 
 
 # --- declarative schema ------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class Key:
-    kind: str                 # "str", "bool", "int", "float", "choice", "float_or", "axis"
-    default: object = None
-    required: bool = False
-    lo: float = -math.inf     # bounds; lo_open/hi_open make them strict
-    hi: float = math.inf
-    lo_open: bool = False
-    hi_open: bool = False
-    choices: tuple = ()
-    pattern: str = ""
-    help: str = ""
-
+# Generic sections here; a model's own sections (e.g. [bearing], [rotor]) and its sweep axes come
+# from its ModelSpec parameters (`model_schema`). Key is the kernels' Parameter type.
 
 def _num(lo=-math.inf, hi=math.inf, lo_open=False, hi_open=False, default=None, kind="float", **kw):
     return Key(kind, default, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open, **kw)
 
-
-AXIS_RANGES = {
-    "speed": _num(0, 1e5, lo_open=True, help="shaft speed [Hz]"),
-    "clearance": _num(0, 1e-3, hi_open=True, help="radial clearance [m]"),
-    "contact_angle": _num(0, 90, lo_open=True, hi_open=True, help="contact angle [deg]"),
-    "preload": _num(0, 1e6, hi_open=True, help="axial preload [N]"),
-}
 
 SCHEMA = {
     "scene": {
@@ -69,23 +50,6 @@ SCHEMA = {
         "model": Key("choice", required=True, choices=MODELS),
         "description": Key("str", default=""),
     },
-    "bearing": {
-        "preset": Key("choice", default="209", choices=PRESETS),
-        "nominal_angle": Key("choice", default=None, choices=NOMINAL_ANGLES),
-        "stiffness": Key("float_or", default="hertz", choices=("hertz", "bai2006"), lo=0, lo_open=True),
-        "preload_constant": Key("choice", default="consistent", choices=("consistent", "filipkovsky")),
-        "cage_rotation": Key("bool", default=True),
-        "clearance": AXIS_RANGES["clearance"],
-        "contact_angle": AXIS_RANGES["contact_angle"],
-        "preload": AXIS_RANGES["preload"],
-    },
-    "rotor": {
-        "mass": _num(0, lo_open=True, default=2.0),
-        "damping": _num(0, default=300.0),
-        "radial_load": Key("float_or", default="gravity", choices=("gravity",)),
-        "gravity": _num(0, default=9.8),
-    },
-    "sweep": {name: Key("axis") for name in AXES},
     "analysis": {
         "floquet": Key("bool", default=True, help="periodic orbit by shooting, Floquet multipliers"),
         "attractor": Key("bool", default=False, help="Poincare section, period, attractor class, Lyapunov exponents"),
@@ -193,9 +157,8 @@ def _check_value(v, k):
     return float(v), _check_number(float(v), k)
 
 
-def _axis_values(v, name, errors, where):
-    """Grid values of a sweep axis, appending problems to errors."""
-    rng = AXIS_RANGES[name]
+def _axis_values(v, rng, errors, where):
+    """Grid values of a sweep axis (rng: its Key), appending problems to errors."""
     if isinstance(v, list):
         if not v:
             errors.append(f"{where}: must not be empty")
@@ -267,6 +230,15 @@ class Config:
     axes: dict = field(repr=False)
 
     @property
+    def model(self):
+        return models.get(self.data["scene"]["model"])
+
+    @property
+    def continued_axis(self):
+        """The axis orbits are continued along: the model's first continuation parameter."""
+        return self.model.continuation[0]
+
+    @property
     def n_points(self):
         return int(np.prod([len(v) for v in self.axes.values()]))
 
@@ -282,9 +254,8 @@ def _unknown(key, known, where):
     return f"{where}: unknown key{hint}"
 
 
-def _validate_section(name, table, errors):
+def _validate_section(name, table, spec, errors):
     out = {}
-    spec = SCHEMA[name]
     if not isinstance(table, dict):
         errors.append(f"{name}: must be a table (got {_type_name(table)})")
         return out
@@ -298,9 +269,6 @@ def _validate_section(name, table, errors):
                 errors.append(f"{where}: required")
             out[key] = k.default
             continue
-        if k.kind == "axis":
-            out[key] = table[key]
-            continue
         value, problem = _check_value(table[key], k)
         if problem:
             errors.append(f"{where}: {problem}")
@@ -308,17 +276,23 @@ def _validate_section(name, table, errors):
     return out
 
 
-def _cross_checks(data, axes, errors):
-    b = data["bearing"]
-    if "speed" not in axes and "sweep.speed" not in " ".join(errors):
-        errors.append("sweep.speed: required (speed is the continuation axis of every sweep)")
-    for name in ("clearance", "contact_angle", "preload"):
-        if name in axes and b.get(name) is not None:
-            errors.append(f"bearing.{name}: is also swept in sweep.{name}; give it in one place only")
-    if b["nominal_angle"] is not None and b["preset"] != "angular_contact_medium":
-        errors.append(f"bearing.nominal_angle: only for preset \"angular_contact_medium\" (preset is {b['preset']!r})")
-    if b["preload_constant"] == "filipkovsky" and max(axes.get("preload", [b["preload"] or 0.0])) <= 0:
-        errors.append("bearing.preload_constant: \"filipkovsky\" needs a preload > 0")
+def model_schema(spec):
+    """The model's config sections ({section: {key: Key}}) and its sweep axes ({axis: Key})."""
+    sections = {}
+    for par in spec.parameters:
+        if par.section is not None:
+            sections.setdefault(par.section, {})[par.name] = par
+    return sections, {par.name: par for par in spec.parameters if par.axis}
+
+
+def _cross_checks(spec, data, axes, errors):
+    along = spec.continuation[0]
+    if along not in axes and f"sweep.{along}" not in " ".join(errors):
+        errors.append(f"sweep.{along}: required ({along} is the continuation axis of model {spec.name})")
+    for par in spec.parameters:
+        if par.axis and par.section and par.name in axes and data[par.section].get(par.name) is not None:
+            errors.append(f"{par.section}.{par.name}: is also swept in sweep.{par.name}; give it in one place only")
+    errors.extend(spec.check(data, axes) if spec.check else [])
     ana = data["analysis"]
     if not (ana["floquet"] or ana["attractor"]):
         errors.append("analysis: floquet and attractor are both false; nothing to compute")
@@ -332,11 +306,28 @@ def _cross_checks(data, axes, errors):
                       "converge below the integration accuracy")
 
 
-def _fill_dependent_defaults(data):
-    """Defaults that depend on another key: the nominal angle exists only for the angular preset."""
-    b = data["bearing"]
-    if b["preset"] == "angular_contact_medium" and b["nominal_angle"] is None:
-        b["nominal_angle"] = DEFAULT_NOMINAL_ANGLE
+def _scene_model(raw, errors):
+    """The ModelSpec the scene names, or None (its problem is reported by the scene section)."""
+    scene = raw.get("scene")
+    name = scene.get("model") if isinstance(scene, dict) else None
+    return models.REGISTRY[name] if name in MODELS else None
+
+
+def _sweep_axes(table, axis_keys, errors):
+    """{axis: grid values} of the [sweep] table, in the model's axis order."""
+    if not isinstance(table, dict):
+        errors.append(f"sweep: must be a table (got {_type_name(table)})")
+        return {}
+    for key in table:
+        if key not in axis_keys:
+            errors.append(_unknown(key, list(axis_keys), f"sweep.{key}"))
+    axes = {}
+    for name, key in axis_keys.items():
+        if table.get(name) is not None:
+            values = _axis_values(table[name], key, errors, f"sweep.{name}")
+            if values is not None:
+                axes[name] = values
+    return axes
 
 
 def parse_config(text, path=None, allow_large=False):
@@ -347,23 +338,21 @@ def parse_config(text, path=None, allow_large=False):
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{label}: not valid TOML: {exc}") from None
     errors = []
+    spec = _scene_model(raw, errors)
+    sections, axis_keys = model_schema(spec) if spec else ({}, {})
+    tables = {**SCHEMA, **sections}
+    known = list(tables) + ["sweep"]
     for section in raw:
-        if section not in SCHEMA:
-            errors.append(_unknown(section, list(SCHEMA), section))
+        if section not in known and spec is not None:
+            errors.append(_unknown(section, known, section))
     for section in REQUIRED_SECTIONS:
         if section not in raw:
             errors.append(f"{section}: required section missing")
-    data = {name: _validate_section(name, raw.get(name, {}), errors) for name in SCHEMA}
-    sweep = data.pop("sweep")
-    axes = {}
-    for name in AXES:
-        if sweep.get(name) is not None:
-            values = _axis_values(sweep[name], name, errors, f"sweep.{name}")
-            if values is not None:
-                axes[name] = values
+    data = {name: _validate_section(name, raw.get(name, {}), table, errors) for name, table in tables.items()}
+    axes = _sweep_axes(raw.get("sweep", {}), axis_keys, errors) if spec else {}
     data["sweep"] = {name: [float(x) for x in values] for name, values in axes.items()}
     if not errors:
-        _cross_checks(data, axes, errors)
+        _cross_checks(spec, data, axes, errors)
     if errors:
         raise ConfigError("\n".join(f"{label}: {e}" for e in errors))
     n = int(np.prod([len(v) for v in axes.values()]))
@@ -371,7 +360,8 @@ def parse_config(text, path=None, allow_large=False):
     if n > limit and not allow_large:
         raise ConfigError(f"{label}: sweep: the grid has {n} points, above numerics.max_points = "
                           f"{limit}; raise numerics.max_points or pass --yes", grid_points=n)
-    _fill_dependent_defaults(data)
+    if spec.fill_defaults:
+        spec.fill_defaults(data)
     return Config(None if path is None else str(path), text, data, axes)
 
 
@@ -386,15 +376,16 @@ def load_config(path, allow_large=False):
     return parse_config(text, path=path, allow_large=allow_large)
 
 
-def check_point(point):
-    """Validate a single point (the `point` command) with the sweep-axis rules."""
+def check_point(point, model="jeffcott_clearance"):
+    """Validate a single point (the `point` command) with the model's sweep-axis rules."""
+    _, axis_keys = model_schema(models.get(model))
     errors = []
-    for name in AXES:
+    for name, key in axis_keys.items():
         v = point.get(name)
-        if v is None or (name == "contact_angle" and v is None):
+        if v is None:
             continue
-        problem = _check_number(float(v), AXIS_RANGES[name])
+        problem = _check_number(float(v), key)
         if problem:
-            errors.append(f"{name}: {problem} ({AXIS_RANGES[name].help})")
+            errors.append(f"{name}: {problem} ({key.help})")
     if errors:
         raise ConfigError("\n".join(errors))

@@ -28,19 +28,22 @@ class CubeError(Exception):
 # --- building -------------------------------------------------------------------------------
 
 def build_dataset(axes, fixed, results, attrs, extra_attrs=None):
-    """A schema-conforming Dataset. axes: swept axis -> 1-D values (schema.AXES names, in that
-    order); fixed: other axis parameters -> value (NaN: not fixed); results: variable -> array of
-    shape point dims + extra dims; extra_attrs: attrs of variables not in the schema (point
-    dims only)."""
-    _check_axes(axes, fixed)
+    """A schema-conforming Dataset. axes: swept axis -> 1-D values (the axes of the model named
+    by attrs["model"], default jeffcott_clearance, in the model's order); fixed: other axis
+    parameters -> value (NaN: not fixed); results: variable -> array of shape point dims + extra
+    dims; extra_attrs: attrs of variables not in the schema (point dims only)."""
+    spec = schema.model_of(attrs)
+    axis_table = schema.axes_of(spec)
+    _check_axes(axes, fixed, axis_table)
+    variables = schema.variables_of(spec)
     dims = tuple(axes)
     shape = tuple(len(v) for v in axes.values())
-    coords = {name: (name, np.asarray(values, float), _axis_attrs(name)) for name, values in axes.items()}
-    coords.update({name: ((), float(value), _axis_attrs(name, value)) for name, value in fixed.items()})
+    coords = {name: (name, np.asarray(values, float), _axis_attrs(axis_table[name])) for name, values in axes.items()}
+    coords.update({name: ((), float(value), _axis_attrs(axis_table[name], value, name)) for name, value in fixed.items()})
     ds = xr.Dataset(coords=coords)
     for name, data in results.items():
         data = np.asarray(data)
-        extra, dtype, var_attrs = _variable_spec(name, data, extra_attrs or {})
+        extra, dtype, var_attrs = _variable_spec(name, data, variables, extra_attrs or {})
         _check_shape(name, data, shape, extra)
         ds[name] = (dims + extra, data.astype(dtype), var_attrs)
         for dim, n in zip(extra, data.shape[len(dims):]):
@@ -50,11 +53,11 @@ def build_dataset(axes, fixed, results, attrs, extra_attrs=None):
     return ds
 
 
-def _check_axes(axes, fixed):
-    unknown = [a for a in list(axes) + list(fixed) if a not in schema.AXES]
+def _check_axes(axes, fixed, axis_table):
+    unknown = [a for a in list(axes) + list(fixed) if a not in axis_table]
     if unknown:
-        raise CubeError(f"unknown axis {unknown[0]!r}; cube axes are {', '.join(schema.AXES)}")
-    order = [a for a in schema.AXES if a in axes]
+        raise CubeError(f"unknown axis {unknown[0]!r}; cube axes are {', '.join(axis_table)}")
+    order = [a for a in axis_table if a in axes]
     if list(axes) != order:
         raise CubeError(f"swept axes must come in schema order ({', '.join(order)}), got {', '.join(axes)}")
     both = set(axes) & set(fixed)
@@ -65,17 +68,17 @@ def _check_axes(axes, fixed):
             raise CubeError(f"axis {name} must be a non-empty 1-D array")
 
 
-def _axis_attrs(name, value=0.0):
-    units, long_name = schema.AXES[name]
+def _axis_attrs(entry, value=0.0, name=""):
+    units, long_name = entry
     if np.isnan(value):
         long_name = f"{long_name} ({DERIVED.get(name, 'not fixed')})"
     return {"units": units, "long_name": long_name}
 
 
-def _variable_spec(name, data, extra_attrs):
+def _variable_spec(name, data, variables, extra_attrs):
     """(extra dims, dtype, attrs) of a variable: from the schema, else from extra_attrs."""
-    if name in schema.VARIABLES:
-        extra, dtype, attrs = schema.VARIABLES[name]
+    if name in variables:
+        extra, dtype, attrs = variables[name]
         attrs = dict(attrs)
         if "flag_values" in attrs:  # CF: flag_values has the variable's type
             attrs["flag_values"] = np.asarray(attrs["flag_values"], dtype)
@@ -175,15 +178,16 @@ def describe(ds):
     """What a cube holds, as text for `rotorsweep info`."""
     lines = [f"{ds.attrs.get('title', 'rotorsweep result cube')} "
              f"(schema version {ds.attrs.get('rotorsweep_schema_version', '?')})", "", "axes:"]
-    for name in (a for a in schema.AXES if a in ds.dims):
+    for name in schema.point_axes(ds):
         v = ds[name]
         lines.append(f"  {name:<14} {v.size:>5} values  {v.values.min():g} .. {v.values.max():g} "
                      f"{v.attrs.get('units', '')}  ({v.attrs.get('long_name', '')})")
-    fixed = [name for name in schema.AXES if name in ds.coords and ds[name].ndim == 0]
+    fixed = [name for name in schema.axes_of(schema.model_of(ds)) if name in ds.coords and ds[name].ndim == 0]
     if fixed:
         lines += ["", "fixed parameters:"]
         lines += [_describe_fixed(name, ds[name]) for name in fixed]
-    lines += ["", "variables:"] + [_describe_variable(name, var) for name, var in ds.data_vars.items()]
+    axes = schema.point_axes(ds)
+    lines += ["", "variables:"] + [_describe_variable(name, var, axes) for name, var in ds.data_vars.items()]
     if "orbit_status" in ds:
         lines += ["", "points per orbit_status:"] + _flag_counts(ds["orbit_status"])
     lines += ["", "provenance:"]
@@ -199,8 +203,8 @@ def _describe_fixed(name, coord):
     return f"  {name:<14} {shown:<12} {coord.attrs.get('long_name', '')}"
 
 
-def _describe_variable(name, var):
-    extra = "".join(f" (per {d}: {var.sizes[d]})" for d in var.dims if d not in schema.AXES)
+def _describe_variable(name, var, axes):
+    extra = "".join(f" (per {d}: {var.sizes[d]})" for d in var.dims if d not in axes)
     text = f"  {name:<20} {var.attrs.get('long_name', '')}{extra}"
     if "flag_meanings" in var.attrs:
         return f"{text}  flags: {var.attrs['flag_meanings']}"
@@ -269,6 +273,7 @@ def assemble(axes, fixed, parts, attrs, n_multipliers, allow_missing=False):
     """The cube of a sweep from its parts: full-grid arrays (NaN / INT_FILL where no part has
     the point). A point no part holds is an error unless allow_missing."""
     shape = tuple(len(v) for v in axes.values())
+    variables = schema.variables_of(schema.model_of(attrs))
     have = np.zeros(shape, bool)
     full = {}
     for _, index, results, _ in parts:
@@ -276,7 +281,7 @@ def assemble(axes, fixed, parts, attrs, n_multipliers, allow_missing=False):
         have[at] = True
         for name, values in results.items():
             if name not in full:
-                full[name] = _empty(name, shape, values, n_multipliers)
+                full[name] = _empty(name, shape, values, n_multipliers, variables)
             full[name][at] = values
     missing = int((~have).sum())
     if missing and not allow_missing:
@@ -285,11 +290,11 @@ def assemble(axes, fixed, parts, attrs, n_multipliers, allow_missing=False):
     return build_dataset(axes, fixed, full, attrs)
 
 
-def _empty(name, shape, values, n_multipliers):
+def _empty(name, shape, values, n_multipliers, variables):
     """A full-grid array for a variable, filled with its 'no value' (NaN or INT_FILL)."""
-    if name not in schema.VARIABLES:
+    if name not in variables:
         raise CubeError(f"part files hold variable {name!r}, which the cube schema does not know")
-    extra_dims, dtype, _ = schema.VARIABLES[name]
+    extra_dims, dtype, _ = variables[name]
     extra = tuple(n_multipliers if d in ("multiplier", "state", "exponent") else n
                   for d, n in zip(extra_dims, values.shape[1:]))
     dtype = np.dtype(dtype)

@@ -52,7 +52,7 @@ def _number(item, text):
 
 def select(ds, where):
     """The part of a cube that `where` (from parse_where) selects; swept axes stay dimensions."""
-    axes = [a for a in schema.AXES if a in ds.dims]
+    axes = schema.point_axes(ds)
     index = {}
     for axis, sel in where.items():
         if axis not in axes:
@@ -93,14 +93,15 @@ def _sample(grid, n=8):
 # --- tables ---------------------------------------------------------------------------------
 
 def to_table(ds, variables=None, fmt="table"):
-    """One row per grid point (speed varying fastest): axis columns, then the variables. Flags
+    """One row per grid point (the continued axis varying fastest): axis columns, then the variables. Flags
     are shown by meaning; a variable with an extra dimension gives one column per index."""
     variables = list(variables or [v for v in DEFAULT_VARIABLES if v in ds])
     unknown = [v for v in variables if v not in ds.data_vars]
     if unknown:
         raise QueryError(f"unknown variable {unknown[0]!r}; this cube has {', '.join(ds.data_vars)}")
-    axes = [a for a in schema.AXES if a in ds.dims]
-    order = [a for a in axes if a != "speed"] + [a for a in axes if a == "speed"]
+    axes = schema.point_axes(ds)
+    along = schema.continued_axis(ds)
+    order = [a for a in axes if a != along] + [along]
     grid = np.meshgrid(*(ds[a].values for a in order), indexing="ij")
     columns = {a: grid[order.index(a)].ravel().tolist() for a in axes}
     for name in variables:
@@ -156,7 +157,8 @@ def _json_value(v):
 
 
 def _other_axes(ds):
-    return [a for a in schema.AXES if a in ds.dims and a != "speed"]
+    along = schema.continued_axis(ds)
+    return [a for a in schema.point_axes(ds) if a != along]
 
 
 def _runs(mask):
@@ -173,29 +175,31 @@ def _run_type(line, i0):
 
 
 def _refined_crossings(ds, others):
-    """(other axes' values..., unstable grid speed next to the crossing) -> refined speed."""
-    if "boundary_speed" not in ds:
+    """(other axes' values..., unstable grid value next to the crossing) -> refined value."""
+    name = f"boundary_{schema.continued_axis(ds)}"
+    if name not in ds:
         return {}
     out = {}
     for k in range(ds.sizes["boundary"]):
         key = tuple(ds[f"boundary_{a}"].values[k] for a in others)
         losing = int(ds["boundary_direction"].values[k]) == 0
         unstable_side = ds["boundary_grid_high" if losing else "boundary_grid_low"].values[k]
-        out[(*key, float(unstable_side))] = float(ds["boundary_speed"].values[k])
+        out[(*key, float(unstable_side))] = float(ds[name].values[k])
     return out
 
 
 def unstable_intervals(ds):
-    """Maximal runs of consecutive speeds whose periodic orbit is not stable (unstable, or not
-    found), one list entry per run and per combination of the other swept axes.
+    """Maximal runs of consecutive values of the continued axis (speed) whose periodic orbit is
+    not stable (unstable, or not found), one list entry per run and per combination of the other
+    swept axes.
 
-    Each entry: the other axes' values, `start`/`end` (Hz, the first and last grid speed of the
-    run), `onset`/`offset` (Hz, the refined crossings of the cube's boundary table just below
+    Each entry: the other axes' values, `start`/`end` (the first and last grid value of the
+    run), `onset`/`offset` (the refined crossings of the cube's boundary table just below
     `start` and just above `end`; NaN where there is none, e.g. at a grid edge or next to a point
     without orbit), `n_points`, `type` (fold / period_doubling / neimark_sacker / no_orbit: the
     state at the run's first point) and the run's largest `max_abs_multiplier`."""
     others = _other_axes(ds)
-    speed = ds["speed"].values
+    speed = ds[schema.continued_axis(ds)].values
     refined = _refined_crossings(ds, others)
     out = []
     for values in itertools.product(*(ds[a].values for a in others)):
@@ -225,11 +229,11 @@ def attractor_label(code, k):
 
 
 def attractor_intervals(ds, direction="up"):
-    """Maximal runs of consecutive speeds on which the attractor keeps its class and period, per
+    """Maximal runs of consecutive values of the continued axis on which the attractor keeps its class and period, per
     combination of the other swept axes (the bifurcation diagram as a table). direction "down"
     reads the down sweep (`*_down`) of a sweep_direction = "both" cube.
 
-    Each entry: the other axes' values, `start`/`end` (Hz), `n_points`, `attractor` (see
+    Each entry: the other axes' values, `start`/`end`, `n_points`, `attractor` (see
     attractor_label) and the run's largest exponent `max_lle` [1/s]."""
     suffix = schema.DOWN_SUFFIX if direction == "down" else ""
     if "attractor" + suffix not in ds:
@@ -237,7 +241,7 @@ def attractor_intervals(ds, direction="up"):
                          + (" for the down sweep" if suffix and "attractor" in ds else
                             "; run the scene with [analysis] attractor = true"))
     others = _other_axes(ds)
-    speed = ds["speed"].values
+    speed = ds[schema.continued_axis(ds)].values
     out = []
     for values in itertools.product(*(ds[a].values for a in others)):
         where = dict(zip(others, values))

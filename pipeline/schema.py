@@ -1,20 +1,40 @@
 """The result-cube schema: one table that the sweep, the cube writer, query and report share.
 
-Dimensions of a cube are the swept axes, always in AXES order (a swept axis with one value is
-still a dimension); parameters that are not swept are stored as scalar coordinates. Per-point
-variables carry the point dimensions plus, for some, `multiplier` or `sample`.
+Dimensions of a cube are the swept axes of its model, in the order the model declares them (a
+swept axis with one value is still a dimension); axis parameters that are not swept are stored
+as scalar coordinates. Per-point variables carry the point dimensions plus, for some,
+`multiplier`, `state`, `exponent` or `sample`. Generic variables are listed here; a model adds its
+observables (orbit mean and half peak-to-peak, Poincare samples) and derived values
+(`variables_of`). The cube names its model (`model`), the model's version and the axis the
+orbits were continued along (`continued_axis`).
 """
+from rotorkernels import models
 
 SCHEMA_VERSION = 1
+DEFAULT_MODEL = "jeffcott_clearance"   # cubes written before models were named in attributes
 
-# name -> (units, long_name). Shaft speed in Hz, clearance in m, contact angle in degrees (the
-# only angle a user types), preload in N.
-AXES = {
-    "speed": ("Hz", "shaft speed"),
-    "clearance": ("m", "radial internal clearance"),
-    "contact_angle": ("degree", "bearing contact angle"),
-    "preload": ("N", "axial preload"),
-}
+
+def model_of(ds):
+    """The ModelSpec of a cube (or of a dict of cube attributes)."""
+    attrs = getattr(ds, "attrs", ds)
+    return models.get(attrs.get("model", DEFAULT_MODEL))
+
+
+def axes_of(spec):
+    """Swept-axis name -> (units, long_name), in the model's order."""
+    return {p.name: (p.unit, p.long_name) for p in spec.parameters if p.axis}
+
+
+def point_axes(ds):
+    """The swept axes of a cube, in order: the dimensions of its per-point variables."""
+    if "orbit_status" in ds:
+        return list(ds["orbit_status"].dims)
+    return [a for a in axes_of(model_of(ds)) if a in ds.dims]
+
+
+def continued_axis(ds):
+    """The axis orbits (and attractors) were continued along."""
+    return ds.attrs.get("continued_axis") or point_axes(ds)[0]
 
 ORBIT_STATUS = ("converged", "not_converged", "diverged", "not_applicable")
 ORBIT_REASON = (
@@ -27,6 +47,7 @@ ORBIT_REASON = (
     "singular_jacobian",     # the shooting Jacobian M - I could not be solved
     "quasi_periodic_forcing",  # incommensurate forcing: no periodic orbit to shoot for
     "not_requested",         # the scene did not ask for the periodic orbit
+    "unknown_model",         # the kernels were given a model id no model is registered under
 )
 BIFURCATION = ("none", "fold", "period_doubling", "neimark_sacker")
 ATTRACTOR = ("not_computed", "periodic", "quasi_periodic", "chaotic", "diverged")
@@ -53,16 +74,11 @@ VARIABLES = {
     "max_abs_multiplier": ((), "float64", {"long_name": "largest Floquet multiplier modulus", "units": "1"}),
     "stable": ((), "int8", {"long_name": "periodic orbit is stable (max |multiplier| < 1)", **_flag(STABLE)}),
     "bifurcation": ((), "int8", {"long_name": "how the leading multiplier left the unit circle", **_flag(BIFURCATION)}),
-    "forcing_period": ((), "float64", {"long_name": "ball-passage (forcing) period T", "units": "s"}),
-    "contact_angle_used": ((), "float64", {"long_name": "contact angle used in the force law", "units": "degree"}),
-    "x_mean": ((), "float64", {"long_name": "mean horizontal journal displacement over the orbit", "units": "m"}),
-    "y_mean": ((), "float64", {"long_name": "mean vertical journal displacement over the orbit", "units": "m"}),
-    "amplitude_x": ((), "float64", {"long_name": "half peak-to-peak horizontal displacement over the orbit", "units": "m"}),
-    "amplitude_y": ((), "float64", {"long_name": "half peak-to-peak vertical displacement over the orbit", "units": "m"}),
+    "forcing_period": ((), "float64", {"long_name": "forcing period T (time unit of the scaled state)", "units": "s"}),
     "orbit_state": (("state",), "float64", {
         "long_name": "periodic orbit state at t = 0 in the kernel's scaled units", "units": "1",
-        "comment": "lengths in units of 1e-6 m, time in units of forcing_period; for "
-                   "jeffcott_clearance: x, y, dx/dtau, dy/dtau (tau = t / forcing_period)"}),
+        "comment": "lengths in units of the model's length scale, time in units of forcing_period "
+                   "(tau = t / forcing_period); jeffcott_clearance: x, y, dx/dtau, dy/dtau in um"}),
     "compute_time": ((), "float64", {"long_name": "wall time spent on this point", "units": "s"}),
 }
 
@@ -77,8 +93,6 @@ ATTRACTOR_VARIABLES = {
     "lle_stderr": ((), "float64", {"long_name": "standard error of the largest Lyapunov exponent (block averages; 0 when derived)", "units": "s-1"}),
     "lle_method": ((), "int8", {"long_name": "how lle was obtained: integrated (Benettin/QR) or derived as ln|multiplier| / (k T)", **_flag(LLE_METHOD)}),
     "lyapunov_exponents": (("exponent",), "float64", {"long_name": "Lyapunov spectrum, largest first", "units": "s-1"}),
-    "poincare_x": (("sample",), "float64", {"long_name": "horizontal journal displacement once per forcing period (Poincare section)", "units": "m"}),
-    "poincare_y": (("sample",), "float64", {"long_name": "vertical journal displacement once per forcing period (Poincare section)", "units": "m"}),
     "attractor_multiplier_real": (("multiplier",), "float64", {"long_name": f"{_MODULUS}, real part", "units": "1"}),
     "attractor_multiplier_imag": (("multiplier",), "float64", {"long_name": f"{_MODULUS}, imaginary part", "units": "1"}),
     "attractor_state": (("state",), "float64", {
@@ -86,26 +100,56 @@ ATTRACTOR_VARIABLES = {
         "units": "1", "comment": "the start of the next speed in the continuation; see orbit_state for the units"}),
     "lyapunov_periods": ((), "float64", {"long_name": "forcing periods integrated for the Lyapunov estimate (0 when derived)", "units": "1"}),
 }
-# sweep_direction = "both": the same diagnostics sweeping speed downwards, as <name>_down, plus
-# where the two directions end on different attractors (coexisting attractors, hysteresis).
+# sweep_direction = "both": the same diagnostics sweeping the continued axis downwards, as
+# <name>_down, plus where the two directions end on different attractors (hysteresis).
 DOWN_SUFFIX = "_down"
-ATTRACTOR_VARIABLES.update({
-    name + DOWN_SUFFIX: (extra, dtype, {**attrs, "long_name": attrs["long_name"] + ", sweeping speed down"})
-    for name, (extra, dtype, attrs) in list(ATTRACTOR_VARIABLES.items())})
-ATTRACTOR_VARIABLES["hysteresis"] = ((), "int8", {
-    "long_name": "up and down sweeps end on different attractors (class, period or orbit differ; 0 where a period is unresolved)", **_flag(("no", "yes"))})
-VARIABLES.update(ATTRACTOR_VARIABLES)
 
-# The boundary table: one entry per stability change between neighbouring speeds of a line,
-# refined far below the grid step (dimension `boundary`; the other axes' values are stored as
-# boundary_<axis>).
+
+def observable_variables(spec):
+    """Per-orbit and per-sample variables of the model's observables (SI units)."""
+    out = {}
+    for o in spec.observables:
+        out[f"{o.name}_mean"] = ((), "float64", {"long_name": f"mean {o.long_name} over the orbit", "units": o.unit})
+        out[f"amplitude_{o.name}"] = ((), "float64", {"long_name": f"half peak-to-peak {o.long_name} over the orbit", "units": o.unit})
+    out.update({name: ((), "float64", {"long_name": long_name, "units": unit})
+                for name, (unit, long_name) in spec.derived.items()})
+    return out
+
+
+def poincare_variables(spec):
+    return {f"poincare_{o.name}": (("sample",), "float64", {
+        "long_name": f"{o.long_name} once per forcing period (Poincare section)", "units": o.unit})
+        for o in spec.observables}
+
+
+def _with_down(table):
+    out = dict(table)
+    out.update({name + DOWN_SUFFIX: (extra, dtype, {**attrs, "long_name": attrs["long_name"] + ", sweeping down"})
+                for name, (extra, dtype, attrs) in table.items()})
+    out["hysteresis"] = ((), "int8", {
+        "long_name": "up and down sweeps end on different attractors (class, period or orbit differ; 0 where a period is unresolved)", **_flag(("no", "yes"))})
+    return out
+
+
+def variables_of(spec):
+    """Every variable a cube of this model may hold: name -> (extra dims, dtype, attrs)."""
+    return {**VARIABLES, **observable_variables(spec),
+            **_with_down({**ATTRACTOR_VARIABLES, **poincare_variables(spec)})}
+
+# The boundary table: one entry per stability change between neighbouring values of the
+# continued axis on a line, refined far below the grid step (dimension `boundary`; the other
+# axes' values are stored as boundary_<axis>).
 BOUNDARY_STATUS = ("refined", "not_refined")
-BOUNDARY_DIRECTION = ("loses_stability", "regains_stability")  # with increasing speed
-BOUNDARY_VARIABLES = {
-    "boundary_speed": ("float64", {"long_name": "refined speed where max |multiplier| = 1", "units": "Hz"}),
-    "boundary_type": ("int8", {"long_name": "how the leading multiplier crosses the unit circle", **_flag(BIFURCATION)}),
-    "boundary_direction": ("int8", {"long_name": "stability change with increasing speed", **_flag(BOUNDARY_DIRECTION)}),
-    "boundary_status": ("int8", {"long_name": "whether the crossing could be refined", **_flag(BOUNDARY_STATUS)}),
-    "boundary_grid_low": ("float64", {"long_name": "grid speed below the crossing", "units": "Hz"}),
-    "boundary_grid_high": ("float64", {"long_name": "grid speed above the crossing", "units": "Hz"}),
-}
+BOUNDARY_DIRECTION = ("loses_stability", "regains_stability")  # with increasing axis value
+
+
+def boundary_variables(axis, units, long_name):
+    """The boundary table's variables for continued axis `axis`."""
+    return {
+        f"boundary_{axis}": ("float64", {"long_name": f"refined {long_name} where max |multiplier| = 1", "units": units}),
+        "boundary_type": ("int8", {"long_name": "how the leading multiplier crosses the unit circle", **_flag(BIFURCATION)}),
+        "boundary_direction": ("int8", {"long_name": f"stability change with increasing {long_name}", **_flag(BOUNDARY_DIRECTION)}),
+        "boundary_status": ("int8", {"long_name": "whether the crossing could be refined", **_flag(BOUNDARY_STATUS)}),
+        "boundary_grid_low": ("float64", {"long_name": f"grid {long_name} below the crossing", "units": units}),
+        "boundary_grid_high": ("float64", {"long_name": f"grid {long_name} above the crossing", "units": units}),
+    }

@@ -29,25 +29,26 @@ class SweepError(Exception):
 @dataclass(frozen=True)
 class Segment:
     id: int
-    index: np.ndarray      # (n, n_axes) grid indices of its points, speed varying fastest
-    points: tuple          # dicts with speed, clearance, contact_angle, preload
+    index: np.ndarray      # (n, n_axes) grid indices of its points, the continued axis varying fastest
+    points: tuple          # dicts {axis parameter: value}
 
 
 def segments(cfg):
     """The continuation segments of a config's grid, in a fixed order."""
     axes = cfg.axes
     names = list(axes)
+    along = cfg.continued_axis
     fixed = compute.fixed_values(cfg.data)
     length = cfg.data["numerics"]["segment_length"]
-    others = [n for n in names if n != "speed"]
+    others = [n for n in names if n != along]
     out = []
     for combo in itertools.product(*(range(len(axes[n])) for n in others)):
         where = dict(zip(others, combo))
         values = {**fixed, **{n: float(axes[n][i]) for n, i in where.items()}}
-        for s0 in range(0, len(axes["speed"]), length):
-            speeds = range(s0, min(s0 + length, len(axes["speed"])))
-            index = np.array([[k if n == "speed" else where[n] for n in names] for k in speeds])
-            points = tuple({**values, "speed": float(axes["speed"][k])} for k in speeds)
+        for s0 in range(0, len(axes[along]), length):
+            steps = range(s0, min(s0 + length, len(axes[along])))
+            index = np.array([[k if n == along else where[n] for n in names] for k in steps])
+            points = tuple({**values, along: float(axes[along][k])} for k in steps)
             out.append(Segment(len(out), index, points))
     return out
 
@@ -173,6 +174,8 @@ def _provenance(cfg):
         "config_hash": cfg.hash(),
         "scene": cfg.data["scene"]["name"],
         "model": cfg.data["scene"]["model"],
+        "model_version": compute.model_of(cfg.data).version,
+        "continued_axis": cfg.continued_axis,
         "numerics": json.dumps(cfg.data["numerics"], sort_keys=True),
         "rotorsweep_version": VERSION,
         "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
@@ -199,7 +202,7 @@ def run(cfg, output, workers=None, scheduler=None, resume=False, overwrite=False
         _warm_up(cfg.data, todo[0])
         _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points, bar)
     ds = cube.assemble(cfg.axes, _fixed_coords(cfg), cube.read_parts(parts), _provenance(cfg),
-                       n_multipliers=compute.MODELS[cfg.data["scene"]["model"]].n_state)
+                       n_multipliers=compute.model_of(cfg.data).n_state)
     ds = boundaries.add_boundary_table(cfg.data, ds)
     path = cube.write_cube(ds, output, overwrite=True)
     _remove_parts(parts)

@@ -3,18 +3,26 @@
 Numba's on-disk cache checks only the source file of the function it caches, yet a cached
 function holds the machine code of every kernel it calls (shooting holds the integrator, the
 integrator holds the models), so editing one module would leave stale code in the others' caches.
-The cache therefore lives in a directory named after a hash of all kernel sources:
+The cache therefore lives in a directory named after a hash of all kernel sources, those of the
+user's models in $ROTORSWEEP_MODELS included:
 $ROTORSWEEP_CACHE (default ~/.cache/rotorsweep)/numba/<hash>. NUMBA_CACHE_DIR, if set, wins.
 """
 import hashlib
+import importlib.util
 import os
 from pathlib import Path
 
 import numba
 
 
+def _plugin_sources():
+    names = [m.strip() for m in os.environ.get("ROTORSWEEP_MODELS", "").split(",") if m.strip()]
+    found = [importlib.util.find_spec(name) for name in names]
+    return [Path(spec.origin) for spec in found if spec is not None and spec.origin]
+
+
 def _cache_dir(src=Path(__file__).parent):
-    sources = sorted(Path(src).glob("*.py"))
+    sources = sorted(Path(src).rglob("*.py")) + _plugin_sources()
     digest = hashlib.sha256(b"".join(p.name.encode() + p.read_bytes() for p in sources)).hexdigest()
     base = os.environ.get("ROTORSWEEP_CACHE") or os.path.join(os.path.expanduser("~"), ".cache", "rotorsweep")
     return os.path.join(base, "numba", digest[:16])

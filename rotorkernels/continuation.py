@@ -19,13 +19,11 @@ PointSolution = namedtuple(
 
 
 def _shoot(model, guess, p, opts, periods, tol, max_iter):
-    return shooting.shoot(model.id, guess, p, model.n_state, model.n_position,
-                          float(periods), opts, tol, max_iter)
+    return shooting.shoot(model.kernel, guess, p, float(periods), opts, tol, max_iter)
 
 
 def _settle(model, u0, p, opts, n_periods):
-    z, status, n_rhs = shooting.settle(model.id, u0, p, model.n_state, model.n_position,
-                                       float(n_periods), opts)
+    z, status, n_rhs = shooting.settle(model.kernel, u0, p, float(n_periods), opts)
     return z, status == 0, n_rhs
 
 
@@ -78,20 +76,19 @@ def solve_orbit(model, p, opts, history=(), *, cold_guess, periods=1, tol=1e-9, 
                              state, None, n_rhs)
     lams = floquet.multipliers(mono)
     max_abs, stable, bif = floquet.classify(lams)
-    samples = shooting.sample_orbit(model.id, state, p, model.n_state, model.n_position,
-                                    float(periods), n_samples * periods, opts)
+    samples = shooting.sample_orbit(model.kernel, state, p, float(periods), n_samples * periods, opts)
     return PointSolution(status, reason, iters, res, lams, max_abs, stable, bif, state, samples, n_rhs)
 
 
-def solve_chain(model, params, opts, **kw):
-    """solve_orbit at each parameter vector of `params` in order, continuing the orbit."""
+def natural(model, params, opts, **kw):
+    """Natural continuation: solve_orbit at each parameter vector of `params` in order, each
+    started from the previous converged orbits (a failure restarts the history). A generator,
+    so a caller can time or stop each point."""
     history = []
-    out = []
     for p in params:
         sol = solve_orbit(model, p, opts, history[-2:], **kw)
-        out.append(sol)
         if sol.status == shooting.CONVERGED:
             history.append(sol.state)
         else:
             history.clear()
-    return out
+        yield sol

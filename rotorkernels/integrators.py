@@ -1,5 +1,5 @@
-"""Numba integrators for any model (by id, see models.rhs/jac), optionally carrying the
-variational equations.
+"""Numba integrators for any registered model (by its kernel identity, through the generated
+`models.dispatch`), optionally carrying the variational equations.
 
 The integrated vector is z = [u (n), Phi (n x n, row-major)] when `variational` is set, with
 Phi' = J(t, u) Phi; otherwise z = u. Both integrators return (z_end, status, n_rhs, h_next):
@@ -15,16 +15,16 @@ Cost (docs/benchmarks): the step loops (`_dop853_steps`, `_rk4_steps`) contain t
 inlined once (`_derivative`), take only arrays allocated by their caller and are compiled without
 Numba's reference counting, so a stage costs the model's arithmetic plus the vectorised stage
 sums; with the variational equations the model's right-hand side and Jacobian come from one
-contact sum (`models.rhs_jac`) and J Phi uses the block form [[0, I], [A, B]] of the models. The
+contact sum (`rhs_jac`) and J Phi uses the block form [[0, I], [A, B]] of the models. The
 results are those of the straightforward formulation, operation by operation.
 """
 import numpy as np
 from numba import njit
 from scipy.integrate._ivp import dop853_coefficients as _dop
 
-from rotorkernels import models
+from rotorkernels.models import dispatch
 
-STATUS_OK, STATUS_NAN, STATUS_AMPLITUDE, STATUS_STEP_UNDERFLOW = range(4)
+STATUS_OK, STATUS_NAN, STATUS_AMPLITUDE, STATUS_STEP_UNDERFLOW, STATUS_UNKNOWN_MODEL = range(5)
 
 _N_STAGES = _dop.N_STAGES
 # Stage s = 1..11 of a step evaluates at t + C[s] h, z + h sum_j A[s, j] K[j]; the solution
@@ -43,49 +43,22 @@ _ERR_EXPONENT = -1.0 / 8.0
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _tangent_product(model, z, n, jac, dz):
-    h = n // 2 if models.velocity_form(model) else 0
-    for i in range(h):
-        for j in range(n):
-            dz[n + i * n + j] = z[n + (h + i) * n + j]
-    for i in range(h, n):
-        for j in range(n):
-            acc = 0.0
-            for k in range(n):
-                acc += jac[i, k] * z[n + k * n + j]
-            dz[n + i * n + j] = acc
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _tangent(model, z, n, jac, dz):
-    """dz[n:] = J Phi with Phi = z[n:] (n x n, row-major) and J = jac.
-
-    For a model in velocity form (J = [[0, I], [A, B]]) the upper half of J Phi is the lower half
-    of Phi and only the lower block rows are multiplied: half the dense product's work. n = 4
-    (every model here) gets its own copy with a constant size, which the compiler unrolls."""
-    if n == 4:
-        _tangent_product(model, z, 4, jac, dz)
-    else:
-        _tangent_product(model, z, n, jac, dz)
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _derivative(model, t, z, p, n, variational, dz, jbuf):
+def _derivative(kernel, t, z, p, variational, dz, jbuf):
     """dz/dt of the (possibly augmented) system, inlined into the step loops: no call and no
     array views of z and dz (the models read and write the first n entries). With the
     variational equations the model's right-hand side and Jacobian come from one evaluation
-    (`models.rhs_jac`, one ball sum)."""
+    (`rhs_jac`, one ball sum)."""
     if variational:
-        models.rhs_jac(model, t, z, p, dz, jbuf)
-        _tangent(model, z, n, jbuf, dz)
+        dispatch.rhs_jac(kernel[0], t, z, p, dz, jbuf)
+        dispatch.tangent(kernel[3], z, kernel[1], jbuf, dz)
     else:
-        models.rhs(model, t, z, p, dz)
+        dispatch.rhs(kernel[0], t, z, p, dz)
 
 
 @njit(cache=True, nogil=True)
-def derivative(model, t, z, p, n, variational, dz, jbuf):
+def derivative(kernel, t, z, p, variational, dz, jbuf):
     """dz/dt of the (possibly augmented) system (jbuf: n x n scratch for the Jacobian)."""
-    _derivative(model, t, z, p, n, variational, dz, jbuf)
+    _derivative(kernel, t, z, p, variational, dz, jbuf)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -100,6 +73,14 @@ def state_status(z, n, n_position, amplitude_limit):
     return STATUS_OK
 
 
+@njit(cache=True, nogil=True, inline="always")
+def start_status(kernel, z, amplitude_limit):
+    """An unknown model id is an error status (the dispatch would give NaN), else state_status."""
+    if not dispatch.known(kernel[0]):
+        return STATUS_UNKNOWN_MODEL
+    return state_status(z, kernel[1], kernel[2], amplitude_limit)
+
+
 @njit(cache=True, nogil=True)
 def initial_state(u0, n, variational):
     """z0 = u0, or [u0, I] with the variational equations."""
@@ -110,40 +91,6 @@ def initial_state(u0, n, variational):
         for i in range(n):
             z[n + i * n + i] = 1.0
     return z
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _combine_m(K, coef, n_terms, z, step, out, m):
-    c = coef[0]
-    if n_terms == 1:
-        for i in range(m):
-            out[i] = z[i] + step * (c * K[0, i])
-        return
-    for i in range(m):
-        out[i] = c * K[0, i]
-    for j in range(1, n_terms - 1):
-        c = coef[j]
-        if c != 0.0:
-            for i in range(m):
-                out[i] += c * K[j, i]
-    c = coef[n_terms - 1]
-    for i in range(m):
-        out[i] = z[i] + step * (out[i] + c * K[n_terms - 1, i])
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _combine(K, coef, n_terms, z, step, out):
-    """out = z + step * sum_{j < n_terms} coef[j] K[j] (coef[0] != 0 and coef[n_terms - 1] != 0).
-
-    Row by row over K (contiguous, vectorised), each component summed in the order j = 0, 1, ...
-    as a per-component dot product would; terms with a zero coefficient are skipped (a quarter
-    of the Dormand-Prince tableau). One pass over `out` per term: the first assigns, the last
-    adds z. The state of a 4-state model (m = 4) gets a copy with a constant size."""
-    m = z.size
-    if m == 4:
-        _combine_m(K, coef, n_terms, z, step, out, 4)
-    else:
-        _combine_m(K, coef, n_terms, z, step, out, m)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -171,25 +118,25 @@ def _error_norm(K, h, z, znew, rtol, atol, w5, w3):
 
 
 @njit(cache=True, nogil=True)
-def dop853(model, t0, t1, z0, p, n, n_position, variational, rtol, atol, h0, max_steps,
-           amplitude_limit):
+def dop853(kernel, t0, t1, z0, p, variational, rtol, atol, h0, max_steps, amplitude_limit):
     """Integrate z from t0 to t1 > t0 with adaptive Dormand-Prince 8(5,3)."""
     m = z0.size
+    n = kernel[1]
     z = z0.copy()
-    status = state_status(z, n, n_position, amplitude_limit)
+    status = start_status(kernel, z, amplitude_limit)
     if status != STATUS_OK:
         return z, status, 0, h0
     K = np.empty((_N_STAGES + 1, m))
     work = np.empty((4, m))
     jbuf = np.empty((n, n))
-    status, n_rhs, h = _dop853_steps(model, t0, t1, z, p, n, n_position, variational, rtol, atol, h0,
-                                     max_steps, amplitude_limit, K, work, jbuf)
+    status, n_rhs, h = _dop853_steps(kernel, t0, t1, z, p, variational, rtol, atol, h0, max_steps,
+                                     amplitude_limit, K, work, jbuf)
     return z, status, n_rhs, h
 
 
 @njit(cache=True, nogil=True, _nrt=False)
-def _dop853_steps(model, t0, t1, z, p, n, n_position, variational, rtol, atol, h0, max_steps,
-                  amplitude_limit, K, work, jbuf):
+def _dop853_steps(kernel, t0, t1, z, p, variational, rtol, atol, h0, max_steps, amplitude_limit,
+                  K, work, jbuf):
     """The step loop of `dop853`, advancing z in place: (status, n_rhs, h_next).
 
     It only reads and writes the caller's arrays (K: stage derivatives, work: 4 rows of scratch,
@@ -219,8 +166,8 @@ def _dop853_steps(model, t0, t1, z, p, n, n_position, variational, rtol, atol, h
                     target = z
                 else:
                     target = znew if s == _N_STAGES else stage
-                    _combine(K, _A[s], s, z, step, target)
-                _derivative(model, t + _C[s] * step, target, p, n, variational, K[s], jbuf)
+                    dispatch.combine(K, _A[s], s, z, step, target)
+                _derivative(kernel, t + _C[s] * step, target, p, variational, K[s], jbuf)
             n_rhs += _N_STAGES + 1 - first_stage
             first_stage = 1
             err = _error_norm(K, step, z, znew, rtol, atol, w5, w3)
@@ -234,7 +181,7 @@ def _dop853_steps(model, t0, t1, z, p, n, n_position, variational, rtol, atol, h
         for i in range(m):
             z[i] = znew[i]
             K[0, i] = K[_N_STAGES, i]
-        status = state_status(z, n, n_position, amplitude_limit)
+        status = state_status(z, kernel[1], kernel[2], amplitude_limit)
         if status != STATUS_OK:
             return status, n_rhs, h
         factor = _MAX_FACTOR if err == 0.0 else min(_MAX_FACTOR, _SAFETY * err ** _ERR_EXPONENT)
@@ -245,24 +192,23 @@ def _dop853_steps(model, t0, t1, z, p, n, n_position, variational, rtol, atol, h
 
 
 @njit(cache=True, nogil=True)
-def rk4(model, t0, t1, z0, p, n, n_position, variational, n_steps, amplitude_limit):
+def rk4(kernel, t0, t1, z0, p, variational, n_steps, amplitude_limit):
     """Integrate z from t0 to t1 with n_steps classical RK4 steps."""
     m = z0.size
+    n = kernel[1]
     z = z0.copy()
     h = (t1 - t0) / n_steps
-    status = state_status(z, n, n_position, amplitude_limit)
+    status = start_status(kernel, z, amplitude_limit)
     if status != STATUS_OK:
         return z, status, 0, h
     work = np.empty((5, m))
     jbuf = np.empty((n, n))
-    status, n_rhs = _rk4_steps(model, t0, z, p, n, n_position, variational, n_steps, h,
-                               amplitude_limit, work, jbuf)
+    status, n_rhs = _rk4_steps(kernel, t0, z, p, variational, n_steps, h, amplitude_limit, work, jbuf)
     return z, status, n_rhs, h
 
 
 @njit(cache=True, nogil=True, _nrt=False)
-def _rk4_steps(model, t0, z, p, n, n_position, variational, n_steps, h, amplitude_limit, work,
-               jbuf):
+def _rk4_steps(kernel, t0, z, p, variational, n_steps, h, amplitude_limit, work, jbuf):
     """The step loop of `rk4`, advancing z in place: (status, n_rhs). Like `_dop853_steps`, it
     touches only the caller's arrays and is compiled without reference counting."""
     m = z.size
@@ -283,10 +229,10 @@ def _rk4_steps(model, t0, z, p, n, n_position, variational, n_steps, h, amplitud
                 for i in range(m):
                     stage[i] = z[i] + h * work[2, i]
                 tq = t + h
-            _derivative(model, tq, stage, p, n, variational, work[q], jbuf)
+            _derivative(kernel, tq, stage, p, variational, work[q], jbuf)
         for i in range(m):
             z[i] += h / 6.0 * (work[0, i] + 2.0 * work[1, i] + 2.0 * work[2, i] + work[3, i])
-        status = state_status(z, n, n_position, amplitude_limit)
+        status = state_status(z, kernel[1], kernel[2], amplitude_limit)
         if status != STATUS_OK:
             return status, 4 * (step + 1)
     return STATUS_OK, 4 * n_steps
@@ -309,10 +255,12 @@ def settings(method="dop853", rtol=1e-10, atol=1e-12, steps_per_unit=512, max_st
 
 
 @njit(cache=True, nogil=True)
-def flow(model, t0, t1, z0, p, n, n_position, variational, opts, h0):
-    """Integrate with the method and tolerances in `opts` (see `settings`)."""
+def flow(kernel, t0, t1, z0, p, variational, opts, h0):
+    """Integrate with the method and tolerances in `opts` (see `settings`).
+
+    kernel: the model's identity (id, n_state, n_position, velocity form), `ModelSpec.kernel`."""
     if opts[S_METHOD] == METHOD_RK4:
         n_steps = max(1, int(round(opts[S_STEPS_PER_UNIT] * (t1 - t0))))
-        return rk4(model, t0, t1, z0, p, n, n_position, variational, n_steps, opts[S_AMPLITUDE])
-    return dop853(model, t0, t1, z0, p, n, n_position, variational, opts[S_RTOL], opts[S_ATOL],
-                  h0, int(opts[S_MAX_STEPS]), opts[S_AMPLITUDE])
+        return rk4(kernel, t0, t1, z0, p, variational, n_steps, opts[S_AMPLITUDE])
+    return dop853(kernel, t0, t1, z0, p, variational, opts[S_RTOL], opts[S_ATOL], h0,
+                  int(opts[S_MAX_STEPS]), opts[S_AMPLITUDE])

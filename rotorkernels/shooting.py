@@ -12,6 +12,7 @@ from rotorkernels import integrators as ig
 
 CONVERGED, NOT_CONVERGED, DIVERGED = 0, 1, 2
 (R_OK, R_MAX_ITER, R_LINE_SEARCH, R_NAN, R_AMPLITUDE, R_STEP_UNDERFLOW, R_SINGULAR) = range(7)
+R_UNKNOWN_MODEL = 9     # pipeline.schema.ORBIT_REASON: 7, 8 are set by the pipeline
 
 Orbit = namedtuple("Orbit", "state monodromy status reason iterations residual n_rhs")
 
@@ -25,6 +26,8 @@ def _failure(flow_status):
         return DIVERGED, R_NAN
     if flow_status == ig.STATUS_AMPLITUDE:
         return DIVERGED, R_AMPLITUDE
+    if flow_status == ig.STATUS_UNKNOWN_MODEL:
+        return NOT_CONVERGED, R_UNKNOWN_MODEL
     return NOT_CONVERGED, R_STEP_UNDERFLOW
 
 
@@ -35,28 +38,29 @@ def _residual_norm(r, s):
 
 
 @njit(cache=True, nogil=True)
-def _return_map(model, s, p, n, n_position, periods, opts, h):
+def _return_map(kernel, s, p, periods, opts, h):
     """(u(k T; s) - s, monodromy, flow status, n_rhs, h_next)."""
+    n = kernel[1]
     z0 = ig.initial_state(s, n, True)
-    z, status, n_rhs, h = ig.flow(model, 0.0, periods, z0, p, n, n_position, True, opts, h)
+    z, status, n_rhs, h = ig.flow(kernel, 0.0, periods, z0, p, True, opts, h)
     r = z[:n] - s
     mono = z[n:].copy().reshape((n, n))
     return r, mono, status, n_rhs, h
 
 
 @njit(cache=True, nogil=True)
-def shoot(model, guess, p, n, n_position, periods, opts, tol, max_iter):
+def shoot(kernel, guess, p, periods, opts, tol, max_iter):
     """Newton shooting for an orbit of period `periods` (scaled time) from `guess`.
 
     Returns (state, monodromy, status, reason, iterations, residual, n_rhs). The monodromy is
     evaluated at the returned state."""
     s = guess.copy()
-    r, mono, fstat, n_rhs, h = _return_map(model, s, p, n, n_position, periods, opts, 0.0)
+    r, mono, fstat, n_rhs, h = _return_map(kernel, s, p, periods, opts, 0.0)
     if fstat != ig.STATUS_OK:
         status, reason = _failure(fstat)
         return s, mono, status, reason, 0, np.inf, n_rhs
     res = _residual_norm(r, s)
-    eye = np.eye(n)
+    eye = np.eye(kernel[1])
     for it in range(max_iter + 1):
         if res <= tol:
             return s, mono, CONVERGED, R_OK, it, res, n_rhs
@@ -71,7 +75,7 @@ def shoot(model, guess, p, n, n_position, periods, opts, tol, max_iter):
         last_fail = ig.STATUS_OK
         for _ in range(_MAX_HALVINGS):
             trial = s + lam * step
-            r_t, mono_t, fstat, nr, h_t = _return_map(model, trial, p, n, n_position, periods, opts, h)
+            r_t, mono_t, fstat, nr, h_t = _return_map(kernel, trial, p, periods, opts, h)
             n_rhs += nr
             if fstat == ig.STATUS_OK:
                 res_t = _residual_norm(r_t, trial)
@@ -91,23 +95,22 @@ def shoot(model, guess, p, n, n_position, periods, opts, tol, max_iter):
 
 
 @njit(cache=True, nogil=True)
-def settle(model, u0, p, n, n_position, periods, opts):
+def settle(kernel, u0, p, periods, opts):
     """Integrate a transient of `periods` forcing periods from u0: (state, flow status, n_rhs)."""
-    z, status, n_rhs, _ = ig.flow(model, 0.0, float(periods), u0.copy(), p, n, n_position, False,
-                                  opts, 0.0)
+    z, status, n_rhs, _ = ig.flow(kernel, 0.0, float(periods), u0.copy(), p, False, opts, 0.0)
     return z, status, n_rhs
 
 
 @njit(cache=True, nogil=True)
-def sample_orbit(model, u0, p, n, n_position, periods, n_samples, opts):
+def sample_orbit(kernel, u0, p, periods, n_samples, opts):
     """States at n_samples equally spaced times over [0, periods) starting from u0."""
-    out = np.empty((n_samples, n))
+    out = np.empty((n_samples, kernel[1]))
     z = u0.copy()
     h = 0.0
     dt = periods / n_samples
     for i in range(n_samples):
         out[i] = z
-        z, status, _, h = ig.flow(model, i * dt, (i + 1) * dt, z, p, n, n_position, False, opts, h)
+        z, status, _, h = ig.flow(kernel, i * dt, (i + 1) * dt, z, p, False, opts, h)
         if status != ig.STATUS_OK:
             out[i + 1:] = np.nan
             break
@@ -115,7 +118,6 @@ def sample_orbit(model, u0, p, n, n_position, periods, n_samples, opts):
 
 
 def periodic_orbit(model, guess, p, opts, periods=1, tol=1e-9, max_iter=30):
-    """Python-facing wrapper of `shoot` for a `models.Model`."""
-    res = shoot(model.id, np.asarray(guess, float), p, model.n_state, model.n_position,
-                float(periods), opts, tol, max_iter)
+    """Python-facing wrapper of `shoot` for a `models.ModelSpec`."""
+    res = shoot(model.kernel, np.asarray(guess, float), p, float(periods), opts, tol, max_iter)
     return Orbit(*res)

@@ -11,6 +11,8 @@ import xarray as xr
 
 from pipeline import schema
 
+JEFFCOTT_VARIABLES = schema.variables_of(schema.model_of({}))
+
 
 def synthetic_cube(speed=None, clearance=None, n_multipliers=4, attractor=False,
                    sweep_direction="up", boundaries=False, n_samples=128):
@@ -65,7 +67,7 @@ def synthetic_cube(speed=None, clearance=None, n_multipliers=4, attractor=False,
         "preload": ((), 0.0, {"units": "N", "long_name": "axial preload"}),
     })
     for name, values in data.items():
-        extra, dtype, attrs = schema.VARIABLES[name]
+        extra, dtype, attrs = JEFFCOTT_VARIABLES[name]
         ds[name] = (dims + tuple(extra), np.asarray(values).astype(dtype), dict(attrs))
     ds.attrs.update({
         "Conventions": "CF-1.10",
@@ -100,7 +102,7 @@ def add_boundary_table(ds):
                          "boundary_grid_low": speed[i], "boundary_grid_high": speed[i + 1],
                          "boundary_clearance": float(c)})
     out = ds.copy()
-    for name, (dtype, attrs) in schema.BOUNDARY_VARIABLES.items():
+    for name, (dtype, attrs) in schema.boundary_variables("speed", "Hz", "shaft speed").items():
         out[name] = ("boundary", np.array([r[name] for r in rows], dtype=dtype), dict(attrs))
     out["boundary_clearance"] = ("boundary", np.array([r["boundary_clearance"] for r in rows], float),
                                  {"units": "m", "long_name": "radial internal clearance of the boundary"})

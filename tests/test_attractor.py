@@ -7,18 +7,19 @@ import numpy as np
 import pytest
 
 from rotorkernels import attractor as at, continuation, floquet, integrators as ig, models, shooting
+from rotorkernels.models import jeffcott_clearance as jc
 from tests.reference import BaiPoint
 from tests.test_kernels import JEFF, bai_params
 
 OPTS = ig.settings(rtol=1e-10, atol=1e-12)
 TIGHT = ig.settings(rtol=1e-12, atol=1e-14)
-LINEAR = models.LINEAR_OSCILLATOR
+LINEAR = models.get("linear_oscillator")
 CHAOTIC_POINT = BaiPoint(36.5, 19.0e-6)      # chaotic attractor, reached from the static guess
 
 
 def stable_orbit(point, opts=OPTS):
     p, period = bai_params(point)
-    sol = continuation.solve_orbit(JEFF, p, opts, cold_guess=models.static_guess, tol=1e-11,
+    sol = continuation.solve_orbit(JEFF, p, opts, cold_guess=jc.static_guess, tol=1e-11,
                                    transient_periods=100)
     assert sol.status == shooting.CONVERGED and sol.stable, sol
     return sol, p, period
@@ -38,7 +39,7 @@ def stable_orbit(point, opts=OPTS):
 def test_lle_of_stable_orbit_matches_floquet_multipliers(point, weighted, align, rtol):
     sol, p, period = stable_orbit(point)
     expected = at.derived_lle(sol.max_abs, period)                     # 1/s
-    res = at.lyapunov_si(JEFF, models.static_guess(p), p, period, OPTS, n_transient=200,
+    res = at.lyapunov_si(JEFF, jc.static_guess(p), p, period, OPTS, n_transient=200,
                          max_periods=1000, rtol_stop=0.0, min_periods=1000, weighted=weighted,
                          align_periods=align)
     assert res.status == ig.STATUS_OK and res.periods_used == 1000
@@ -47,7 +48,7 @@ def test_lle_of_stable_orbit_matches_floquet_multipliers(point, weighted, align,
 
 def linear_system(p):
     a = np.zeros((4, 4))
-    models.jac(LINEAR.id, 0.0, np.zeros(4), p, a)
+    models.dispatch.jac(LINEAR.id, 0.0, np.zeros(4), p, a)
     return a
 
 
@@ -84,12 +85,12 @@ def test_linear_oscillator_with_complex_pairs():
 @pytest.mark.parametrize("point", [BaiPoint(60.0, 3.8e-6), CHAOTIC_POINT], ids=["stable", "chaotic"])
 def test_sum_of_spectrum_is_the_divergence(point):
     p, period = bai_params(point)
-    expo, _, _, status = at.lyapunov_spectrum(JEFF, models.static_guess(p), p, OPTS, n_transient=100,
+    expo, _, _, status = at.lyapunov_spectrum(JEFF, jc.static_guess(p), p, OPTS, n_transient=100,
                                               max_periods=300, rtol_stop=0.0)
     assert status == ig.STATUS_OK
     divergence = -2.0 * point.damping * period / point.mass               # per unit tau
     assert abs(expo.sum() - divergence) < 1e-6 * abs(divergence)
-    si = at.lyapunov_si(JEFF, models.static_guess(p), p, period, OPTS, n_transient=100, max_periods=300,
+    si = at.lyapunov_si(JEFF, jc.static_guess(p), p, period, OPTS, n_transient=100, max_periods=300,
                         rtol_stop=0.0)
     divergence_si = -2.0 * point.damping / point.mass                        # 1/s
     assert abs(si.exponents.sum() - divergence_si) < 1e-6 * abs(divergence_si)
@@ -97,7 +98,7 @@ def test_sum_of_spectrum_is_the_divergence(point):
 
 def test_chaotic_exponents_do_not_depend_on_the_renormalization_interval():
     p, period = bai_params(CHAOTIC_POINT)
-    u0 = at.poincare(JEFF, models.static_guess(p), p, OPTS, 200, 1)[0][-1]
+    u0 = at.poincare(JEFF, jc.static_guess(p), p, OPTS, 200, 1)[0][-1]
     runs = {}
     for renorm in (0.5, 1.0, 2.0):
         expo, stderr, used, status = at.lyapunov_spectrum(JEFF, u0, p, OPTS, 0, renorm, 1000,
@@ -112,7 +113,7 @@ def test_chaotic_exponents_do_not_depend_on_the_renormalization_interval():
 
 def test_early_stop_and_largest_lyapunov_is_the_first_component():
     p, period = bai_params(CHAOTIC_POINT)
-    u0 = at.poincare(JEFF, models.static_guess(p), p, OPTS, 200, 1)[0][-1]
+    u0 = at.poincare(JEFF, jc.static_guess(p), p, OPTS, 200, 1)[0][-1]
     kw = dict(n_transient=0, renorm_periods=1.0, max_periods=3000, n_blocks=10, rtol_stop=0.1,
               min_periods=200)
     expo, stderr, used, status = at.lyapunov_spectrum(JEFF, u0, p, OPTS, **kw)
@@ -141,7 +142,7 @@ def test_derived_lle():
 
 def test_poincare_samples_of_a_stable_orbit_are_the_shooting_state():
     sol, p, _ = stable_orbit(BaiPoint(60.0, 3.8e-6), TIGHT)
-    samples, status = at.poincare(JEFF, models.static_guess(p), p, TIGHT, 200, 32)
+    samples, status = at.poincare(JEFF, jc.static_guess(p), p, TIGHT, 200, 32)
     assert status == ig.STATUS_OK and samples.shape == (32, 4)
     scale = np.abs(sol.state).max()
     np.testing.assert_allclose(samples, np.broadcast_to(sol.state, samples.shape), rtol=0,
@@ -151,7 +152,7 @@ def test_poincare_samples_of_a_stable_orbit_are_the_shooting_state():
 
 def test_poincare_samples_of_a_period_two_orbit_alternate_between_its_points():
     p, _ = bai_params(BaiPoint(55.0, 19.0e-6))
-    samples, status = at.poincare(JEFF, models.static_guess(p), p, TIGHT, 300, 16)
+    samples, status = at.poincare(JEFF, jc.static_guess(p), p, TIGHT, 300, 16)
     assert status == ig.STATUS_OK and at.detect_period(samples) == 2
     orbit = shooting.periodic_orbit(JEFF, samples[-1], p, TIGHT, periods=2, tol=1e-11)
     assert orbit.status == shooting.CONVERGED
@@ -242,15 +243,15 @@ def test_power_spectrum_peak():
 
 def test_diagnose_periodic_and_chaotic_points():
     p, period = bai_params(BaiPoint(55.0, 19.0e-6))                     # period 2
-    res = at.diagnose(JEFF, models.static_guess(p), p, period, OPTS, n_transient=300)
+    res = at.diagnose(JEFF, jc.static_guess(p), p, period, OPTS, n_transient=300)
     assert (res.code, res.period, res.periods_used) == (at.PERIODIC, 2, 0.0)
-    bench = at.diagnose(JEFF, models.static_guess(p), p, period, OPTS, n_transient=300,
+    bench = at.diagnose(JEFF, jc.static_guess(p), p, period, OPTS, n_transient=300,
                         lyapunov_always=True, max_periods=1000, rtol_stop=0.0)
     assert (bench.code, bench.period, bench.periods_used) == (at.PERIODIC, 2, 1000.0)
     assert res.lle < 0 and abs(res.lle - bench.lle) < 1e-3 * abs(res.lle), (res.lle, bench.lle)
     np.testing.assert_allclose(res.end_state, res.samples[-1])
     p, period = bai_params(CHAOTIC_POINT)
-    res = at.diagnose(JEFF, models.static_guess(p), p, period, OPTS, max_periods=400)
+    res = at.diagnose(JEFF, jc.static_guess(p), p, period, OPTS, max_periods=400)
     assert res.code == at.CHAOTIC and res.period == 0 and res.lle > 3 * res.lle_stderr > 0
     assert 100 <= res.periods_used <= 400 and res.status == ig.STATUS_OK
     # the end state is on the attractor at a whole period: restarting there stays chaotic
@@ -290,7 +291,7 @@ def test_period_two_attractor_is_refined_and_stable_although_period_one_is_not()
     at tighter tolerance."""
     point = BaiPoint(55.0, 19.0e-6)
     p, period = bai_params(point)
-    p1 = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=models.static_guess, tol=1e-10)
+    p1 = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=jc.static_guess, tol=1e-10)
     assert p1.status == shooting.CONVERGED and not p1.stable and p1.bifurcation == floquet.PERIOD_DOUBLING
     res = at.diagnose(JEFF, p1.state, p, period, OPTS, n_transient=300)
     assert (res.code, res.period) == (at.PERIODIC, 2) and res.derived
@@ -310,7 +311,7 @@ def test_a_start_on_the_unstable_orbit_still_finds_the_attractor(point, expected
     unstable orbit is left so slowly that the samples first repeat on it (kicked off, retaken),
     or have not settled on the attractor yet (sampled again after the Lyapunov run)."""
     p, period = bai_params(point)
-    p1 = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=models.static_guess, tol=1e-10)
+    p1 = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=jc.static_guess, tol=1e-10)
     assert p1.status == shooting.CONVERGED and not p1.stable
     res = at.diagnose(JEFF, p1.state, p, period, OPTS)
     assert (res.code, res.period) == expected
@@ -332,7 +333,7 @@ def test_period_doubling_cascade_to_chaos_at_19um():
     found = []
     for speed in CASCADE_SPEEDS:
         p, period = bai_params(BaiPoint(speed, 19.0e-6))
-        u = models.static_guess(p) if u is None else u
+        u = jc.static_guess(p) if u is None else u
         res = at.diagnose(JEFF, u, p, period, OPTS, n_transient=400, n_samples=128, max_periods=1000,
                           min_periods=200)
         assert res.status == ig.STATUS_OK

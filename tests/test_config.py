@@ -52,7 +52,8 @@ def test_zero_clearance_without_angle_is_radial_contact():
     from pipeline import compute
 
     cfg = config.parse_config(BASE.replace("clearance = [3.8e-6, 7.6e-6]", "clearance = [0.0, 1e-6]"))
-    assert compute.point_params(cfg.data, 50.0, 0.0, None, 0.0).contact_angle == 0.0
+    point = {"speed": 50.0, "clearance": 0.0, "contact_angle": None, "preload": 0.0}
+    assert compute.point_params(cfg.data, point).derived["contact_angle_used"] == 0.0
 
 
 def test_dependent_defaults_and_path():

@@ -23,7 +23,7 @@ def random_results(shape, n_multipliers=4, seed=0):
     """Every schema variable, with fills (-1 / NaN) sprinkled in, as compute returns them (int64)."""
     rng = np.random.default_rng(seed)
     out = {}
-    for name, (extra, dtype, attrs) in schema.VARIABLES.items():
+    for name, (extra, dtype, attrs) in schema.variables_of(schema.model_of({})).items():
         full = shape + (n_multipliers,) * len(extra)
         if "flag_values" in attrs:
             out[name] = rng.integers(schema.INT_FILL, len(attrs["flag_values"]), full)
@@ -66,7 +66,7 @@ def test_build_follows_the_schema():
     syn, built = from_synthetic()
     for name in syn.data_vars:
         np.testing.assert_array_equal(built[name].values, syn[name].values)
-        assert built[name].dtype == np.dtype(schema.VARIABLES[name][1])
+        assert built[name].dtype == np.dtype(schema.variables_of(schema.model_of({}))[name][1])
         assert built[name].dims == syn[name].dims
     assert built.attrs["config_hash"] == syn.attrs["config_hash"]
     assert built.attrs["rotorsweep_schema_version"] == schema.SCHEMA_VERSION
@@ -79,7 +79,7 @@ def test_cf_attributes_and_compression_on_disk(tmp_path):
     ds = cube.open_cube(path)
     assert ds.attrs["Conventions"] == "CF-1.10" and ds.attrs["title"]
     for name in AXES4:
-        assert ds[name].attrs["units"] == schema.AXES[name][0] and ds[name].attrs["long_name"]
+        assert ds[name].attrs["units"] == schema.axes_of(schema.model_of({}))[name][0] and ds[name].attrs["long_name"]
     for name, var in ds.data_vars.items():
         assert var.attrs["long_name"]
         assert "units" in var.attrs or {"flag_values", "flag_meanings"} <= set(var.attrs), name

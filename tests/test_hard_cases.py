@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 
 from rotorkernels import attractor as at, boundary, continuation, floquet, integrators as ig, models, shooting
+from rotorkernels.models import jeffcott_clearance as jc
 from tests.reference import BaiPoint, PreloadedPoint
 from tests.test_kernels import JEFF, bai_params, match
 
@@ -11,7 +12,7 @@ OPTS = ig.settings(rtol=1e-11, atol=1e-13)
 
 def solve(point, opts=OPTS, history=(), **overrides):
     p, period = bai_params(point, **overrides)
-    sol = continuation.solve_orbit(JEFF, p, opts, history, cold_guess=models.static_guess, tol=1e-10,
+    sol = continuation.solve_orbit(JEFF, p, opts, history, cold_guess=jc.static_guess, tol=1e-10,
                                    transient_periods=100)
     return sol, p, period
 
@@ -24,9 +25,9 @@ def loaded_balls(state_samples, p):
     """Number of loaded balls at each orbit sample."""
     counts = []
     for k, (x, y) in enumerate(state_samples[:, :2]):
-        theta = 2 * np.pi * (k / len(state_samples)) / p[models.P_NBALLS]
-        phi = theta + 2 * np.pi * np.arange(int(p[models.P_NBALLS])) / p[models.P_NBALLS]
-        delta = (x * np.cos(phi) + y * np.sin(phi)) * p[models.P_COS_A] + p[models.P_OFFSET]
+        theta = 2 * np.pi * (k / len(state_samples)) / p[jc.P_NBALLS]
+        phi = theta + 2 * np.pi * np.arange(int(p[jc.P_NBALLS])) / p[jc.P_NBALLS]
+        delta = (x * np.cos(phi) + y * np.sin(phi)) * p[jc.P_COS_A] + p[jc.P_OFFSET]
         counts.append(int((delta > 0).sum()))
     return np.array(counts)
 
@@ -37,7 +38,7 @@ def test_large_clearance_with_most_balls_unloaded():
     assert sol.status == shooting.CONVERGED
     assert loaded_balls(sol.samples, p).max() <= 3          # 9 balls, at most 3 carry load
     assert abs(np.prod(sol.multipliers).real - liouville(point, period)) < 1e-9
-    ref_state, ref_mono, _ = point.periodic_orbit(models.to_physical(sol.state, period), iterations=1)
+    ref_state, ref_mono, _ = point.periodic_orbit(jc.to_physical(sol.state, period), iterations=1)
     assert match(sol.multipliers, np.linalg.eigvals(ref_mono)) < 1e-6
 
 
@@ -73,7 +74,7 @@ def test_multiplier_within_1e_3_of_minus_one_is_resolved():
 
     def at(speed, guess):
         return continuation.solve_orbit(JEFF, bai_params(BaiPoint(speed, clearance))[0], OPTS, [guess],
-                                        cold_guess=models.static_guess, tol=1e-10)
+                                        cold_guess=jc.static_guess, tol=1e-10)
 
     lo, _, _ = solve(BaiPoint(76.0, clearance))
     hi = at(84.0, lo.state)
@@ -84,18 +85,18 @@ def test_multiplier_within_1e_3_of_minus_one_is_resolved():
     lead = sol.multipliers[0]
     assert sol.status == shooting.CONVERGED and abs(lead + 1) < 1e-3
     point = BaiPoint(speed, clearance)
-    _, ref_mono, _ = point.periodic_orbit(models.to_physical(sol.state, bai_params(point)[1]), iterations=1)
+    _, ref_mono, _ = point.periodic_orbit(jc.to_physical(sol.state, bai_params(point)[1]), iterations=1)
     assert match(sol.multipliers, np.linalg.eigvals(ref_mono)) < 1e-7
 
 
 def test_nonconvergence_is_reported_as_data():
     point = BaiPoint(190.0, 19.0e-6)
     p, _ = bai_params(point)
-    orbit = shooting.periodic_orbit(JEFF, models.static_guess(p), p, OPTS, tol=1e-14, max_iter=1)
+    orbit = shooting.periodic_orbit(JEFF, jc.static_guess(p), p, OPTS, tol=1e-14, max_iter=1)
     assert orbit.status == shooting.NOT_CONVERGED
     assert orbit.reason in (shooting.R_MAX_ITER, shooting.R_LINE_SEARCH)
     tiny = ig.settings(rtol=1e-11, atol=1e-13, amplitude_limit=1e-3)   # 1 nm limit: 'diverged'
-    orbit = shooting.periodic_orbit(JEFF, models.static_guess(p), p, tiny)
+    orbit = shooting.periodic_orbit(JEFF, jc.static_guess(p), p, tiny)
     assert orbit.status == shooting.DIVERGED and orbit.reason == shooting.R_AMPLITUDE
     nan_guess = np.full(4, np.nan)
     orbit = shooting.periodic_orbit(JEFF, nan_guess, p, OPTS)
@@ -141,21 +142,22 @@ def test_preloaded_bearing_driven_until_balls_unload(load, unloads):
     from pipeline import compute, config
 
     cfg = config.parse_config(PRELOADED_SCENE.format(load=load))
-    params = compute.point_params(cfg.data, 350.0, 0.0, None, 300.0)
+    params = compute.point_params(cfg.data, {"speed": 350.0, "clearance": 0.0, "contact_angle": None,
+                                             "preload": 300.0})
     point = preloaded_reference(350.0, load)
     p, period = params.p, params.period
     # the preloaded static state, solved independently from the geometry
-    assert params.contact_angle == pytest.approx(point.alpha, rel=1e-12)
-    assert p[models.P_OFFSET] * models.LENGTH_SCALE == pytest.approx(point.normal_approach, rel=1e-10)
+    assert params.derived["contact_angle_used"] == pytest.approx(np.degrees(point.alpha), rel=1e-12)
+    assert p[jc.P_OFFSET] * jc.LENGTH_SCALE == pytest.approx(point.normal_approach, rel=1e-10)
     assert period == pytest.approx(point.period, rel=1e-12)
     at_rest = point.ball_deflections(0.0, 0.0, 0.0)
     assert np.all(at_rest > 4e-6)                                   # every ball loaded at rest
 
-    sol = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=models.static_guess, tol=1e-10,
+    sol = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=jc.static_guess, tol=1e-10,
                                    transient_periods=100)
     assert sol.status == shooting.CONVERGED and sol.stable
     assert abs(np.prod(sol.multipliers).real - liouville(point, period)) < 1e-9
-    state = models.to_physical(sol.state, period)
+    state = jc.to_physical(sol.state, period)
     ref_state, ref_mono, residual = point.periodic_orbit(state, iterations=1)
     scale = np.array([1e-6, 1e-6, 1e-6 / period, 1e-6 / period])
     assert residual < 1e-9
@@ -164,7 +166,7 @@ def test_preloaded_bearing_driven_until_balls_unload(load, unloads):
 
     # ball deflections along the reference orbit (10 points per kernel sample)
     t, traj = point.trajectory(ref_state, n_times=10 * len(sol.samples))
-    np.testing.assert_allclose(models.to_physical(sol.samples, period)[:, :2], traj[::10, :2],
+    np.testing.assert_allclose(jc.to_physical(sol.samples, period)[:, :2], traj[::10, :2],
                                rtol=0, atol=1e-8 * 1e-6)
     delta = point.ball_deflections(t, traj[:, 0], traj[:, 1])
     loaded = (delta > 0).sum(axis=1)
@@ -201,7 +203,7 @@ def test_chaotic_regime_shooting_fails_gracefully(speed):
     spectrum summing to the divergence."""
     point = BaiPoint(speed, CHAOS_CLEARANCE)
     p, period = bai_params(point)
-    att = at.diagnose(JEFF, models.static_guess(p), p, period, ATT_OPTS, n_transient=300,
+    att = at.diagnose(JEFF, jc.static_guess(p), p, period, ATT_OPTS, n_transient=300,
                       max_periods=400)
     assert att.code == at.CHAOTIC and att.status == ig.STATUS_OK
     assert att.lle > 3 * att.lle_stderr > 0
@@ -218,7 +220,7 @@ def test_chaotic_regime_shooting_fails_gracefully(speed):
             assert orbit.reason in (shooting.R_MAX_ITER, shooting.R_LINE_SEARCH, shooting.R_SINGULAR)
             assert orbit.residual > 1e-10
     # the pipeline's per-point solve (cold start: a transient that lands on the attractor)
-    cold = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=models.static_guess, tol=1e-10,
+    cold = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=jc.static_guess, tol=1e-10,
                                     transient_periods=100)
     assert cold.status in (shooting.CONVERGED, shooting.NOT_CONVERGED)
     if cold.status != shooting.CONVERGED:
@@ -237,7 +239,7 @@ def test_chaotic_regime_shooting_fails_gracefully(speed):
     lams = floquet.multipliers(converged[0].monodromy)
     max_abs, stable, bif = floquet.classify(lams)
     assert not stable and max_abs > 2 and bif == floquet.PERIOD_DOUBLING and lams[0].real < -2
-    _, ref_mono, residual = point.periodic_orbit(models.to_physical(states[0], period), iterations=1)
+    _, ref_mono, residual = point.periodic_orbit(jc.to_physical(states[0], period), iterations=1)
     assert residual < 1e-9
     assert match(lams, np.linalg.eigvals(ref_mono)) < 1e-6
 
@@ -248,7 +250,7 @@ def attractor_carried_from(speed_from, speed_to, step=0.2, periods=100):
     for speed in np.arange(speed_from, speed_to - 0.5 * step, -step):
         p, _ = bai_params(BaiPoint(speed, CHAOS_CLEARANCE))
         first = u is None
-        u = at.poincare(JEFF, models.static_guess(p) if first else u, p, ATT_OPTS,
+        u = at.poincare(JEFF, jc.static_guess(p) if first else u, p, ATT_OPTS,
                         3 * periods if first else periods, 1)[0][-1]
     return u
 
@@ -260,10 +262,10 @@ def test_stable_orbit_coexists_with_a_chaotic_attractor(speed):
     chaotic attractor carried down from 29 Hz it stays chaotic, never approaching the orbit."""
     point = BaiPoint(speed, CHAOS_CLEARANCE)
     p, period = bai_params(point)
-    sol = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=models.static_guess, tol=1e-11,
+    sol = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=jc.static_guess, tol=1e-11,
                                    transient_periods=100)
     assert sol.status == shooting.CONVERGED and sol.stable
-    _, ref_mono, _ = point.periodic_orbit(models.to_physical(sol.state, period), iterations=1)
+    _, ref_mono, _ = point.periodic_orbit(jc.to_physical(sol.state, period), iterations=1)
     assert match(sol.multipliers, np.linalg.eigvals(ref_mono)) < 1e-6
     expected = at.derived_lle(sol.max_abs, period)
 
@@ -282,7 +284,7 @@ def test_stable_orbit_coexists_with_a_chaotic_attractor(speed):
     assert chaos.code == at.CHAOTIC and chaos.lle > 3 * chaos.lle_stderr > 0
     assert abs(chaos.exponents.sum() - divergence_si(point)) < 1e-6 * abs(divergence_si(point))
     # the same call from the orbit's basin reports the orbit (the derive-when-stable shortcut)
-    settled = at.diagnose(JEFF, models.static_guess(p), p, period, ATT_OPTS, n_transient=300,
+    settled = at.diagnose(JEFF, jc.static_guess(p), p, period, ATT_OPTS, n_transient=300,
                           stable_orbit=(sol.state, sol.multipliers))
     assert (settled.code, settled.period, settled.derived) == (at.PERIODIC, 1, True)
     assert settled.lle == pytest.approx(expected, rel=1e-12)

@@ -9,9 +9,10 @@ from scipy.linalg import expm
 from scipy.optimize import linear_sum_assignment
 
 from rotorkernels import boundary, continuation, floquet, integrators as ig, models, shooting
+from rotorkernels.models import jeffcott_clearance as jc
 from tests.reference import BAI, BaiPoint
 
-JEFF = models.JEFFCOTT_CLEARANCE
+JEFF = models.get("jeffcott_clearance")
 TIGHT = ig.settings(rtol=1e-13, atol=1e-15)
 
 
@@ -20,12 +21,12 @@ def bai_params(point, **overrides):
               axial_approach=0.0, mass=point.mass, damping=point.damping, radial_load=point.load,
               n_balls=point.n_balls, ball_diameter=BAI["Db"], pitch_diameter=BAI["Dm"])
     kw.update(overrides)
-    return models.jeffcott_params(**kw)
+    return jc.jeffcott_params(**kw)
 
 
 def solve_bai(point, opts=TIGHT, tol=1e-12):
     p, period = bai_params(point)
-    sol = continuation.solve_orbit(JEFF, p, opts, cold_guess=models.static_guess, tol=tol,
+    sol = continuation.solve_orbit(JEFF, p, opts, cold_guess=jc.static_guess, tol=tol,
                                    transient_periods=100)
     assert sol.status == shooting.CONVERGED, sol
     return sol, period
@@ -40,7 +41,7 @@ def match(a, b):
 
 def scaled_rhs(p, tau, u):
     du = np.empty(4)
-    models.rhs(JEFF.id, tau, np.asarray(u, float), p, du)
+    models.dispatch.rhs(JEFF.id, tau, np.asarray(u, float), p, du)
     return du
 
 
@@ -52,9 +53,9 @@ def grazing_states(p, rng, n):
     states = []
     for _ in range(n):
         tau = rng.uniform(0, 1)
-        theta = p[models.P_PHI0] + 2 * np.pi * tau / p[models.P_NBALLS]
+        theta = p[jc.P_PHI0] + 2 * np.pi * tau / p[jc.P_NBALLS]
         phi = theta + 2 * np.pi * rng.integers(9) / 9
-        radius = (1e-4 * rng.choice([-1, 1]) - p[models.P_OFFSET]) / p[models.P_COS_A]
+        radius = (1e-4 * rng.choice([-1, 1]) - p[jc.P_OFFSET]) / p[jc.P_COS_A]
         u = np.array([radius * np.cos(phi), radius * np.sin(phi), *rng.normal(size=2)])
         states.append((tau, u))
     return states
@@ -67,7 +68,7 @@ def test_analytic_jacobian_matches_finite_differences():
     cases += grazing_states(p, rng, 20)
     for tau, u in cases:
         jac = np.empty((4, 4))
-        models.jac(JEFF.id, tau, u, p, jac)
+        models.dispatch.jac(JEFF.id, tau, u, p, jac)
         h = 1e-7
         fd = np.column_stack([(scaled_rhs(p, tau, u + h * e) - scaled_rhs(p, tau, u - h * e)) / (2 * h)
                               for e in np.eye(4)])
@@ -76,8 +77,8 @@ def test_analytic_jacobian_matches_finite_differences():
 
 # --- Floquet multipliers of linear systems --------------------------------------------------
 
-LINEAR = models.LINEAR_OSCILLATOR
-MATHIEU = models.DAMPED_MATHIEU
+LINEAR = models.get("linear_oscillator")
+MATHIEU = models.get("damped_mathieu")
 
 
 @pytest.mark.parametrize("opts, tol", [(ig.settings(rtol=1e-12, atol=1e-14), 1e-10),
@@ -85,7 +86,7 @@ MATHIEU = models.DAMPED_MATHIEU
 def test_linear_oscillator_multipliers_are_exp_of_eigenvalues(opts, tol):
     p = np.array([40.0, 5.0, 90.0, 0.4, 0.9])
     a = np.zeros((4, 4))
-    models.jac(LINEAR.id, 0.0, np.zeros(4), p, a)
+    models.dispatch.jac(LINEAR.id, 0.0, np.zeros(4), p, a)
     orbit = shooting.periodic_orbit(LINEAR, np.array([1.0, -2.0, 0.5, 0.3]), p, opts, tol=1e-12)
     assert orbit.status == shooting.CONVERGED and orbit.iterations <= 2
     np.testing.assert_allclose(orbit.state, 0.0, atol=1e-10)
@@ -120,10 +121,10 @@ BAI_POINTS = [BaiPoint(60.0, 3.8e-6), BaiPoint(100.0, 7.6e-6), BaiPoint(150.0, 1
 @pytest.mark.parametrize("point", BAI_POINTS, ids=lambda pt: f"{pt.speed}Hz-{pt.clearance * 1e6}um")
 def test_bai_orbit_and_multipliers_match_scipy_reference(point):
     sol, period = solve_bai(point)
-    ours = models.to_physical(sol.state, period)
+    ours = jc.to_physical(sol.state, period)
     ref_state, ref_mono, ref_residual = point.periodic_orbit(ours, iterations=1)
     assert ref_residual < 1e-9
-    scale = models.to_physical(np.ones(4), period)
+    scale = jc.to_physical(np.ones(4), period)
     np.testing.assert_allclose(ours / scale, ref_state / scale, rtol=0, atol=1e-8)
     assert match(sol.multipliers, np.linalg.eigvals(ref_mono)) < 1e-7
 
@@ -144,7 +145,7 @@ def test_rk4_converges_towards_dop853_at_reduced_order_across_contact_switching(
     errors = []
     for steps in (256, 512, 1024):
         sol = continuation.solve_orbit(JEFF, p, ig.settings("rk4", steps_per_unit=steps), [exact.state],
-                                       cold_guess=models.static_guess, tol=1e-12)
+                                       cold_guess=jc.static_guess, tol=1e-12)
         errors.append(match(sol.multipliers, exact.multipliers))
     ratios = np.array(errors[:-1]) / np.array(errors[1:])
     # a smooth problem gives 2^4 = 16 per halving; the C^1 contact force (the Jacobian has a
@@ -159,7 +160,7 @@ def test_zero_preload_law_is_bai_law():
     rng = np.random.default_rng(3)
     point = BaiPoint(130.0, 11.4e-6)
     p, period = bai_params(point)
-    scale = models.to_physical(np.ones(4), period)
+    scale = jc.to_physical(np.ones(4), period)
     for _ in range(30):
         tau, u = rng.uniform(0, 3), rng.normal(scale=12.0, size=4)
         ours = scaled_rhs(p, tau, u)
@@ -171,11 +172,11 @@ def test_zero_clearance_law_is_filipkovsky_preloaded_law():
     """c = 0, s0 = z0: delta_k = x cos a cos b_k + y cos a sin b_k + z0 sin a (2016 paper)."""
     rng = np.random.default_rng(4)
     alpha, z0, K, n = np.radians(26.0), 4e-6, 8e9, 7
-    p, period = models.jeffcott_params(speed=100.0, stiffness=K, clearance=0.0, contact_angle=alpha,
+    p, period = jc.jeffcott_params(speed=100.0, stiffness=K, clearance=0.0, contact_angle=alpha,
                                        axial_approach=z0, mass=3.0, damping=50.0, radial_load=0.0,
                                        n_balls=n, ball_diameter=11.51e-3, pitch_diameter=43.5e-3,
                                        cage_rotation=False)
-    scale = models.to_physical(np.ones(4), period)
+    scale = jc.to_physical(np.ones(4), period)
     b = 2 * np.pi * np.arange(n) / n
     for _ in range(20):
         u = rng.normal(scale=3.0, size=4)
@@ -193,10 +194,10 @@ def test_frozen_cage_orbit_is_static_equilibrium_with_expm_monodromy():
     and the monodromy over one period is expm(A) of the linearization (FD of the reference)."""
     point = BaiPoint(80.0, 7.6e-6)
     p, period = bai_params(point, cage_rotation=False)
-    sol = continuation.solve_orbit(JEFF, p, TIGHT, cold_guess=models.static_guess, tol=1e-12,
+    sol = continuation.solve_orbit(JEFF, p, TIGHT, cold_guess=jc.static_guess, tol=1e-12,
                                    transient_periods=200)
     assert sol.status == shooting.CONVERGED
-    scale = models.to_physical(np.ones(4), period)
+    scale = jc.to_physical(np.ones(4), period)
     eq = sol.state * scale
     frozen = lambda u: np.array(point.rhs(0.0, u))  # noqa: E731 - reference rhs at t = 0 (balls fixed)
     np.testing.assert_allclose(frozen(eq)[2:] / (scale[2] / period), 0.0, atol=1e-9)
@@ -214,9 +215,9 @@ def test_boundary_is_located_far_below_the_grid_step():
 
     def solve(speed, guess):
         p, _ = bai_params(BaiPoint(speed, clearance))
-        return continuation.solve_orbit(JEFF, p, opts, [guess], cold_guess=models.static_guess, tol=1e-11)
+        return continuation.solve_orbit(JEFF, p, opts, [guess], cold_guess=jc.static_guess, tol=1e-11)
 
-    start = solve(70.0, models.static_guess(bai_params(BaiPoint(70.0, clearance))[0]))
+    start = solve(70.0, jc.static_guess(bai_params(BaiPoint(70.0, clearance))[0]))
     grid = np.arange(70.0, 110.0, 2.0)
     states, mus = [start.state], []
     for speed in grid:
@@ -234,7 +235,7 @@ def test_boundary_is_located_far_below_the_grid_step():
     mu = []
     for pt, state in ((below, found.solution.state), (above, found.solution.state)):
         _, period = bai_params(pt)
-        _, mono, _ = pt.periodic_orbit(models.to_physical(state, period), iterations=2)
+        _, mono, _ = pt.periodic_orbit(jc.to_physical(state, period), iterations=2)
         mu.append(np.abs(np.linalg.eigvals(mono)).max())
     assert mu[0] < 1.0 < mu[1], mu
 
@@ -249,12 +250,12 @@ def test_preloaded_law_linearizes_to_the_bearing_radial_stiffness(preload):
     geom = bearing.preset("angular_contact_medium", 26)
     state = bearing.preload_state(geom, preload)
     mass = 3.0
-    p, period = models.jeffcott_params(
+    p, period = jc.jeffcott_params(
         speed=100.0, stiffness=state.contact_constant, clearance=0.0, contact_angle=state.contact_angle,
         axial_approach=state.axial_approach, mass=mass, damping=0.0, radial_load=0.0,
         n_balls=geom.n_balls, ball_diameter=geom.ball_diameter, pitch_diameter=geom.pitch_diameter)
     jac = np.empty((4, 4))
-    models.jac(JEFF.id, 0.3, np.zeros(4), p, jac)
+    models.dispatch.jac(JEFF.id, 0.3, np.zeros(4), p, jac)
     np.testing.assert_allclose(-jac[2, 0] * mass / period ** 2, state.radial_stiffness, rtol=1e-12)
     np.testing.assert_allclose(-jac[3, 1] * mass / period ** 2, state.radial_stiffness, rtol=1e-12)
     np.testing.assert_allclose(scaled_rhs(p, 0.3, np.zeros(4)), 0.0, atol=1e-9)
@@ -278,13 +279,13 @@ def test_fused_rhs_jac_equals_rhs_and_jac():
     rng = np.random.default_rng(5)
     for model, p, tau, u in _model_cases(rng):
         du, jac = np.empty(4), np.empty((4, 4))
-        models.rhs(model.id, tau, u, p, du)
-        models.jac(model.id, tau, u, p, jac)
+        models.dispatch.rhs(model.id, tau, u, p, du)
+        models.dispatch.jac(model.id, tau, u, p, jac)
         du2, jac2 = np.full(4, np.nan), np.full((4, 4), np.nan)
-        models.rhs_jac(model.id, tau, u, p, du2, jac2)
+        models.dispatch.rhs_jac(model.id, tau, u, p, du2, jac2)
         np.testing.assert_allclose(du2, du, rtol=1e-15, atol=1e-15 * np.abs(du).max())
         np.testing.assert_allclose(jac2, jac, rtol=1e-15, atol=1e-15 * np.abs(jac).max())
-        assert models.velocity_form(model.id)
+        assert model.velocity_form
         np.testing.assert_array_equal(jac[:2], [[0, 0, 1, 0], [0, 0, 0, 1]])   # [[0, I], [A, B]]
 
 
@@ -308,15 +309,15 @@ def test_variational_derivative_is_rhs_and_dense_j_phi():
         phi = rng.normal(size=(4, 4))
         z = np.concatenate([u, phi.ravel()])
         dz, jbuf = np.full(20, np.nan), np.empty((4, 4))
-        ig.derivative(model.id, tau, z, p, 4, True, dz, jbuf)
+        ig.derivative(model.kernel, tau, z, p, True, dz, jbuf)
         du, jac = np.empty(4), np.empty((4, 4))
-        models.rhs(model.id, tau, u, p, du)
-        models.jac(model.id, tau, u, p, jac)
+        models.dispatch.rhs(model.id, tau, u, p, du)
+        models.dispatch.jac(model.id, tau, u, p, jac)
         np.testing.assert_allclose(dz[:4], du, rtol=1e-15, atol=1e-15 * np.abs(du).max())
         dense = (jac @ phi).ravel()
         np.testing.assert_allclose(dz[4:], dense, rtol=1e-14, atol=1e-14 * np.abs(dense).max())
         ds = np.full(4, np.nan)
-        ig.derivative(model.id, tau, u, p, 4, False, ds, jbuf)
+        ig.derivative(model.kernel, tau, u, p, False, ds, jbuf)
         np.testing.assert_array_equal(ds, du)
 
 
@@ -344,7 +345,7 @@ def test_variational_flow_is_unchanged_by_the_fast_kernels(method):
     p, _ = bai_params(BaiPoint(80.0, 7.6e-6))
     opts = ig.settings(rtol=1e-10, atol=1e-12) if method == "dop853" else ig.settings("rk4", steps_per_unit=256)
     z0 = ig.initial_state(np.array([0.3, -10.5, 0.2, 1.9]), 4, True)
-    z, status, n_rhs, _ = ig.flow(JEFF.id, 0.0, 1.0, z0, p, 4, 2, True, opts, 0.0)
+    z, status, n_rhs, _ = ig.flow(JEFF.kernel, 0.0, 1.0, z0, p, True, opts, 0.0)
     n_before, z_before = _VARIATIONAL_BEFORE[method]
     assert status == ig.STATUS_OK and n_rhs == n_before
     np.testing.assert_allclose(z, z_before, rtol=0, atol=1e-12)
@@ -361,10 +362,10 @@ def test_step_loops_without_reference_counting_do_not_leak():
     _nrt_python.memsys_enable_stats()
     try:
         for opts in (ig.settings(), ig.settings("rk4", steps_per_unit=64)):
-            ig.flow(JEFF.id, 0.0, 1.0, z0, p, 4, 2, True, opts, 0.0)
+            ig.flow(JEFF.kernel, 0.0, 1.0, z0, p, True, opts, 0.0)
             before = rtsys.get_allocation_stats()
             for _ in range(5):
-                z, *_ = ig.flow(JEFF.id, 0.0, 1.0, z0, p, 4, 2, True, opts, 0.0)
+                z, *_ = ig.flow(JEFF.kernel, 0.0, 1.0, z0, p, True, opts, 0.0)
             del z
             after = rtsys.get_allocation_stats()
             assert after.alloc - before.alloc > 0
@@ -383,10 +384,10 @@ def test_numba_cache_is_keyed_on_all_kernel_sources(tmp_path):
     import rotorkernels
 
     src = Path(rotorkernels.__file__).parent
-    for f in src.glob("*.py"):
-        shutil.copy(f, tmp_path / f.name)
+    shutil.copytree(src, tmp_path, dirs_exist_ok=True, ignore=shutil.ignore_patterns("__pycache__"))
     assert rotorkernels._cache_dir(tmp_path) == rotorkernels._cache_dir(src)
     if not os.environ.get("NUMBA_CACHE_DIR"):
         assert numba.config.CACHE_DIR == rotorkernels._cache_dir(src)
-    (tmp_path / "models.py").write_text((src / "models.py").read_text() + "\n# edited\n")
+    model = tmp_path / "models" / "jeffcott_clearance.py"
+    model.write_text(model.read_text() + "\n# edited\n")
     assert rotorkernels._cache_dir(tmp_path) != rotorkernels._cache_dir(src)

@@ -34,9 +34,9 @@ def cube_4d(angles=(15.0, 40.0), preloads=(0.0, 200.0), step=6.0):
     ds = synthetic_cube(speed=np.arange(10.0, 250.01, step))
     ds = ds.drop_vars(["contact_angle", "preload"])
     ds = ds.expand_dims(contact_angle=np.asarray(angles, float), preload=np.asarray(preloads, float))
-    ds = ds.transpose(*schema.AXES, ...).copy(deep=True)
+    ds = ds.transpose(*schema.axes_of(schema.model_of({})), ...).copy(deep=True)
     for a in ("contact_angle", "preload"):
-        ds[a].attrs.update(units=schema.AXES[a][0], long_name=schema.AXES[a][1])
+        ds[a].attrs.update(units=schema.axes_of(schema.model_of({}))[a][0], long_name=schema.axes_of(schema.model_of({}))[a][1])
     preloaded = ds["preload"] > 0
     ds["max_abs_multiplier"] = ds["max_abs_multiplier"].where(~preloaded, 0.5 * ds["max_abs_multiplier"])
     ds["stable"] = xr.where(preloaded, 1, ds["stable"]).astype("int8")
@@ -47,7 +47,7 @@ def cube_4d(angles=(15.0, 40.0), preloads=(0.0, 200.0), step=6.0):
         ds[v] = ds[v].where(~diverged)
     ds["stable"] = xr.where(diverged, schema.INT_FILL, ds["stable"]).astype("int8")
     ds["bifurcation"] = xr.where(diverged, schema.INT_FILL, ds["bifurcation"]).astype("int8")
-    return ds.transpose(*schema.AXES, ...)
+    return ds.transpose(*schema.axes_of(schema.model_of({})), ...)
 
 
 def attractor_cube():

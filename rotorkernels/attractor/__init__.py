@@ -1,0 +1,16 @@
+"""Attractor diagnostics from a long run after a transient: stroboscopic Poincare samples
+(`poincare`), period-k detection (`period`), Lyapunov exponents by Benettin with QR
+(`lyapunov`), power spectrum, and one point's classification (`diagnosis`).
+
+Everything works in the models' scaled time tau = t / T (the forcing period is 1), so the
+kernels return exponents *per unit tau* (per forcing period); `lyapunov_si` divides by T to give
+1/s. Pure numerics: arrays in, arrays out, failures as status codes (the integrators' STATUS_*).
+"""
+from rotorkernels.attractor.diagnosis import (  # noqa: F401 (the package's API)
+    ATTRACTOR, CHAOTIC, DIVERGED, LLE_FLOOR, NOT_COMPUTED, PERIODIC, QUASI_PERIODIC, SIGMAS,
+    Attractor, classify, closed_curve, diagnose, exponents_of_orbit, periodic_orbit_of,
+    settle_on_orbit)
+from rotorkernels.attractor.lyapunov import (  # noqa: F401
+    Lyapunov, derived_lle, largest_lyapunov, lyapunov_si, lyapunov_spectrum)
+from rotorkernels.attractor.period import PERIOD_FLOOR, default_period_rtol, detect_period  # noqa: F401
+from rotorkernels.attractor.poincare import poincare, power_spectrum  # noqa: F401

@@ -1,0 +1,241 @@
+"""One parameter point: the attractor's class, period, exponents and (for a periodic one) the
+multipliers of its period-k orbit, from a transient, Poincare samples and, where needed, a
+Lyapunov run."""
+from collections import namedtuple
+
+import numpy as np
+
+from rotorkernels import floquet, integrators as ig, shooting
+from rotorkernels.attractor.lyapunov import _run_benettin
+from rotorkernels.attractor.period import default_period_rtol, detect_period
+from rotorkernels.attractor.poincare import _poincare
+
+ATTRACTOR = ("not_computed", "periodic", "quasi_periodic", "chaotic", "diverged")
+NOT_COMPUTED, PERIODIC, QUASI_PERIODIC, CHAOTIC, DIVERGED = range(5)
+
+# classify(): an exponent counts as positive (chaos) when lle > SIGMAS * stderr + LLE_FLOOR and
+# as negative (a stable orbit) when lle < -(SIGMAS * stderr + LLE_FLOOR); in between it is zero
+# within its uncertainty. LLE_FLOOR is per forcing period (per unit tau): a growth by
+# exp(0.002) per period cannot be told from zero in the runs used here (a few hundred to a few
+# thousand periods), and it keeps a slowly settling orbit or a torus from reading as chaos.
+SIGMAS = 3.0
+LLE_FLOOR = 2e-3
+
+# exponents, lle, lle_stderr in 1/s; multipliers: of the period-k orbit when the attractor is
+# periodic and its orbit was refined by shooting on k T (else NaN); derived: the exponents come
+# from those multipliers, not from a Lyapunov run.
+Attractor = namedtuple("Attractor", "code period lle lle_stderr samples end_state status periods_used "
+                                    "exponents multipliers derived")
+
+
+def closed_curve(samples, max_gap=np.pi / 3, max_jump=0.25, min_aspect=0.02):
+    """Whether the tail of the Poincare samples (second half) lies on one closed curve around
+    its centroid, as the section of a 2-torus does (heuristic, documented thresholds).
+
+    The tail is projected on its two principal axes; in polar coordinates about the centroid,
+    sorted by angle, the points must (1) surround the centroid, no angular gap over `max_gap`
+    (a circle map with irrational rotation fills its curve; settling period-k points leave k
+    clusters), (2) trace a continuous radius, no jump between angular neighbours over
+    `max_jump` x the mean radius (a chaotic cloud jumps), (3) not be collinear, second principal
+    extent >= `min_aspect` x the first (a slowly settling orbit near a period doubling
+    alternates along a line). Needs at least 16 tail points."""
+    s = np.asarray(samples, float)
+    tail = s[len(s) // 2:]
+    if len(tail) < 16 or not np.all(np.isfinite(tail)):
+        return False
+    x = tail - tail.mean(axis=0)
+    _, sv, vt = np.linalg.svd(x, full_matrices=False)
+    if sv[0] == 0.0 or len(sv) < 2 or sv[1] < min_aspect * sv[0]:
+        return False
+    xy = x @ vt[:2].T
+    ang = np.arctan2(xy[:, 1], xy[:, 0])
+    rad = np.hypot(xy[:, 0], xy[:, 1])
+    order = np.argsort(ang)
+    ang, rad = ang[order], rad[order]
+    gaps = np.diff(np.concatenate([ang, ang[:1] + 2 * np.pi]))
+    if gaps.max() > max_gap:
+        return False
+    jumps = np.abs(np.diff(np.concatenate([rad, rad[:1]])))
+    return bool(jumps.max() <= max_jump * rad.mean())
+
+
+def classify(samples, lle, lle_stderr, period_k, status=ig.STATUS_OK, *, sigmas=SIGMAS,
+             floor=LLE_FLOOR, check_curve=True):
+    """(code into ATTRACTOR, k) from the Poincare samples, the largest exponent and its standard
+    error, and the detected period.
+
+    - diverged: a failed integration (status != STATUS_OK), NaN samples, or a NaN exponent;
+    - periodic, k = period_k, when the samples repeat with period k > 0;
+    - chaotic when lle > sigmas * lle_stderr + floor (positive beyond its uncertainty);
+    - periodic with k = 0 (period not resolved: longer than max_period, or not settled to the
+      detection tolerance, typically close to a bifurcation) when lle < -(sigmas * lle_stderr +
+      floor);
+    - zero within the uncertainty: quasi_periodic -- unless check_curve is set and the tail
+      samples do not lie on a closed curve (`closed_curve`): then periodic, k = 0. This is what
+      an orbit next to a bifurcation looks like (a multiplier near -1 or +1: the state settles
+      onto, or drifts off, the orbit over thousands of periods, leaving clustered or collinear
+      points and |lle| ~ 0), and what the sweeps find within ~0.1 Hz of a period doubling.
+    lle, lle_stderr and floor share units: per forcing period (per unit tau) for the default
+    floor. `samples` may be None when only the exponent is known (no curve check then)."""
+    if status != ig.STATUS_OK or not np.isfinite(lle):
+        return DIVERGED, 0
+    if samples is not None and not np.all(np.isfinite(samples)):
+        return DIVERGED, 0
+    if period_k > 0:
+        return PERIODIC, int(period_k)
+    margin = sigmas * (lle_stderr if np.isfinite(lle_stderr) else np.inf) + floor
+    if lle > margin:
+        return CHAOTIC, 0
+    if lle < -margin:
+        return PERIODIC, 0
+    if check_curve and samples is not None and not closed_curve(samples):
+        return PERIODIC, 0
+    return QUASI_PERIODIC, 0
+
+
+
+def _shoot_k(model, state, p, opts, k):
+    """Newton on k forcing periods from a state already on (or next to) the orbit."""
+    return shooting.shoot(model.kernel, state.copy(), p, float(k), opts, max(1e-9, 10.0 * float(opts[ig.S_RTOL])), 10)
+
+
+def _minimal_period(model, state, p, opts, k, rel_tol):
+    """Smallest divisor d of k for which the converged period-k orbit through `state` returns
+    after d periods (within rel_tol x max(1, max|state|)). Samples that settle slowly onto a
+    period-d orbit whose multiplier is close to -1 alternate with a decay too slow for the
+    detection tolerance and pass for period 2 d; the Newton-converged orbit does not."""
+    scale = rel_tol * max(1.0, float(np.abs(state).max()))
+    for d in range(1, k):
+        if k % d:
+            continue
+        u, status, _, _ = ig.flow(model.kernel, 0.0, float(d), state.copy(), p, False, opts, 0.0)
+        if status == ig.STATUS_OK and np.abs(u - state).max() <= scale:
+            return d
+    return k
+
+
+def periodic_orbit_of(model, state, p, opts, k, rel_tol):
+    """Refine a period-k attractor through `state` by shooting on k T: (k_min, orbit state,
+    multipliers of the k_min-periodic orbit), or None when Newton does not converge. k is
+    reduced to the orbit's minimal period (`_minimal_period`)."""
+    orbit = _shoot_k(model, state, p, opts, k)
+    if orbit[2] != shooting.CONVERGED:
+        return None
+    d = _minimal_period(model, orbit[0], p, opts, k, rel_tol)
+    if d < k:
+        again = _shoot_k(model, orbit[0], p, opts, d)
+        if again[2] == shooting.CONVERGED:
+            orbit, k = again, d
+    return k, orbit[0], floquet.multipliers(orbit[1])
+
+
+def exponents_of_orbit(multipliers, k, period):
+    """The Lyapunov spectrum of a periodic orbit: ln|lambda_i| / (k T), largest first."""
+    return np.sort(np.log(np.abs(np.asarray(multipliers))))[::-1] / (k * period)
+
+
+def settle_on_orbit(model, u0, p, opts, orbit_state, max_periods, rel_tol):
+    """Integrate from u0 one forcing period at a time until the state is within rel_tol x
+    max(1, max|orbit_state|) of the periodic orbit's state. Returns (state, periods used,
+    reached). A start in the orbit's basin converges like max|lambda|^n; one on another
+    attractor does not, and its periods then count as that attractor's transient."""
+    u = np.asarray(u0, float).copy()
+    scale = rel_tol * max(1.0, float(np.abs(orbit_state).max()))
+    h = 0.0
+    for n in range(int(max_periods) + 1):
+        if np.abs(u - orbit_state).max() <= scale:
+            return u, n, True
+        if n == max_periods:
+            break
+        u, status, _, h = ig.flow(model.kernel, 0.0, 1.0, u, p, False, opts, h)
+        if status != ig.STATUS_OK:
+            break
+    return u, n, False
+
+
+def _on_stable_orbit(model, orbit_state, multipliers, period, n_samples, end_state):
+    lle_all = exponents_of_orbit(multipliers, 1, period)
+    samples = np.tile(orbit_state, (n_samples, 1))
+    return Attractor(PERIODIC, 1, float(lle_all[0]), 0.0, samples, end_state, ig.STATUS_OK, 0.0,
+                     lle_all, np.asarray(multipliers, complex), True)
+
+
+# diagnose(): periodic samples whose refined orbit has max|lambda| > 1 + UNSTABLE_MARGIN sit on an
+# unstable orbit, not an attractor; up to ESCAPES new transients follow, each from the state
+# kicked by ESCAPE_KICK x its size.
+UNSTABLE_MARGIN = 1e-6
+ESCAPES = 2
+ESCAPE_KICK = 1e-3
+
+
+def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_period=32,
+             period_rtol=None, orbit_lle=True, lyapunov_always=False, stable_orbit=None,
+             renorm_periods=1.0, max_periods=2000, n_blocks=10, rtol_stop=0.02, min_periods=None,
+             atol_stop=1e-4, align_periods=20.0, weighted=True):
+    """One parameter point from u0 at tau = 0: Poincare samples after a transient, their period
+    (tolerance `default_period_rtol(opts)` unless given), the largest exponent, and `classify`.
+
+    A periodic attractor (period k found) is refined by shooting on k T from the last sample
+    (already on the orbit: one or two iterations; `periodic_orbit_of`), and its multipliers are
+    returned. When orbit_lle is set and the orbit is stable, the exponents follow from them,
+    ln|lambda_i| / (k T), stderr 0 (derived=True) -- unless lyapunov_always.
+    stable_orbit = (state, multipliers) of a stable period-1 orbit found by shooting: the
+    transient stops as soon as the state reaches it (`settle_on_orbit`), and the point is that
+    orbit (samples = its state) with derived exponents -- the 'derive when stable' shortcut.
+    Samples that repeat on an unstable orbit (a start on or next to it) are retaken after a kick
+    off it (ESCAPES). Otherwise (no period, the shooting fails, or lyapunov_always) a Lyapunov
+    run starts where the samples end (no second transient). Returns an Attractor: code, period k, lle and lle_stderr
+    in 1/s (NaN when not computed), samples, end_state (the state at the last whole period
+    reached: the start of the next speed in a continuation of the attractor), status,
+    periods_used (measured Lyapunov periods; 0 when none ran), exponents [1/s], multipliers,
+    derived."""
+    if period_rtol is None:
+        period_rtol = default_period_rtol(opts)
+    u0 = np.asarray(u0, float)
+    if stable_orbit is not None and not lyapunov_always:
+        state, lams = stable_orbit
+        u0, used, reached = settle_on_orbit(model, u0, p, opts, state, n_transient, period_rtol)
+        if reached:
+            return _on_stable_orbit(model, state, lams, period, int(n_samples), state.copy())
+        n_transient -= used
+    nan = np.full(model.n_state, np.nan)
+    for attempt in range(1 + ESCAPES):
+        samples, status, end = _poincare(model.kernel, u0, p, opts, int(n_transient), int(n_samples))
+        if status != ig.STATUS_OK:
+            return Attractor(DIVERGED, 0, np.nan, np.nan, samples, end, int(status), 0.0, nan,
+                             nan + 0j, False)
+        k = detect_period(samples, max_period, period_rtol)
+        orbit = periodic_orbit_of(model, end, p, opts, k, period_rtol) if k > 0 and orbit_lle else None
+        # Samples that repeat on an unstable orbit only show a start too close to it (a weakly
+        # unstable orbit is left slowly): kick the state off it and take a new transient.
+        if orbit is None or np.abs(orbit[2]).max() <= 1.0 + UNSTABLE_MARGIN or attempt == ESCAPES:
+            break
+        u0 = end + ESCAPE_KICK * max(1.0, float(np.abs(end).max()))
+        n_transient = max(int(n_transient), 1)
+    lams = nan + 0j
+    if orbit is not None:
+        k, _, lams = orbit
+        if np.abs(lams).max() < 1.0 and not lyapunov_always:
+            expo = exponents_of_orbit(lams, k, period)
+            return Attractor(PERIODIC, k, float(expo[0]), 0.0, samples, end, int(status), 0.0,
+                             expo, lams, True)
+    if k > 0 and not orbit_lle and not lyapunov_always:
+        return Attractor(PERIODIC, k, np.nan, np.nan, samples, end, int(status), 0.0, nan, lams, False)
+    expo, stderr, n_done, lstatus, end2, _ = _run_benettin(
+        model, end, p, opts, 0, renorm_periods, max_periods, n_blocks, rtol_stop, min_periods,
+        atol_stop, align_periods, weighted)
+    code, k = classify(samples, expo[0], stderr[0], k, lstatus)
+    if code == PERIODIC and k == 0 and lstatus == ig.STATUS_OK:
+        # a contracting attractor whose samples had not settled: by the end of the Lyapunov run
+        # they have, so sample again there
+        again, status2, end3 = _poincare(model.kernel, end2, p, opts, 0, int(n_samples))
+        k2 = detect_period(again, max_period, period_rtol) if status2 == ig.STATUS_OK else 0
+        orbit = periodic_orbit_of(model, end3, p, opts, k2, period_rtol) if k2 > 0 else None
+        if orbit is not None and np.abs(orbit[2]).max() < 1.0:
+            k, _, lams = orbit
+            samples, end2 = again, end3
+    if code != PERIODIC or k == 0:
+        lams = nan + 0j
+    return Attractor(code, k, float(expo[0]) / period, float(stderr[0]) / period, samples, end2,
+                     int(lstatus), n_done * float(renorm_periods), np.asarray(expo) / period, lams,
+                     False)

@@ -1,0 +1,79 @@
+"""The model registry: one module per model (njit `rhs`, `jac`, `rhs_jac` and a `SPEC`), one
+line each in BUILTIN below.
+
+Further models come from modules named in $ROTORSWEEP_MODELS (comma-separated, importable, each
+defining `SPEC`): a user's own model needs no edit of rotorsweep. Dask workers inherit the
+variable from a local cluster; set it on remote workers too. With such models the kernels' dispatch
+is generated for the extended registry into the Numba cache directory instead of using the
+committed `dispatch.py`.
+"""
+import importlib
+import importlib.util
+import os
+import sys
+
+from rotorkernels.models import damped_mathieu, jeffcott_clearance, linear_oscillator
+from rotorkernels.models.spec import Built, ModelSpec, Observable, Parameter  # noqa: F401 (API)
+
+BUILTIN = (jeffcott_clearance, linear_oscillator, damped_mathieu)
+BUILTIN_NAMES = tuple(m.SPEC.name for m in BUILTIN)
+PLUGINS_VARIABLE = "ROTORSWEEP_MODELS"
+
+REGISTRY = {}
+
+
+class ModelError(ValueError):
+    """A model that cannot be registered or found."""
+
+
+def register(spec):
+    """Add a ModelSpec; names and kernel ids are unique."""
+    if spec.name in REGISTRY:
+        raise ModelError(f"model {spec.name!r} is registered twice")
+    clash = [s.name for s in REGISTRY.values() if s.id == spec.id]
+    if clash:
+        raise ModelError(f"model {spec.name!r}: kernel id {spec.id} is already used by {clash[0]!r}")
+    REGISTRY[spec.name] = spec
+
+
+def get(name):
+    try:
+        return REGISTRY[name]
+    except KeyError:
+        raise ModelError(f"unknown model {name!r}; registered: {', '.join(REGISTRY)}") from None
+
+
+def plugin_modules():
+    """Module names in $ROTORSWEEP_MODELS."""
+    return [m.strip() for m in os.environ.get(PLUGINS_VARIABLE, "").split(",") if m.strip()]
+
+
+def _load_dispatch():
+    """The committed dispatch for the built-in models, else one generated for the registry."""
+    if set(REGISTRY) == set(BUILTIN_NAMES):
+        from rotorkernels.models import dispatch
+        return dispatch
+    import numba
+
+    from rotorkernels.models.generate import dispatch_source
+
+    source = dispatch_source(REGISTRY.values())
+    os.makedirs(numba.config.CACHE_DIR, exist_ok=True)
+    path = os.path.join(numba.config.CACHE_DIR, "dispatch_plugins.py")
+    if not os.path.exists(path) or open(path).read() != source:
+        tmp = f"{path}.{os.getpid()}"
+        with open(tmp, "w") as fh:
+            fh.write(source)
+        os.replace(tmp, path)
+    spec = importlib.util.spec_from_file_location(f"{__name__}.dispatch", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+for _module in BUILTIN:
+    register(_module.SPEC)
+for _name in plugin_modules():
+    register(importlib.import_module(_name).SPEC)
+dispatch = _load_dispatch()

@@ -1,0 +1,104 @@
+"""What a model declares to the rest of rotorsweep: its parameters (config keys and sweep axes),
+how to build the kernel's parameter vector, its observables and checks.
+
+`pipeline/` knows a model only through its `ModelSpec` (looked up in `models.REGISTRY`); the
+kernels know it only through its integer id, dispatched by the generated `models.dispatch`.
+"""
+import math
+from dataclasses import dataclass, field
+from typing import Callable, NamedTuple
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One input of a model (or of the generic config sections, which use the same type).
+
+    kind: "str", "bool", "int", "float", "choice", "float_or" (a number or one of `choices`).
+    section: the config table the key lives in; None for a parameter that is only swept.
+    axis: the parameter may be swept (it becomes a cube dimension, in declaration order)."""
+    kind: str = "float"
+    default: object = None
+    required: bool = False
+    lo: float = -math.inf
+    hi: float = math.inf
+    lo_open: bool = False
+    hi_open: bool = False
+    choices: tuple = ()
+    pattern: str = ""
+    help: str = ""
+    name: str = ""
+    section: str | None = None
+    unit: str = "1"
+    long_name: str = ""
+    axis: bool = False
+    unset: float | None = None   # value of an axis neither given nor swept (None: derived per point)
+
+
+@dataclass(frozen=True)
+class Observable:
+    """A linear function of the physical state, reported per orbit (mean, half peak-to-peak) and
+    per Poincare sample: value = weights . to_physical(u)."""
+    name: str
+    weights: tuple
+    unit: str
+    long_name: str
+
+
+class Built(NamedTuple):
+    """A model's kernel inputs at one parameter point."""
+    p: np.ndarray       # kernel parameter vector (scaled units)
+    period: float       # the period [s] that scaled time tau = t / period refers to
+    derived: dict       # extra per-point values for the cube, e.g. {"contact_angle_used": 15.2}
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    name: str
+    id: int                         # kernel dispatch id (unique; the generated dispatch uses it)
+    module: str                     # module holding the njit rhs, jac, rhs_jac
+    n_position: int
+    description: str
+    version: str = "1"
+    velocity_form: bool = True      # u = (q, q'), dq/dtau = q': Jacobian [[0, I], [A, B]]
+    n_state_override: int = 0       # only for models not in velocity form
+    forced: bool = True             # periodic forcing of known period (shooting over it)
+    parameters: tuple = ()          # Parameter, in the order of the cube's dimensions for axes
+    continuation: tuple = ()        # parameters a sweep continues orbits along (first: default)
+    build: Callable = None          # build(values: {parameter name: value}) -> Built
+    cold_guess: Callable = None     # cold_guess(p) -> a scaled state to start a transient from
+    length_scale: float = 1e-6      # m per scaled length unit
+    observables: tuple = ()         # Observable
+    derived: dict = field(default_factory=dict)   # name -> (unit, long_name) of Built.derived
+    check: Callable = None          # check(data, axes) -> list of error strings (config level)
+    fill_defaults: Callable = None  # fill_defaults(data): defaults that depend on other keys
+
+    @property
+    def n_state(self):
+        return 2 * self.n_position if self.velocity_form else self.n_state_override
+
+    @property
+    def kernel(self):
+        """The kernel identity every njit function takes: (id, n_state, n_position, velocity form)."""
+        return (self.id, self.n_state, self.n_position, int(self.velocity_form))
+
+    @property
+    def axes(self):
+        return tuple(p.name for p in self.parameters if p.axis)
+
+    def parameter(self, name):
+        return next(p for p in self.parameters if p.name == name)
+
+    def to_physical(self, u, period):
+        """Scaled state(s) (..., n_state) -> SI: positions in m, velocities in m/s (velocity form)."""
+        u = np.asarray(u, float)
+        scale = np.full(self.n_state, self.length_scale)
+        if self.velocity_form:
+            scale[self.n_position:] /= period
+        return u * scale
+
+    def observe(self, u, period):
+        """Observables of scaled state(s) (..., n_state): array (..., n_observables) in SI."""
+        weights = np.array([o.weights for o in self.observables], float)
+        return self.to_physical(u, period)[..., :weights.shape[1]] @ weights.T
