@@ -74,10 +74,10 @@ def classify(lam):
 
 
 def approach(point_spec, opts, tol):
-    """State of the orbit at the point, continued along point_spec['approach'] (natural
-    continuation in speed, as a sweep does). Same chain as the pipeline's solve_chain: it only
-    continues past a failed speed where this raises, so a failure here costs the rest of the
-    chain before the error."""
+    """State of the orbit at the point, by natural continuation in speed along
+    point_spec['approach'] (continuation.solve_chain, as a sweep does). Where a speed fails,
+    solve_chain clears its history and goes on, so the error below comes after the whole chain
+    instead of at the failed speed: only the cost of a failure differs from stopping there."""
     params = [bai_params(speed, point_spec["clearance"])[0] for speed in point_spec["approach"]]
     chain = continuation.solve_chain(JEFF, params, opts, cold_guess=models.static_guess, tol=tol,
                                      transient_periods=100)
