@@ -17,6 +17,25 @@ def _pyplot():
     return plt
 
 
+def _tag(row):
+    """The setting's value as a point label: rtol or steps per period."""
+    return f"{row['value']:.0e}" if row["method"] == "dop853" else f"{int(row['value'])}"
+
+
+def _finish(plt, fig, ax, path, xlabel, ylabel, title, **legend):
+    """Log-log axes, labels, grid and legend; save to path."""
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    ax.grid(True, which="both", lw=0.3, alpha=0.5)
+    ax.legend(**legend)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def plot_wp(path, rows, refs, err_max_key, err_med_key, time_key, title, xlabel, ylabel, ref_key,
             peer=None, peer_err=None):
     plt = _pyplot()
@@ -37,8 +56,7 @@ def plot_wp(path, rows, refs, err_max_key, err_med_key, time_key, title, xlabel,
                         color="k", ms=8)
             if name == "stable":
                 for r in rs:
-                    tag = f"{r['value']:.0e}" if method == "dop853" else f"{int(r['value'])}"
-                    ax.annotate(tag, (max(r[err_max_key], 1e-16), r[time_key] * 1e3), fontsize=6,
+                    ax.annotate(_tag(r), (max(r[err_max_key], 1e-16), r[time_key] * 1e3), fontsize=6,
                                 xytext=(3, 3), textcoords="offset points", color="0.3")
         e = next(e for e in refs["points"] if e["name"] == name)
         ax.axvline(max(e["error_estimate"][ref_key], 1e-16), color=color, lw=0.6, ls=(0, (1, 3)))
@@ -55,16 +73,7 @@ def plot_wp(path, rows, refs, err_max_key, err_med_key, time_key, title, xlabel,
     ax.plot([], [], ":o", color="0.3", ms=3, mfc="none", label="median")
     ax.plot([], [], "x", color="k", label="a Newton solve failed")
     ax.plot([], [], ls=(0, (1, 3)), color="0.3", label="reference error estimate")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel(ylabel)
-    ax.set_title(title, fontsize=10)
-    ax.grid(True, which="both", lw=0.3, alpha=0.5)
-    ax.legend(fontsize=7, ncol=2, loc="lower left")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _finish(plt, fig, ax, path, xlabel, ylabel, title, fontsize=7, ncol=2, loc="lower left")
 
 
 def plot_boundary(path, rows, refs):
@@ -78,23 +87,14 @@ def plot_boundary(path, rows, refs):
         ax.plot(_floor([r["err"] for r in rs]), t, ":", marker=marker, mfc="none", ms=4, color=color,
                 label=f"{method}, timed bracket")
         for r in rs:
-            tag = f"{r['value']:.0e}" if method == "dop853" else f"{int(r['value'])}"
-            ax.annotate(tag, (max(r["err_max"], 1e-16), r["t"] * 1e3), fontsize=7, xytext=(3, 3),
+            ax.annotate(_tag(r), (max(r["err_max"], 1e-16), r["t"] * 1e3), fontsize=7, xytext=(3, 3),
                         textcoords="offset points", color="0.3")
     ax.axvline(max(refs["boundary"]["error_estimate_relative"], 1e-16), color="0.4", ls=(0, (1, 3)),
                label="reference error estimate")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("relative error of the boundary speed")
-    ax.set_ylabel("wall time per locate_boundary [ms]")
     b = BOUNDARY["bracket"]
-    ax.set_title(f"Stability boundary (period doubling near 80.88 Hz, {BOUNDARY['clearance'] * 1e6:.1f} um; "
-                 f"timed bracket {b[0]:g}-{b[1]:g} Hz)", fontsize=10)
-    ax.grid(True, which="both", lw=0.3, alpha=0.5)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _finish(plt, fig, ax, path, "relative error of the boundary speed", "wall time per locate_boundary [ms]",
+            f"Stability boundary (period doubling near 80.88 Hz, {BOUNDARY['clearance'] * 1e6:.1f} um; "
+            f"timed bracket {b[0]:g}-{b[1]:g} Hz)", fontsize=8)
 
 
 def plot_all(out, data, refs):
