@@ -68,6 +68,15 @@ class RoundRobin:
         return {key: entry[2] for key, entry in self.calls.items()}
 
 
+def add_render_options(ap, outputs, inputs, quick_dir):
+    """--render-only and --data: write `outputs` again from the JSON `inputs` without measuring."""
+    ap.add_argument("--render-only", action="store_true",
+                    help=f"measure nothing: {outputs} from the {inputs} in --data")
+    ap.add_argument("--data", type=Path, default=None,
+                    help=f"directory with the JSON for --render-only (default: docs/benchmarks/, "
+                         f"{quick_dir.relative_to(ROOT)}/ with --quick)")
+
+
 def _cpu_model():
     with contextlib.suppress(OSError):
         for line in Path("/proc/cpuinfo").read_text().splitlines():

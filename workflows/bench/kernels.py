@@ -33,7 +33,7 @@ import sys
 import time
 from pathlib import Path
 
-from workflows.bench.common import DOCS, ROOT, log, loadavg, machine_info
+from workflows.bench.common import DOCS, ROOT, add_render_options, log, loadavg, machine_info
 from workflows.bench.references import REF_NAME
 
 QUICK_OUT = ROOT / "build" / "bench_quick"
@@ -106,12 +106,7 @@ def main(argv=None):
     ap.add_argument("--out", type=Path, default=None, help="output directory (default docs/benchmarks/, "
                                                             "build/bench_quick/ with --quick)")
     ap.add_argument("--repeats", type=int, default=None, help="best-of-N repeats (default 25, quick 7)")
-    ap.add_argument("--render-only", action="store_true",
-                    help="measure nothing: README.md and plots from the results.json and reference_points.json "
-                         "in --data")
-    ap.add_argument("--data", type=Path, default=None,
-                    help="directory with the JSON for --render-only (default: docs/benchmarks/, "
-                         "build/bench_quick/ with --quick)")
+    add_render_options(ap, "README.md and plots", f"{RESULTS} and {REF_NAME}", QUICK_OUT)
     args = ap.parse_args(argv)
     default_dir = QUICK_OUT if args.quick else DOCS
     out = args.out or default_dir

@@ -42,7 +42,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from workflows.bench.common import DOCS, ROOT, log, loadavg, machine_info
+from workflows.bench.common import DOCS, ROOT, add_render_options, log, loadavg, machine_info
 from workflows.bench.scaling_analysis import analyse, verdict_text
 from workflows.bench.scaling_md import markdown
 from workflows.bench.scaling_plots import write_plot
@@ -160,10 +160,7 @@ def main(argv=None):
                     help="comma-separated chunk sizes [points] for 2 workers, or 'auto' (default): one "
                          "segment per chunk, 8 segments, the default and one chunk per worker")
     ap.add_argument("--no-plot", action="store_true")
-    ap.add_argument("--render-only", action="store_true",
-                    help="measure nothing: scaling.md (and .png) from the scaling.json in --data")
-    ap.add_argument("--data", type=Path, default=None, help="directory with scaling.json for --render-only "
-                    "(default: docs/benchmarks, build/bench_scaling_quick with --quick)")
+    add_render_options(ap, "scaling.md (and .png)", "scaling.json", QUICK_OUT)
     args = ap.parse_args(argv)
     default_dir = QUICK_OUT if args.quick else DOCS
     out = args.out or default_dir
