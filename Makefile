@@ -29,10 +29,10 @@ cascade: $(STAMP)  ## 19 um route to chaos, attractors swept up and down, with t
 	$(BIN)/rotorsweep report out/bai2006_cascade.nc -o out/bai2006_cascade_report --point speed=28
 
 bench: $(STAMP)  ## work-precision and baseline benchmarks -> docs/benchmarks/
-	$(BIN)/python -m workflows.bench_kernels
+	$(BIN)/python -m workflows.bench.kernels
 
 bench-scaling: $(STAMP)  ## 1 vs 2 workers, chunk sizes, memory of the Fig. 13 sweep (~7 min, quiet machine) -> docs/benchmarks/scaling.*
-	$(BIN)/python -m workflows.bench_scaling
+	$(BIN)/python -m workflows.bench.scaling
 
 clean:
 	rm -rf out .pytest_cache

@@ -1,23 +1,40 @@
 """Smoke tests of the benchmark workflows on tiny grids (the real runs: `make bench`,
-`make bench-scaling`)."""
+`make bench-scaling`), and the shipped write-ups against their JSON."""
 import importlib
 import json
+from pathlib import Path
 
 import pytest
 
+DOCS = Path(__file__).resolve().parents[1] / "docs" / "benchmarks"
+
 
 def test_bench_kernels_imports():
-    mod = importlib.import_module("workflows.bench_kernels")
-    assert callable(mod.main)
+    for name in ("kernels", "jeffcott", "references", "work_precision", "peer_baseline", "cfloor"):
+        importlib.import_module(f"workflows.bench.{name}")
+
+
+def test_shipped_writeups_are_their_json_rendered():
+    """docs/benchmarks/README.md and scaling.md are what the templates make of the JSON beside
+    them (`--render-only`), so a template edit shows up as a diff of the docs."""
+    from workflows.bench.kernels_md import render_readme
+    from workflows.bench.scaling_md import markdown
+
+    data = json.loads((DOCS / "results.json").read_text())
+    refs = json.loads((DOCS / "reference_points.json").read_text())
+    assert render_readme(data, refs) == (DOCS / "README.md").read_text()
+    scaling = json.loads((DOCS / "scaling.json").read_text())
+    assert markdown(scaling, DOCS / "scaling.png") == (DOCS / "scaling.md").read_text()
 
 
 @pytest.mark.timeout(180)
 def test_scaling_bench_core_on_a_tiny_grid(tmp_path):
     """1 and 2 workers with default chunks plus one chunk size on 2 workers, 8 points: the JSON
     holds every section and a complete record per run, the Markdown and the plot exist."""
-    from workflows import bench_scaling as bs
+    from workflows.bench import scaling as bs
+    from workflows.bench.scaling_scene import scene_config
 
-    cfg = bs.scene_config(speed=(100.0, 114.0, 2.0), clearances=(7.6e-6,), name="bench_smoke",
+    cfg = scene_config(speed=(100.0, 114.0, 2.0), clearances=(7.6e-6,), name="bench_smoke",
                           segment_length=4)
     assert cfg.n_points == 8 and cfg.data["scene"]["name"] == "bench_smoke"
     out = tmp_path / "out"

@@ -1,0 +1,225 @@
+"""The kernels as the benchmarks call them, on the Bai 2006 rotor (`jeffcott_clearance`).
+
+Every `rotorkernels` name the kernel benchmarks use is imported here and nowhere else in
+workflows/bench, so that a rename in the kernels is one edit. Scaled units: tau = t / T,
+lengths in um, so the basic orbit has period 1."""
+import numpy as np
+from numba import njit
+
+from rotorkernels import boundary, continuation, floquet, integrators as ig, models, shooting
+from rotorkernels.contact import ring_load
+
+from workflows.bench.scene import ATOL_OVER_RTOL, BAI, BOUNDARY, contact_angle, newton_tol, setting_label
+
+JEFF = models.JEFFCOTT_CLEARANCE
+LINEAR = models.LINEAR_OSCILLATOR
+N, NPOS = JEFF.n_state, JEFF.n_position
+CONVERGED = shooting.CONVERGED
+BoundaryError = boundary.BoundaryError
+multipliers = floquet.multipliers
+static_guess = models.static_guess
+to_physical = models.to_physical
+# indices of the parameter vector read by the Numba force loop below
+P_DAMP, P_GAIN, P_OFFSET, P_LOAD = models.P_DAMP, models.P_GAIN, models.P_OFFSET, models.P_LOAD
+P_COS_A, P_SIN_A, P_NBALLS, P_PHI0 = models.P_COS_A, models.P_SIN_A, models.P_NBALLS, models.P_PHI0
+P_CAGE, P_COS_D, P_SIN_D = models.P_CAGE, models.P_COS_D, models.P_SIN_D
+
+
+def bai_params(speed, clearance):
+    """(p, T) of the Bai 2006 rotor at shaft speed [Hz] and radial clearance [m]."""
+    return models.jeffcott_params(
+        speed=speed, stiffness=BAI["stiffness"], clearance=clearance,
+        contact_angle=contact_angle(clearance), axial_approach=0.0, mass=BAI["mass"],
+        damping=BAI["damping"], radial_load=BAI["radial_load"], n_balls=BAI["n_balls"],
+        ball_diameter=BAI["ball_diameter"], pitch_diameter=BAI["pitch_diameter"])
+
+
+def named_params(p):
+    """The parameter vector by name, for the scipy peer (which must not share our kernels)."""
+    return dict(damp=p[P_DAMP], gain=p[P_GAIN], offset=p[P_OFFSET], load=p[P_LOAD], cos_a=p[P_COS_A],
+                n_balls=int(p[P_NBALLS]), phi0=p[P_PHI0], cage=p[P_CAGE])
+
+
+def dop853(rtol, atol):
+    return ig.settings("dop853", rtol=rtol, atol=atol)
+
+
+def rk4(steps):
+    return ig.settings("rk4", steps_per_unit=steps)
+
+
+def make_setting(method, value):
+    """One benchmarked integrator setting (DOP853 at rtol `value` or RK4 at `value` steps)."""
+    opts = dop853(value, value * ATOL_OVER_RTOL) if method == "dop853" else rk4(value)
+    return dict(method=method, value=value, label=setting_label(method, value), opts=opts,
+                tol=newton_tol(method, value))
+
+
+def orbit(p, guess, opts, tol, max_iter=30):
+    return shooting.periodic_orbit(JEFF, guess, p, opts, tol=tol, max_iter=max_iter)
+
+
+def point(p, guess, opts, tol):
+    """One point the way the pipeline computes it: shooting, then the Floquet multipliers."""
+    sol = orbit(p, guess, opts, tol)
+    return sol, floquet.multipliers(sol.monodromy)
+
+
+def classify(lam):
+    """(max |lambda|, stable, crossing type of the leading multiplier as words)."""
+    max_abs, stable, _ = floquet.classify(lam)
+    kind = ["fold (+1)", "period doubling (-1)", "Neimark-Sacker (complex pair)"][
+        floquet.crossing_type(lam[0]) - 1]
+    return max_abs, stable, kind
+
+
+def approach(point_spec, opts, tol):
+    """State of the orbit at the point, by natural continuation in speed along
+    point_spec['approach'] (continuation.solve_chain, as a sweep does). Where a speed fails,
+    solve_chain clears its history and goes on, so the error below comes after the whole chain
+    instead of at the failed speed: only the cost of a failure differs from stopping there."""
+    params = [bai_params(speed, point_spec["clearance"])[0] for speed in point_spec["approach"]]
+    chain = continuation.solve_chain(JEFF, params, opts, cold_guess=models.static_guess, tol=tol,
+                                     transient_periods=100)
+    for speed, sol in zip(point_spec["approach"], chain):
+        if sol.status != CONVERGED:
+            raise RuntimeError(f"no orbit at {speed} Hz on the approach to {point_spec['name']}")
+    return chain[-1].state
+
+
+def flow(p, z0, opts, variational, t1=1.0, h0=0.0, model=JEFF):
+    """(z, status ok, n_rhs) of one integration over [0, t1] (scaled time)."""
+    z, status, n_rhs, _ = ig.flow(model.id, 0.0, float(t1), z0, p, model.n_state, model.n_position,
+                                  variational, opts, float(h0))
+    return z, status == ig.STATUS_OK, n_rhs
+
+
+def initial_state(u0, variational, n=N):
+    return ig.initial_state(np.asarray(u0, float), n, variational)
+
+
+def monodromies(p, state, opts, placements):
+    """Monodromy (flattened) of one variational period from `state`, once per initial step h0."""
+    z0 = initial_state(state, True)
+    out = []
+    for h0 in placements:
+        z, ok, _ = flow(p, z0, opts, True, h0=h0)
+        out.append(z[N:].copy() if ok else np.full(N * N, np.nan))
+    return np.array(out)
+
+
+def fixed_point_residual(p, state, opts):
+    """Relative return-map residual of `state` over one period (inf if the integration fails)."""
+    z, ok, _ = flow(p, np.array(state, float), opts, False)
+    return float(np.max(np.abs(z - state)) / max(1.0, np.max(np.abs(state)))) if ok else np.inf
+
+
+def largest_lyapunov(p, u0, opts, n_transient=300, n_periods=2000, n_blocks=10):
+    """Largest Lyapunov exponent per forcing period (Benettin, one tangent vector renormalised
+    every period) with the standard error of its block means."""
+    z, _, _ = flow(p, np.array(u0, float), opts, False, t1=n_transient)
+    v = np.array([1.0, 0.3, -0.2, 0.1])
+    v /= np.linalg.norm(v)
+    logs = np.empty(n_periods)
+    for k in range(n_periods):
+        zz, ok, _ = flow(p, initial_state(z, True), opts, True)
+        if not ok:
+            return np.nan, np.nan
+        z = zz[:N].copy()
+        v = zz[N:].reshape(N, N) @ v
+        norm = np.linalg.norm(v)
+        logs[k] = np.log(norm)
+        v /= norm
+    blocks = logs.reshape(n_blocks, -1).mean(axis=1)
+    return float(logs.mean()), float(blocks.std() / np.sqrt(n_blocks - 1))
+
+
+def sample_orbit(p, state, n_states, opts):
+    """n_states states along one period of the orbit through `state`."""
+    return shooting.sample_orbit(JEFF.id, state, p, N, NPOS, 1.0, n_states, opts)
+
+
+# --- stability boundary -------------------------------------------------------------------------
+
+def boundary_solver(opts, tol):
+    clearance = BOUNDARY["clearance"]
+
+    def solve(speed, guess):
+        p, _ = bai_params(speed, clearance)
+        return continuation.solve_orbit(JEFF, p, opts, [guess], cold_guess=models.static_guess,
+                                        tol=tol, n_samples=1)
+    return solve
+
+
+def locate(opts, tol, states, xtol_rel, bracket=None):
+    """The period-doubling boundary (`boundary.locate_boundary`) in the bracket [Hz], from the
+    orbit states at its ends."""
+    a, b = bracket or BOUNDARY["bracket"]
+    return boundary.locate_boundary(boundary_solver(opts, tol), a, b, states[0], states[1],
+                                    xtol_rel=xtol_rel)
+
+
+# --- per-evaluation loops for the C floor comparison --------------------------------------------
+
+@njit(cache=True)
+def _rhs_loop(model, taus, states, p):
+    """models.rhs over many states, the way an integrator calls it (array arguments)."""
+    du = np.empty(states.shape[1])
+    acc = 0.0
+    for i in range(taus.size):
+        models.rhs(model, taus[i], states[i], p, du)
+        acc += du[2] + du[3]
+    return acc
+
+
+@njit(cache=True)
+def _force_loop(taus, states, p):
+    """The same right-hand side from contact.ring_load with scalar arguments only."""
+    acc = 0.0
+    n_balls = int(p[P_NBALLS])
+    for i in range(taus.size):
+        theta = p[P_PHI0] + p[P_CAGE] * 2.0 * np.pi * taus[i] / p[P_NBALLS]
+        fx, fy, _, _, _, _, _, _, _ = ring_load(
+            states[i, 0], states[i, 1], 0.0, p[P_OFFSET], p[P_COS_A], p[P_SIN_A],
+            n_balls, np.cos(theta), np.sin(theta), p[P_COS_D], p[P_SIN_D])
+        du2 = -p[P_DAMP] * states[i, 2] - p[P_GAIN] * fx
+        du3 = -p[P_DAMP] * states[i, 3] - p[P_GAIN] * fy - p[P_LOAD]
+        acc += du2 + du3
+    return acc
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def _variational_steps(model, taus, states, p, z, dz, jbuf):
+    n = states.shape[1]
+    acc = 0.0
+    for i in range(taus.size):
+        for k in range(n):
+            z[k] = states[i, k]
+        ig._derivative(model, taus[i], z, p, n, True, dz, jbuf)
+        for k in range(2, n + n * n):
+            acc += dz[k]
+    return acc
+
+
+@njit(cache=True)
+def _variational_loop(model, taus, states, p):
+    """integrators._derivative with the variational equations (20 components) over many states,
+    in a loop compiled like the integrators' step loops (inlined, no reference counting), so that
+    it is the derivative's share of an evaluation inside `flow`."""
+    n = states.shape[1]
+    z = np.zeros(n + n * n)
+    for k in range(n):
+        z[n + k * n + k] = 1.0
+    return _variational_steps(model, taus, states, p, z, np.empty(n + n * n), np.empty((n, n)))
+
+
+def rhs_loop(taus, states, p):
+    return _rhs_loop(JEFF.id, taus, states, p)
+
+
+def force_loop(taus, states, p):
+    return _force_loop(taus, states, p)
+
+
+def variational_loop(taus, states, p, model=JEFF):
+    return _variational_loop(model.id, taus, states, p)
