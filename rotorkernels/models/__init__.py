@@ -33,6 +33,11 @@ def register(spec):
     clash = [s.name for s in REGISTRY.values() if s.id == spec.id]
     if clash:
         raise ModelError(f"model {spec.name!r}: kernel id {spec.id} is already used by {clash[0]!r}")
+    for par in spec.parameters:
+        # a default would count as "given" and clash with sweeping the axis: `unset` is its value
+        if par.axis and par.section is not None and par.default is not None:
+            raise ModelError(f"model {spec.name!r}: axis parameter {par.name!r} has a default; "
+                             "give it as `unset` (the value when neither given nor swept)")
     REGISTRY[spec.name] = spec
 
 

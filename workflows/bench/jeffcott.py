@@ -8,26 +8,27 @@ from numba import njit
 
 from rotorkernels import boundary, continuation, floquet, integrators as ig, models, shooting
 from rotorkernels.contact import ring_load
+from rotorkernels.models import jeffcott_clearance as jc
 
 from workflows.bench.scene import ATOL_OVER_RTOL, BAI, BOUNDARY, contact_angle, newton_tol, setting_label
 
-JEFF = models.JEFFCOTT_CLEARANCE
-LINEAR = models.LINEAR_OSCILLATOR
+JEFF = models.get("jeffcott_clearance")
+LINEAR = models.get("linear_oscillator")
 N, NPOS = JEFF.n_state, JEFF.n_position
 CONVERGED = shooting.CONVERGED
 BoundaryError = boundary.BoundaryError
 multipliers = floquet.multipliers
-static_guess = models.static_guess
-to_physical = models.to_physical
+static_guess = jc.static_guess
+to_physical = jc.to_physical
 # indices of the parameter vector read by the Numba force loop below
-P_DAMP, P_GAIN, P_OFFSET, P_LOAD = models.P_DAMP, models.P_GAIN, models.P_OFFSET, models.P_LOAD
-P_COS_A, P_SIN_A, P_NBALLS, P_PHI0 = models.P_COS_A, models.P_SIN_A, models.P_NBALLS, models.P_PHI0
-P_CAGE, P_COS_D, P_SIN_D = models.P_CAGE, models.P_COS_D, models.P_SIN_D
+P_DAMP, P_GAIN, P_OFFSET, P_LOAD = jc.P_DAMP, jc.P_GAIN, jc.P_OFFSET, jc.P_LOAD
+P_COS_A, P_SIN_A, P_NBALLS, P_PHI0 = jc.P_COS_A, jc.P_SIN_A, jc.P_NBALLS, jc.P_PHI0
+P_CAGE, P_COS_D, P_SIN_D = jc.P_CAGE, jc.P_COS_D, jc.P_SIN_D
 
 
 def bai_params(speed, clearance):
     """(p, T) of the Bai 2006 rotor at shaft speed [Hz] and radial clearance [m]."""
-    return models.jeffcott_params(
+    return jc.jeffcott_params(
         speed=speed, stiffness=BAI["stiffness"], clearance=clearance,
         contact_angle=contact_angle(clearance), axial_approach=0.0, mass=BAI["mass"],
         damping=BAI["damping"], radial_load=BAI["radial_load"], n_balls=BAI["n_balls"],
@@ -75,22 +76,19 @@ def classify(lam):
 
 def approach(point_spec, opts, tol):
     """State of the orbit at the point, by natural continuation in speed along
-    point_spec['approach'] (continuation.solve_chain, as a sweep does). Where a speed fails,
-    solve_chain clears its history and goes on, so the error below comes after the whole chain
-    instead of at the failed speed: only the cost of a failure differs from stopping there."""
+    point_spec['approach'] (continuation.natural, as a sweep does), stopping at a failed speed."""
     params = [bai_params(speed, point_spec["clearance"])[0] for speed in point_spec["approach"]]
-    chain = continuation.solve_chain(JEFF, params, opts, cold_guess=models.static_guess, tol=tol,
-                                     transient_periods=100)
+    chain = continuation.natural(JEFF, params, opts, cold_guess=jc.static_guess, tol=tol,
+                                 transient_periods=100)
     for speed, sol in zip(point_spec["approach"], chain):
         if sol.status != CONVERGED:
             raise RuntimeError(f"no orbit at {speed} Hz on the approach to {point_spec['name']}")
-    return chain[-1].state
+    return sol.state
 
 
 def flow(p, z0, opts, variational, t1=1.0, h0=0.0, model=JEFF):
     """(z, status ok, n_rhs) of one integration over [0, t1] (scaled time)."""
-    z, status, n_rhs, _ = ig.flow(model.id, 0.0, float(t1), z0, p, model.n_state, model.n_position,
-                                  variational, opts, float(h0))
+    z, status, n_rhs, _ = ig.flow(model.kernel, 0.0, float(t1), z0, p, variational, opts, float(h0))
     return z, status == ig.STATUS_OK, n_rhs
 
 
@@ -136,7 +134,7 @@ def largest_lyapunov(p, u0, opts, n_transient=300, n_periods=2000, n_blocks=10):
 
 def sample_orbit(p, state, n_states, opts):
     """n_states states along one period of the orbit through `state`."""
-    return shooting.sample_orbit(JEFF.id, state, p, N, NPOS, 1.0, n_states, opts)
+    return shooting.sample_orbit(JEFF.kernel, state, p, 1.0, n_states, opts)
 
 
 # --- stability boundary -------------------------------------------------------------------------
@@ -146,7 +144,7 @@ def boundary_solver(opts, tol):
 
     def solve(speed, guess):
         p, _ = bai_params(speed, clearance)
-        return continuation.solve_orbit(JEFF, p, opts, [guess], cold_guess=models.static_guess,
+        return continuation.solve_orbit(JEFF, p, opts, [guess], cold_guess=jc.static_guess,
                                         tol=tol, n_samples=1)
     return solve
 
@@ -163,11 +161,11 @@ def locate(opts, tol, states, xtol_rel, bracket=None):
 
 @njit(cache=True)
 def _rhs_loop(model, taus, states, p):
-    """models.rhs over many states, the way an integrator calls it (array arguments)."""
+    """The model dispatch's rhs over many states, the way an integrator calls it (array arguments)."""
     du = np.empty(states.shape[1])
     acc = 0.0
     for i in range(taus.size):
-        models.rhs(model, taus[i], states[i], p, du)
+        models.dispatch.rhs(model, taus[i], states[i], p, du)
         acc += du[2] + du[3]
     return acc
 
@@ -189,20 +187,20 @@ def _force_loop(taus, states, p):
 
 
 @njit(cache=True, nogil=True, _nrt=False)
-def _variational_steps(model, taus, states, p, z, dz, jbuf):
+def _variational_steps(kernel, taus, states, p, z, dz, jbuf):
     n = states.shape[1]
     acc = 0.0
     for i in range(taus.size):
         for k in range(n):
             z[k] = states[i, k]
-        ig._derivative(model, taus[i], z, p, n, True, dz, jbuf)
+        ig._derivative(kernel, taus[i], z, p, True, dz, jbuf)
         for k in range(2, n + n * n):
             acc += dz[k]
     return acc
 
 
 @njit(cache=True)
-def _variational_loop(model, taus, states, p):
+def _variational_loop(kernel, taus, states, p):
     """integrators._derivative with the variational equations (20 components) over many states,
     in a loop compiled like the integrators' step loops (inlined, no reference counting), so that
     it is the derivative's share of an evaluation inside `flow`."""
@@ -210,7 +208,7 @@ def _variational_loop(model, taus, states, p):
     z = np.zeros(n + n * n)
     for k in range(n):
         z[n + k * n + k] = 1.0
-    return _variational_steps(model, taus, states, p, z, np.empty(n + n * n), np.empty((n, n)))
+    return _variational_steps(kernel, taus, states, p, z, np.empty(n + n * n), np.empty((n, n)))
 
 
 def rhs_loop(taus, states, p):
@@ -222,4 +220,4 @@ def force_loop(taus, states, p):
 
 
 def variational_loop(taus, states, p, model=JEFF):
-    return _variational_loop(model.id, taus, states, p)
+    return _variational_loop(model.kernel, taus, states, p)
