@@ -173,6 +173,24 @@ def test_map_edges_are_the_refined_boundaries():
     assert bk == edges
 
 
+def test_figures_run_along_the_cubes_continued_axis():
+    """The x axis of every figure is the cube's continued_axis attribute; cubes written before it
+    fall back to the first swept dimension (speed)."""
+    ds = synthetic_cube()
+    assert "continued_axis" not in ds.attrs and report.continued_axis(ds) == "speed"
+    assert [f.caption(ds) for f in report.figures_for(ds)][1] == "Largest Floquet multiplier vs shaft speed"
+    ds.attrs["continued_axis"] = "clearance"
+    plan = report.axes_plan(ds)
+    assert (plan["x"], plan["y"]) == ("clearance", "speed")
+    assert report.figures_for(ds)[1].caption(ds) == "Largest Floquet multiplier vs radial clearance"
+    segments, _ = report.line_segments(ds, {"speed": 100.0})
+    assert segments[0][0] < ds["clearance"].values[0] and segments[-1][1] > ds["clearance"].values[-1]
+    assert segments[-1][1] < 1e-4       # clearance units, not speeds
+    fig = report.fig_stability_map(ds, "matplotlib")
+    assert {round(y0 + report.RECT_HALF) for r in _elements(fig, "Rectangles")
+            for _, y0, _, _ in r.array(["x0", "y0", "x1", "y1"])} == set(range(ds.sizes["speed"]))
+
+
 def test_map_without_boundary_table_puts_edges_midway():
     ds = synthetic_cube(speed=np.arange(70.0, 110.0, 2.0), clearance=[3.8e-6])
     segments, refined = report.line_segments(ds, {})

@@ -4,10 +4,9 @@ import numpy as np
 
 from pipeline import schema
 from pipeline.report import style
-from pipeline.report.cubeinfo import (axis_edges, continued_axis, has_attractor, has_down, select,
-                                      sweep_labels)
-from pipeline.report.figures.panels import line_figure, points
-from pipeline.report.plan import axis_label, line_plan
+from pipeline.report.cubeinfo import continued_axis, has_attractor, has_down, select, sweep_labels
+from pipeline.report.figures.panels import line_figure, panel_opts, points
+from pipeline.report.plan import line_plan
 from pipeline.report.registry import Figure, register
 from pipeline.report.stability import class_colour, class_name, line_segments
 
@@ -108,13 +107,7 @@ def _bif_panel(hv, ds, where, backend, slot, span_keys):
         mark = points(hv, hs, np.full(hs.size, ylim[1] - 0.04 * height), [x, "poincare_x"],
                       "hysteresis (up and down differ)")
         elements.append(mark.opts(**style.marker_style(backend, HYSTERESIS_COLOUR, 7, "v"), backend=backend))
-    overlay = hv.Overlay(elements).opts(
-        xlim=axis_edges(grid), ylim=ylim, title=slot.title, show_legend=slot.legend,
-        legend_position="right", xlabel=axis_label(ds, x) if slot.show_x else "",
-        ylabel="Poincaré x [µm]" if slot.show_y else "", fontsize=style.fonts(backend), backend=backend)
-    if backend == "matplotlib":
-        overlay = overlay.opts(hooks=[style.legend_markers], backend=backend)
-    return overlay
+    return hv.Overlay(elements).opts(ylim=ylim, **panel_opts(ds, slot, backend, "Poincaré x [µm]", grid))
 
 
 def fig_bifurcation(ds, backend="bokeh"):

@@ -3,10 +3,9 @@ import numpy as np
 
 from pipeline import schema
 from pipeline.report import style
-from pipeline.report.cubeinfo import (axis_edges, continued_axis, has_attractor, has_down, select,
-                                      sweep_labels)
-from pipeline.report.figures.panels import line_figure, points
-from pipeline.report.plan import axis_display, axis_label
+from pipeline.report.cubeinfo import continued_axis, has_attractor, has_down, select, sweep_labels
+from pipeline.report.figures.panels import line_figure, panel_opts, points
+from pipeline.report.plan import axis_display
 from pipeline.report.registry import Figure, register
 
 LLE_COLOURS = {"integrated": "#0072B2", "derived": "#999999", "chaotic": "#CC0000", "band": "#56B4E9"}
@@ -51,14 +50,8 @@ def _lle_panel(hv, ds, where, backend, slot):
                         .opts(color=style.SWEEP_COLOURS[1], **style.line_style(backend, 1.2, dash=True),
                               backend=backend))
     elements += _estimates(hv, x, grid, lle, line, backend)
-    overlay = hv.Overlay(elements).opts(
-        xlim=axis_edges(grid), title=slot.title, show_legend=slot.legend, legend_position="right",
-        show_grid=True, xlabel=axis_label(ds, x) if slot.show_x else "",
-        ylabel="largest Lyapunov exp. [1/s]" if slot.show_y else "", fontsize=style.fonts(backend),
-        backend=backend)
-    if backend == "matplotlib":
-        overlay = overlay.opts(hooks=[style.legend_markers], backend=backend)
-    return overlay
+    return hv.Overlay(elements).opts(show_grid=True,
+                                     **panel_opts(ds, slot, backend, "largest Lyapunov exp. [1/s]", grid))
 
 
 def fig_lle(ds, backend="bokeh"):

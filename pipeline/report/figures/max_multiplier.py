@@ -4,8 +4,8 @@ import numpy as np
 
 from pipeline.report import style
 from pipeline.report.cubeinfo import continued_axis, select
-from pipeline.report.figures.panels import Sizes, facet_figure
-from pipeline.report.plan import axes_plan, axis_display, axis_label, where_label
+from pipeline.report.figures.panels import Sizes, facet_figure, panel_opts
+from pipeline.report.plan import axes_plan, axis_display, where_label
 from pipeline.report.registry import Figure, register
 
 
@@ -27,22 +27,21 @@ def _mu_panel(hv, ds, where, backend, slot, y):
     sub = select(ds, where)
     x = continued_axis(ds)
     grid = sub[x].values
+    # no explicit alpha (style.line_style): bokeh would then draw unselected lines opaque
+    width = {"line_width": 2} if backend == "bokeh" else {"linewidth": 1.8}
     curves = []
     for i, v in enumerate(sub[y].values if y else [None]):
         line = sub.sel({y: v}) if y else sub
         c = hv.Curve((grid, line["max_abs_multiplier"].values), x, "max_abs_multiplier",
                      label=where_label(ds, {y: v}) if y else "max |λ|")
-        curves.append(c.opts(color=style.LINE_COLOURS[i % len(style.LINE_COLOURS)], backend=backend,
-                             **style.line_style(backend, 2 if backend == "bokeh" else 1.8)))
+        curves.append(c.opts(color=style.LINE_COLOURS[i % len(style.LINE_COLOURS)], backend=backend, **width))
     ref = hv.Curve(([grid.min(), grid.max()], [1.0, 1.0]), x, "max_abs_multiplier",
                    label="|λ| = 1 (stability limit)")
-    ref = ref.opts(color="#C00000", **style.line_style(backend, 2 if backend == "bokeh" else 1.5, dash=True),
-                   backend=backend)
-    return hv.Overlay(curves + [ref]).opts(
-        xlabel=axis_label(ds, x) if slot.show_x else "",
-        ylabel="max |multiplier|" if slot.show_y else "",
-        title=slot.title, show_legend=slot.legend, legend_position="right", show_grid=True,
-        fontsize=style.fonts(backend), backend=backend)
+    if backend == "bokeh":
+        ref = ref.opts(color="#C00000", line_dash="dashed", line_width=2, backend=backend)
+    else:
+        ref = ref.opts(color="#C00000", linestyle="--", linewidth=1.5, backend=backend)
+    return hv.Overlay(curves + [ref]).opts(show_grid=True, **panel_opts(ds, slot, backend, "max |multiplier|"))
 
 
 def fig_max_multiplier(ds, backend="bokeh"):

@@ -5,7 +5,8 @@ from typing import NamedTuple
 import numpy as np
 
 from pipeline.report import style
-from pipeline.report.plan import axes_plan, figure_title, line_plan, where_label
+from pipeline.report.cubeinfo import axis_edges, continued_axis
+from pipeline.report.plan import axes_plan, axis_label, figure_title, line_plan, where_label
 
 
 class Slot(NamedTuple):
@@ -33,6 +34,15 @@ def points(hv, x, y, kdims, label):
     if not x.size:
         x, y = np.array([np.nan]), np.array([np.nan])
     return hv.Points((x, y), kdims, label=label)
+
+
+def panel_opts(ds, slot, backend, ylabel, grid=None):
+    """Options every panel shares: its title, the legend on the right, the axis labels where the
+    slot shows them, fonts; with `grid` (the continued axis) x limits half a step beyond it."""
+    opts = {"title": slot.title, "show_legend": slot.legend, "legend_position": "right",
+            "xlabel": axis_label(ds, continued_axis(ds)) if slot.show_x else "",
+            "ylabel": ylabel if slot.show_y else "", "fontsize": style.fonts(backend), "backend": backend}
+    return opts if grid is None else {**opts, "xlim": axis_edges(grid)}
 
 
 def _draw_panels(ds, backend, plan, title, panel, columns):
@@ -68,7 +78,8 @@ def facet_figure(ds, backend, head, panel, sizes):
 
 
 def line_figure(ds, backend, head, panel):
-    """One wide panel per line (line_plan), stacked in one column (two beyond six lines)."""
+    """One wide panel per line (line_plan), stacked in one column (two beyond six lines); in
+    matplotlib with legend markers at a readable size."""
     plan = line_plan(ds)
     title = figure_title(ds, head, plan)
     n = len(plan["shown"])
@@ -79,7 +90,7 @@ def line_figure(ds, backend, head, panel):
                          backend=backend) for p in panels]
     else:
         aspect = 2.6 if n == 1 else 4.6 if columns == 1 else 2.2
-        panels = [p.opts(aspect=aspect, backend=backend) for p in panels]
+        panels = [p.opts(aspect=aspect, hooks=[style.legend_markers], backend=backend) for p in panels]
     height = 2.1 * -(-n // columns) + 0.8
     if backend == "matplotlib" and n > 1:
         return hv.Layout(panels).cols(columns).opts(

@@ -3,8 +3,7 @@ one band per value of the first other swept axis, one panel per facet combinatio
 import numpy as np
 
 from pipeline.report import style
-from pipeline.report.cubeinfo import axis_edges
-from pipeline.report.figures.panels import Sizes, facet_figure
+from pipeline.report.figures.panels import Sizes, facet_figure, panel_opts
 from pipeline.report.plan import axes_plan, axis_display, axis_label
 from pipeline.report.registry import Figure, register
 from pipeline.report.stability import (class_colour, class_keys, class_name, line_segments,
@@ -58,12 +57,8 @@ def _map_panel(hv, ds, where, backend, slot, plan, keys):
     else:
         factor = axis_display(ds, y)[0]
         yticks, nbands = [(i, f"{v * factor:.4g}") for i, v in enumerate(ds[y].values)], ds.sizes[y]
-    return hv.Overlay(elements).opts(
-        xlim=axis_edges(grid), ylim=(-0.5, nbands - 0.5), yticks=yticks,
-        xlabel=axis_label(ds, x) if slot.show_x else "",
-        ylabel=axis_label(ds, y) if (y and slot.show_y) else "",
-        title=slot.title, show_legend=slot.legend, legend_position="right",
-        fontsize=style.fonts(backend), backend=backend)
+    return hv.Overlay(elements).opts(ylim=(-0.5, nbands - 0.5), yticks=yticks,
+                                     **panel_opts(ds, slot, backend, axis_label(ds, y) if y else "", grid))
 
 
 def fig_stability_map(ds, backend="bokeh"):
