@@ -4,9 +4,6 @@ import contextlib
 
 DPI = 120
 
-# Line colours for the values of the first other axis (Okabe-Ito, then Tol's muted).
-LINE_COLOURS = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#D55E00", "#56B4E9", "#000000",
-                "#882255", "#117733", "#999933", "#44AA99", "#AA4499")
 SWEEP_COLOURS = ("#111111", "#D55E00")       # up (the plain variables), down (_down)
 
 _MARKERS = {"o": "circle", "^": "triangle", "s": "square", "v": "inverted_triangle", "D": "diamond"}

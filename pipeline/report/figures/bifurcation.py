@@ -5,7 +5,7 @@ import numpy as np
 from pipeline import schema
 from pipeline.report import style
 from pipeline.report.cubeinfo import continued_axis, has_attractor, has_down, select, sweep_labels
-from pipeline.report.figures.panels import line_figure, panel_opts, points
+from pipeline.report.figures.panels import legend_points, line_figure, panel_opts
 from pipeline.report.plan import line_plan
 from pipeline.report.registry import Figure, register
 from pipeline.report.stability import class_colour, class_name, line_segments
@@ -80,7 +80,7 @@ def _sweep_dots(hv, x, grid, sweeps, labels, backend, resolution):
     elements = []
     for k in reversed(range(len(sweeps))):
         at, val = thin_points(grid, sweeps[k], cap, resolution)
-        pts = points(hv, at, val, [x, "poincare_x"], labels[k])
+        pts = legend_points(hv, at, val, [x, "poincare_x"], labels[k])
         if backend == "bokeh":
             pts = pts.opts(color=style.SWEEP_COLOURS[k], size=dot + (1 if k else 0), line_width=0,
                            backend=backend)
@@ -104,7 +104,7 @@ def _bif_panel(hv, ds, where, backend, slot, span_keys):
     elements += _sweep_dots(hv, x, grid, sweeps, sweep_labels(ds), backend, height / THIN_LEVELS)
     if "hysteresis" in line:
         hs = grid[line["hysteresis"].values == 1]
-        mark = points(hv, hs, np.full(hs.size, ylim[1] - 0.04 * height), [x, "poincare_x"],
+        mark = legend_points(hv, hs, np.full(hs.size, ylim[1] - 0.04 * height), [x, "poincare_x"],
                       "hysteresis (up and down differ)")
         elements.append(mark.opts(**style.marker_style(backend, HYSTERESIS_COLOUR, 7, "v"), backend=backend))
     return hv.Overlay(elements).opts(ylim=ylim, **panel_opts(ds, slot, backend, "Poincaré x [µm]", grid))

@@ -4,7 +4,7 @@ import numpy as np
 from pipeline import schema
 from pipeline.report import style
 from pipeline.report.cubeinfo import continued_axis, has_attractor, has_down, select, sweep_labels
-from pipeline.report.figures.panels import line_figure, panel_opts, points
+from pipeline.report.figures.panels import legend_points, line_figure, panel_opts
 from pipeline.report.plan import axis_display
 from pipeline.report.registry import Figure, register
 
@@ -18,14 +18,15 @@ def _estimates(hv, x, grid, lle, line, backend):
     else:
         size = float(np.clip(40.0 / np.sqrt(max(grid.size, 1)), 1.6, 5.0))
     method, ok = line["lle_method"].values, np.isfinite(lle)
+    chaotic = line["attractor"].values == schema.ATTRACTOR.index("chaotic")
     groups = (("integrated", method == 0, "o", False, "integrated (Benettin/QR)"),
               ("derived", method == 1, "^", False, "derived ln|λ|/(kT)"),
-              ("chaotic", line["attractor"].values == 3, "o", True, "chaotic attractor"))
+              ("chaotic", chaotic, "o", True, "chaotic attractor"))
     elements = []
     for key, mask, marker, hollow, label in groups:
         m = mask & ok
-        style_ = style.marker_style(backend, LLE_COLOURS[key], size * (1.9 if hollow else 1.0), marker, hollow)
-        elements.append(points(hv, grid[m], lle[m], [x, "lle"], label).opts(**style_, backend=backend))
+        look = style.marker_style(backend, LLE_COLOURS[key], size * (1.9 if hollow else 1.0), marker, hollow)
+        elements.append(legend_points(hv, grid[m], lle[m], [x, "lle"], label).opts(**look, backend=backend))
     return elements
 
 

@@ -2,11 +2,14 @@
 other swept axis, the stability limit |lambda| = 1 dashed."""
 import numpy as np
 
-from pipeline.report import style
 from pipeline.report.cubeinfo import continued_axis, select
 from pipeline.report.figures.panels import Sizes, facet_figure, panel_opts
 from pipeline.report.plan import axes_plan, axis_display, where_label
 from pipeline.report.registry import Figure, register
+
+# Line colours for the values of the first other axis (Okabe-Ito, then Tol's muted).
+LINE_COLOURS = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#D55E00", "#56B4E9", "#000000",
+                "#882255", "#117733", "#999933", "#44AA99", "#AA4499")
 
 
 def _mu_range(ds):
@@ -34,7 +37,7 @@ def _mu_panel(hv, ds, where, backend, slot, y):
         line = sub.sel({y: v}) if y else sub
         c = hv.Curve((grid, line["max_abs_multiplier"].values), x, "max_abs_multiplier",
                      label=where_label(ds, {y: v}) if y else "max |λ|")
-        curves.append(c.opts(color=style.LINE_COLOURS[i % len(style.LINE_COLOURS)], backend=backend, **width))
+        curves.append(c.opts(color=LINE_COLOURS[i % len(LINE_COLOURS)], backend=backend, **width))
     ref = hv.Curve(([grid.min(), grid.max()], [1.0, 1.0]), x, "max_abs_multiplier",
                    label="|λ| = 1 (stability limit)")
     if backend == "bokeh":

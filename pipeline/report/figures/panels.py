@@ -27,7 +27,7 @@ class Sizes(NamedTuple):
     grid_width: float       # matplotlib figure width of a grid; 2.7 inches per row
 
 
-def points(hv, x, y, kdims, label):
+def legend_points(hv, x, y, kdims, label):
     """hv.Points that keeps its legend entry when empty (one NaN point, drawn nowhere): the
     matplotlib grids show one legend for all panels, on a panel that may lack the group."""
     x, y = np.asarray(x, float), np.asarray(y, float)
