@@ -58,7 +58,7 @@ def attractor_cube():
 @pytest.fixture(scope="module")
 def made(tmp_path_factory):
     """{name: (cube, make_report result)} for the base, all-stable, 4-D and attractor cubes."""
-    hv = report._hv()   # importing the plotting backends itself sets one
+    hv = report.holoviews()   # importing the plotting backends itself sets one
     before = hv.Store.current_backend
     cubes = {"base": synthetic_cube(), "stable": all_stable_cube(), "4d": cube_4d(),
              "attractor": attractor_cube()}
@@ -77,10 +77,12 @@ def _colour_pixels(img, hex_colour, tol=0.02):
 
 
 def test_writes_all_files(made):
-    for name, (_, res) in made.items():
+    for name, (ds, res) in made.items():
         assert res["html"].name == "report.html" and res["html"].stat().st_size > 100_000
-        figures = report.FIGURES + (report.ATTRACTOR_FIGURES if name == "attractor" else ())
-        assert [p.name for p in res["png"]] == [png for png, _ in figures]
+        pngs = ["stability_map.png", "max_multiplier.png", "multiplier_paths.png"]
+        pngs += ["bifurcation.png", "lle.png"] if name == "attractor" else []
+        assert [p.name for p in res["png"]] == pngs
+        assert [f.filename for f in report.figures_for(ds)] == pngs
         assert res["csv"].name == "unstable_intervals.csv"
         assert res["points"] == []
         assert all(p.parent == res["html"].parent for p in [*res["png"], res["csv"]])
@@ -160,7 +162,7 @@ def test_map_edges_are_the_refined_boundaries():
         # strictly between the grid speeds: not a staircase edge
         assert ds["boundary_grid_low"].values[k] < speed < ds["boundary_grid_high"].values[k]
     # every interior edge (outside the grid ends) is a refined boundary
-    first, last = report._speed_edges(ds["speed"].values)
+    first, last = report.axis_edges(ds["speed"].values)
     inner = {x for _, x in edges if first < x < last}
     assert inner == set(ds["boundary_speed"].values.tolist())
     # the refined edges are also drawn as segments (legend: refined boundary)
@@ -169,6 +171,24 @@ def test_map_edges_are_the_refined_boundaries():
     # same data for bokeh
     bk = _interior_edges(_elements(report.fig_stability_map(ds, "bokeh"), "Rectangles"))
     assert bk == edges
+
+
+def test_figures_run_along_the_cubes_continued_axis():
+    """The x axis of every figure is the cube's continued_axis attribute; cubes written before it
+    fall back to the first swept dimension (speed)."""
+    ds = synthetic_cube()
+    assert "continued_axis" not in ds.attrs and report.continued_axis(ds) == "speed"
+    assert [f.caption(ds) for f in report.figures_for(ds)][1] == "Largest Floquet multiplier vs shaft speed"
+    ds.attrs["continued_axis"] = "clearance"
+    plan = report.axes_plan(ds)
+    assert (plan["x"], plan["y"]) == ("clearance", "speed")
+    assert report.figures_for(ds)[1].caption(ds) == "Largest Floquet multiplier vs radial clearance"
+    segments, _ = report.line_segments(ds, {"speed": 100.0})
+    assert segments[0][0] < ds["clearance"].values[0] and segments[-1][1] > ds["clearance"].values[-1]
+    assert segments[-1][1] < 1e-4       # clearance units, not speeds
+    fig = report.fig_stability_map(ds, "matplotlib")
+    assert {round(y0 + report.RECT_HALF) for r in _elements(fig, "Rectangles")
+            for _, y0, _, _ in r.array(["x0", "y0", "x1", "y1"])} == set(range(ds.sizes["speed"]))
 
 
 def test_map_without_boundary_table_puts_edges_midway():
@@ -258,10 +278,10 @@ def test_facet_count_is_capped_and_omissions_are_named():
     assert len(plan["shown"]) == report.MAX_PANELS and len(plan["omitted"]) == 3
     fig = report.fig_stability_map(ds, "matplotlib")
     assert len(fig) == report.MAX_PANELS
-    assert "3 omitted" in report._figure_title("x", plan)
-    header = report._header_html(ds, "t", plan)
+    assert "3 omitted" in report.figure_title(ds, "x", plan)
+    header = report.header_html(ds, "t", plan)
     for where in plan["omitted"]:
-        assert report._where_label(where) in header
+        assert report.where_label(ds, where) in header
 
 
 def test_boundaries_are_capped_deterministic_and_inside_the_grid():
@@ -385,7 +405,7 @@ def test_parse_and_resolve_points():
     assert report.parse_point("speed=36,clearance=19e-6") == {"speed": 36.0, "clearance": 1.9e-5}
     r = report.resolve_point(ds, {"speed": 36.9, "clearance": 12e-6})
     assert r["values"] == {"speed": 36.0, "clearance": 1.14e-5}
-    assert report.point_filename(r) == "point_36Hz_11.4um.png"
+    assert report.point_filename(ds, r) == "point_36Hz_11.4um.png"
     # a trailing comma is harmless; values between grid points take the nearest one
     assert report.resolve_point(ds, "speed=50 clearance=1e-5,")["values"] == {"speed": 50.0,
                                                                                 "clearance": 1.14e-5}

@@ -1,0 +1,93 @@
+"""What a cube holds, as the report needs it: the continued axis and the other swept axes, lines
+of the cube, the scene it was run from, and its attractor diagnostics."""
+import numpy as np
+
+from pipeline import schema
+
+
+def continued_axis(ds):
+    """The swept axis the sweep continues solutions along, the x axis of every figure: the cube's
+    `continued_axis` attribute, else (cubes written before it) the first swept axis among the
+    cube's point dimensions."""
+    name = ds.attrs.get("continued_axis")
+    if name:
+        return name
+    dims = ds["orbit_status"].dims if "orbit_status" in ds else tuple(ds.dims)
+    return next(d for d in dims if d in schema.AXES)
+
+
+def other_axes(ds):
+    """The swept axes other than the continued one, in schema order."""
+    axis = continued_axis(ds)
+    return [a for a in schema.AXES if a in ds.dims and a != axis]
+
+
+def select(ds, where):
+    """ds at the given values of swept axes, with every size-1 other swept dim squeezed out."""
+    sub = ds.sel(where) if where else ds
+    extra = [d for d in other_axes(sub) if sub.sizes[d] == 1]
+    return sub.isel({d: 0 for d in extra})
+
+
+def axis_edges(values):
+    """Outer edges of a grid along the continued axis: half a step beyond the first and last
+    value (1 unit wide for a single value), as the cells of a map centred on the grid values."""
+    if values.size == 1:
+        return float(values[0]) - 0.5, float(values[0]) + 0.5
+    return (float(values[0] - 0.5 * (values[1] - values[0])),
+            float(values[-1] + 0.5 * (values[-1] - values[-2])))
+
+
+def scene_toml(ds):
+    """The cube's scene (config_toml) as a dict; {} when it has none or it does not parse."""
+    try:
+        import tomllib
+    except ImportError:          # Python 3.10
+        import tomli as tomllib
+    try:
+        return tomllib.loads(ds.attrs.get("config_toml", ""))
+    except Exception:
+        return {}
+
+
+def scene_name(ds):
+    name = scene_toml(ds).get("scene", {}).get("name")
+    return name or ds.attrs.get("scene") or ds.attrs.get("title") or "rotorsweep cube"
+
+
+def has_attractor(ds):
+    """Whether the cube holds the attractor diagnostics ([analysis] attractor = true)."""
+    return all(v in ds.variables for v in ("attractor", "period", "lle", "poincare_x"))
+
+
+def has_down(ds):
+    return "poincare_x" + schema.DOWN_SUFFIX in ds.variables
+
+
+def sweep_labels(ds):
+    """Legend labels of the plain and the _down variables: the plain ones sweep up, unless the
+    scene swept only down."""
+    direction = scene_toml(ds).get("analysis", {}).get("sweep_direction", "up")
+    return ("sweep down" if direction == "down" else "sweep up"), "sweep down"
+
+
+def attractor_counts(ds, suffix=""):
+    """{label: n} of the attractor classes of one sweep direction: periodic by period k (and
+    'period not resolved' for a periodic class without k), quasi-periodic, chaotic, diverged
+    (always listed) and not computed (when any)."""
+    cls = ds["attractor" + suffix].values.ravel()
+    per = ds["period" + suffix].values.ravel()
+    periodic = cls == schema.ATTRACTOR.index("periodic")
+    out = {}
+    for k in sorted(int(v) for v in np.unique(per[periodic & (per > 0)])):
+        out[f"periodic, period {k}"] = int((periodic & (per == k)).sum())
+    unresolved = int((periodic & (per <= 0)).sum())
+    if unresolved:
+        out["periodic, period not resolved"] = unresolved
+    for name in ("quasi_periodic", "chaotic", "diverged"):
+        out[name.replace("_", "-")] = int((cls == schema.ATTRACTOR.index(name)).sum())
+    missing = int((cls == schema.ATTRACTOR.index("not_computed")).sum()
+                  + (~np.isin(cls, range(len(schema.ATTRACTOR)))).sum())
+    if missing:
+        out["not computed"] = missing
+    return out

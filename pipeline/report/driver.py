@@ -1,0 +1,80 @@
+"""make_report: the report of one cube, every figure the registry says applies to it."""
+from pathlib import Path
+
+from pipeline import query, schema
+from pipeline.report import figures  # noqa: F401  (registers the figures)
+from pipeline.report import page, style
+from pipeline.report.cubeinfo import scene_name
+from pipeline.report.figures.point import fig_point
+from pipeline.report.plan import axes_plan
+from pipeline.report.points import (compute_point, point_filename, point_rows, point_title,
+                                    resolve_point, scene_data)
+from pipeline.report.registry import figures_for
+from pipeline.report.tables import interval_rows, write_csv
+
+_VARS = ("orbit_status", "stable", "bifurcation", "max_abs_multiplier", "multiplier_real",
+         "multiplier_imag")
+# attractor variables the report's figures and header read (with their _down twins)
+_ATTRACTOR_VARS = ("attractor", "period", "lle", "lle_stderr", "lle_method", "poincare_x")
+
+
+def _load(ds):
+    """The variables the figures, tables and header need, in memory (not the Poincare y or the
+    Lyapunov spectrum: a Fig. 13 cube holds 1.5 M Poincare samples per variable)."""
+    names = [v for v in _VARS if v in ds.variables]
+    names += [v + sfx for v in _ATTRACTOR_VARS for sfx in ("", schema.DOWN_SUFFIX) if v + sfx in ds.variables]
+    names += [v for v in ("hysteresis",) if v in ds.variables]
+    names += [v for v in ds.data_vars if ds[v].dims == ("boundary",)]     # the boundary table
+    return ds[names].load()
+
+
+def _resolve_all(ds, points):
+    """Every requested point resolved (and so checked) before anything is drawn, duplicates
+    dropped."""
+    resolved = []
+    for spec in points or []:
+        r = resolve_point(ds, spec)
+        if all(r["values"] != other["values"] for other in resolved):
+            resolved.append(r)
+    return resolved
+
+
+def make_report(ds, out_dir, title=None, points=None):
+    """Write report.html, the figures as PNGs (those of the figure registry that apply to the
+    cube, e.g. stability_map.png, max_multiplier.png, multiplier_paths.png, and for cubes with
+    attractor diagnostics bifurcation.png and lle.png) and unstable_intervals.csv into out_dir.
+    points: grid points to show in detail ({axis: value} dicts or AXIS=VALUE strings, nearest
+    grid point, see resolve_point), one point_<speed>Hz_<clearance>um.png each. Returns
+    {"html": Path, "png": [Path, ...] (figures, then points), "csv": Path, "points": [Path, ...]}."""
+    resolved = _resolve_all(ds, points)
+    scene = scene_data(ds) if resolved else None
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    data = _load(ds)
+    title = title or f"Stability report: {scene_name(ds)}"
+    intervals = query.unstable_intervals(data)
+    csv_path = out / "unstable_intervals.csv"
+    write_csv(csv_path, *interval_rows(data, intervals, machine=True))
+    details = [compute_point(ds, scene, r) for r in resolved]
+    chosen = figures_for(data)
+
+    pngs, point_pngs = [], []
+    with style.backend("matplotlib") as hv:
+        for fig in chosen:
+            hv.save(fig.build(data, "matplotlib", intervals), out / fig.filename, backend="matplotlib",
+                    dpi=style.DPI)
+            pngs.append(out / fig.filename)
+        for pt in details:
+            path = out / point_filename(ds, pt["resolved"])
+            hv.save(fig_point(pt, "matplotlib"), path, backend="matplotlib", dpi=style.DPI)
+            point_pngs.append(path)
+
+    html_path = out / "report.html"
+    with style.backend("bokeh"):
+        figs = [(fig.caption(data), fig.build(data, "bokeh", intervals)) for fig in chosen]
+        point_sections = [(point_title(pt), fig_point(pt, "bokeh"), page.point_table_html(point_rows(pt)))
+                          for pt in details]
+        page.save_html(html_path, title, page.header_html(data, title, axes_plan(data)), figs,
+                       page.intervals_html(data, *interval_rows(data, intervals)),
+                       ds.attrs.get("config_toml", ""), point_sections)
+    return {"html": html_path, "png": pngs + point_pngs, "csv": csv_path, "points": point_pngs}

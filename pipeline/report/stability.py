@@ -1,0 +1,102 @@
+"""Stability classes of the periodic orbit at each grid point, and their runs along the
+continued axis with edges at the refined boundaries of the cube's boundary table."""
+import numpy as np
+
+from pipeline import schema
+from pipeline.report.cubeinfo import axis_edges, continued_axis, select
+
+# Stability classes of a grid point, in colour order. Okabe-Ito colours (colour-blind safe) for
+# the instabilities, a pale grey-blue for the stable background, near-black for "no orbit".
+CLASSES = ("stable", "fold", "period doubling", "Neimark-Sacker", "no periodic orbit")
+PALETTE = ("#D6E4F0", "#E69F00", "#0072B2", "#CC79A7", "#333333")
+UNCLASSIFIED = "unclassified"   # converged but unstable with no bifurcation code (should not occur)
+UNCLASSIFIED_COLOUR = "#BBBBBB"
+
+
+def stability_class(ds):
+    """Float array over the point dims: index into CLASSES, NaN where unclassifiable."""
+    status = ds["orbit_status"].values
+    stable = ds["stable"].values
+    bif = ds["bifurcation"].values
+    cls = np.full(status.shape, np.nan)
+    converged = status == 0
+    cls[converged & (stable == 1)] = 0
+    unstable = converged & (stable != 1)
+    for code in (1, 2, 3):          # schema.BIFURCATION: fold, period_doubling, neimark_sacker
+        cls[unstable & (bif == code)] = code
+    cls[~converged] = 4
+    return cls
+
+
+def class_keys(ds):
+    """Stability classes present anywhere in the cube, in CLASSES order (NaN last)."""
+    cls = stability_class(ds)
+    keys = [float(i) for i in range(len(CLASSES)) if (cls == i).any()]
+    return keys + ([np.nan] if np.isnan(cls).any() else [])
+
+
+def class_name(c):
+    return UNCLASSIFIED if np.isnan(c) else CLASSES[int(c)]
+
+
+def class_colour(c):
+    return UNCLASSIFIED_COLOUR if np.isnan(c) else PALETTE[int(c)]
+
+
+def counts(ds):
+    """({orbit_status name: n}, {stability class name: n}) over all points."""
+    status = ds["orbit_status"].values.ravel()
+    by_status = {name: int((status == code).sum()) for code, name in enumerate(schema.ORBIT_STATUS)}
+    missing = int((~np.isin(status, range(len(schema.ORBIT_STATUS)))).sum())
+    if missing:
+        by_status["missing"] = missing
+    cls = stability_class(ds).ravel()
+    by_class = {name: int((cls == i).sum()) for i, name in enumerate(CLASSES)}
+    if np.isnan(cls).any():
+        by_class[UNCLASSIFIED] = int(np.isnan(cls).sum())
+    return by_status, by_class
+
+
+def refined_edges(ds, where):
+    """The refined boundaries of the line `where` (values of the other swept axes; axes left out
+    must have one value) from the cube's boundary table (boundary_<continued axis>, ...):
+    [(grid_low, grid_high, refined value)], only entries that were refined and lie inside their
+    grid bracket."""
+    name = f"boundary_{continued_axis(ds)}"
+    if name not in ds or not ds.sizes.get("boundary", 0):
+        return []
+    value = ds[name].values.astype(float)
+    low, high = ds["boundary_grid_low"].values, ds["boundary_grid_high"].values
+    ok = (ds["boundary_status"].values == 0) & np.isfinite(value) & (low <= value) & (value <= high)
+    for axis, v in where.items():
+        if f"boundary_{axis}" in ds:
+            ok &= np.isclose(ds[f"boundary_{axis}"].values.astype(float), v, rtol=1e-9, atol=0.0)
+    return [(float(a), float(b), float(c)) for a, b, c in zip(low[ok], high[ok], value[ok])]
+
+
+def line_segments(ds, where):
+    """Runs of one stability class along the line `where`: ([(lo, hi, class), ...], [refined
+    edges]). class indexes CLASSES (NaN: unclassified). An edge between two runs is the refined
+    boundary of the boundary table where it has one for that pair of grid values, else midway
+    between them; the outer edges lie half a grid step beyond the grid."""
+    line = select(ds, where)
+    grid = line[continued_axis(ds)].values.astype(float)
+    cls = stability_class(line)
+    code = np.where(np.isnan(cls), -1.0, cls)
+    table = refined_edges(ds, where)
+    first, last = axis_edges(grid)
+    segments, refined, lo = [], [], first
+    for i in range(grid.size):
+        if i < grid.size - 1 and code[i + 1] == code[i]:
+            continue
+        if i == grid.size - 1:
+            hi = last
+        else:
+            hits = [c for a, b, c in table if np.isclose(a, grid[i], rtol=1e-12, atol=0.0)
+                    and np.isclose(b, grid[i + 1], rtol=1e-12, atol=0.0)]
+            hi = hits[0] if hits else 0.5 * (grid[i] + grid[i + 1])
+            if hits:
+                refined.append(hi)
+        segments.append((lo, hi, float(cls[i])))
+        lo = hi
+    return segments, refined
