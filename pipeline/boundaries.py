@@ -7,7 +7,8 @@ import itertools
 import numpy as np
 
 from pipeline import compute, schema
-from rotorkernels import boundary, continuation, floquet
+from rotorkernels import continuation, floquet
+from rotorkernels.continuation import events as boundary
 
 XTOL_REL = 1e-8
 

@@ -253,7 +253,7 @@ def build_parser():
 
 def main(argv=None):
     from pipeline.sweep import SweepError
-    from rotorkernels.boundary import BoundaryError
+    from rotorkernels.continuation.events import BoundaryError
 
     args = build_parser().parse_args(argv)
     user_errors = (config_mod.ConfigError, cube.CubeError, query.QueryError, SweepError,

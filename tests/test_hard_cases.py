@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from rotorkernels import attractor as at, boundary, continuation, floquet, integrators as ig, models, shooting
+from rotorkernels import attractor as at, continuation, floquet, integrators as ig, models, shooting
+from rotorkernels.continuation import events as boundary
 from rotorkernels.models import jeffcott_clearance as jc
 from tests.reference import BaiPoint, PreloadedPoint
 from tests.test_kernels import JEFF, bai_params, match

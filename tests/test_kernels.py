@@ -8,7 +8,8 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 from scipy.optimize import linear_sum_assignment
 
-from rotorkernels import boundary, continuation, floquet, integrators as ig, models, shooting
+from rotorkernels import continuation, floquet, integrators as ig, models, shooting
+from rotorkernels.continuation import events as boundary
 from rotorkernels.models import jeffcott_clearance as jc
 from tests.reference import BAI, BaiPoint
 

@@ -121,6 +121,9 @@ stiffness = [1000.0, 2000.0]
 attractor = true
 transient_periods = 50
 lyapunov_max_periods = 300
+
+[numerics]
+amplitude_limit = 1.0    # m: the default (1 mm) is a bearing's scale, the chain moves by mm
 """
 
 

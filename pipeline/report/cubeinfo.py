@@ -9,17 +9,13 @@ def continued_axis(ds):
     """The swept axis the sweep continues solutions along, the x axis of every figure: the cube's
     `continued_axis` attribute, else (cubes written before it) the first swept axis among the
     cube's point dimensions."""
-    name = ds.attrs.get("continued_axis")
-    if name:
-        return name
-    dims = ds["orbit_status"].dims if "orbit_status" in ds else tuple(ds.dims)
-    return next(d for d in dims if d in schema.AXES)
+    return schema.continued_axis(ds)
 
 
 def other_axes(ds):
-    """The swept axes other than the continued one, in schema order."""
+    """The swept axes other than the continued one, in the cube's order."""
     axis = continued_axis(ds)
-    return [a for a in schema.AXES if a in ds.dims and a != axis]
+    return [a for a in schema.point_axes(ds) if a != axis and a in ds.dims]
 
 
 def select(ds, where):

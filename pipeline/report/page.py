@@ -44,7 +44,7 @@ def _attractor_boxes(ds):
 def header_html(ds, title, plan):
     """Title, scene, config hash, grid size, fixed axes, point counts and omitted panels."""
     by_status, by_class = counts(ds)
-    axes = [a for a in schema.AXES if a in ds.dims]
+    axes = schema.point_axes(ds)
     n = int(np.prod([ds.sizes[a] for a in axes]))
     grid = " x ".join(f"{ds.sizes[a]} {axis_display(ds, a)[2]}" for a in axes)
     parts = [

@@ -24,8 +24,8 @@ TYPE_NAMES = {"fold": "fold", "period_doubling": "period doubling",
 
 def axis_display(ds, axis):
     """(factor from cube units, display unit, short label) of an axis, from the CF attributes
-    (units, long_name) of its coordinate, schema.AXES where the cube has none."""
-    units, long_name = schema.AXES.get(axis, ("1", axis))
+    (units, long_name) of its coordinate, the model's axis table where the cube has none."""
+    units, long_name = schema.axes_of(schema.model_of(ds)).get(axis, ("1", axis))
     attrs = ds[axis].attrs if axis in ds.coords else {}
     factor, unit = _UNIT_DISPLAY.get(attrs.get("units", units), (1.0, attrs.get("units", units)))
     return factor, unit, _SHORT_NAMES.get(axis, attrs.get("long_name", long_name))
@@ -76,7 +76,7 @@ def axes_plan(ds):
     omitted."""
     x = continued_axis(ds)
     swept = [a for a in other_axes(ds) if ds.sizes[a] > 1]
-    fixed = {a: float(np.ravel(ds[a].values)[0]) for a in schema.AXES
+    fixed = {a: float(np.ravel(ds[a].values)[0]) for a in schema.axes_of(schema.model_of(ds))
              if a != x and a not in swept and a in ds.coords}
     facets = swept[1:]
     combos = [dict(zip(facets, vals)) for vals in itertools.product(*(ds[a].values for a in facets))]

@@ -27,9 +27,6 @@ def parse_point(items):
             axis, sep, value = (part.strip() for part in token.partition("="))
             if not sep or not axis or not value:
                 raise query.QueryError(f"bad point item {token!r}: expected AXIS=VALUE, e.g. speed=36")
-            if axis not in schema.AXES:
-                raise query.QueryError(f"unknown axis {axis!r} in point {token!r}; "
-                                       f"the axes are {', '.join(schema.AXES)}")
             if axis in point:
                 raise query.QueryError(f"{axis} is given twice in one point")
             try:
@@ -42,7 +39,7 @@ def parse_point(items):
 def _span(ds, axis):
     """The grid of an axis in cube units, for error messages."""
     grid = ds[axis].values.astype(float)
-    unit = ds[axis].attrs.get("units", schema.AXES[axis][0])
+    unit = ds[axis].attrs.get("units", "")
     if grid.size == 1:
         return f"{grid[0]:g} {unit}"
     return f"{grid.min():g} .. {grid.max():g} {unit} ({grid.size} values)"
@@ -65,8 +62,11 @@ def resolve_point(ds, spec):
     axis with more than one value must be given; a value outside the grid is an error naming
     the valid range."""
     asked = spec if isinstance(spec, dict) else parse_point(spec)
-    swept = [a for a in schema.AXES if a in ds.dims]
+    swept = schema.point_axes(ds)
+    known = schema.axes_of(schema.model_of(ds))
     for axis in asked:
+        if axis not in known:
+            raise query.QueryError(f"unknown axis {axis!r} in point; the axes are {', '.join(known)}")
         if axis not in swept:
             raise query.QueryError(f"point: {axis} is not swept in this cube; its axes are "
                                    f"{', '.join(f'{a} ({_span(ds, a)})' for a in swept)}")
@@ -115,9 +115,7 @@ def compute_point(ds, data, resolved):
 
     fixed = compute.fixed_values(data)
     values = resolved["values"]
-    # point_detail takes the physical parameters; speed is swept in every cube
-    point = {"speed": values["speed"],
-             **{k: values.get(k, fixed[k]) for k in ("clearance", "contact_angle", "preload")}}
+    point = {**fixed, **values}
     sub = ds.isel(resolved["index"])
     names = [n + sfx for n in _POINT_CUBE_VARS for sfx in ("", schema.DOWN_SUFFIX)
              if n + sfx in sub.variables] + (["hysteresis"] if "hysteresis" in sub.variables else [])

@@ -12,10 +12,10 @@ import importlib.util
 import os
 import sys
 
-from rotorkernels.models import damped_mathieu, jeffcott_clearance, linear_oscillator
+from rotorkernels.models import damped_mathieu, duffing, jeffcott_clearance, linear_oscillator
 from rotorkernels.models.spec import Built, ModelSpec, Observable, Parameter  # noqa: F401 (API)
 
-BUILTIN = (jeffcott_clearance, linear_oscillator, damped_mathieu)
+BUILTIN = (jeffcott_clearance, linear_oscillator, damped_mathieu, duffing)
 BUILTIN_NAMES = tuple(m.SPEC.name for m in BUILTIN)
 PLUGINS_VARIABLE = "ROTORSWEEP_MODELS"
 

@@ -7,15 +7,16 @@ from rotorkernels import stages
 import rotorkernels.models.jeffcott_clearance as m0
 import rotorkernels.models.linear_oscillator as m1
 import rotorkernels.models.damped_mathieu as m2
+import rotorkernels.models.duffing as m3
 
-IDS = (0, 1, 2)
-STATE_SIZES = (4,)
+IDS = (0, 1, 2, 3)
+STATE_SIZES = (2, 4)
 
 
 @njit(cache=True, nogil=True, inline="always")
 def known(model):
     """True for a registered model id."""
-    return model == 0 or model == 1 or model == 2
+    return model == 0 or model == 1 or model == 2 or model == 3
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -41,6 +42,8 @@ def rhs(model, tau, u, p, du):
         m1.rhs(tau, u, p, du)
     elif model == 2:
         m2.rhs(tau, u, p, du)
+    elif model == 3:
+        m3.rhs(tau, u, p, du)
     else:
         _fill_nan(du)
 
@@ -54,6 +57,8 @@ def jac(model, tau, u, p, out):
         m1.jac(tau, u, p, out)
     elif model == 2:
         m2.jac(tau, u, p, out)
+    elif model == 3:
+        m3.jac(tau, u, p, out)
     else:
         _fill_nan_2d(out)
 
@@ -67,6 +72,8 @@ def rhs_jac(model, tau, u, p, du, out):
         m1.rhs_jac(tau, u, p, du, out)
     elif model == 2:
         m2.rhs_jac(tau, u, p, du, out)
+    elif model == 3:
+        m3.rhs_jac(tau, u, p, du, out)
     else:
         _fill_nan(du)
 
@@ -74,7 +81,9 @@ def rhs_jac(model, tau, u, p, du, out):
 @njit(cache=True, nogil=True, inline="always")
 def tangent(velocity_form, z, n, jbuf, dz):
     """dz[n:] = J Phi; the registered state sizes get copies with a constant size."""
-    if n == 4:
+    if n == 2:
+        stages.tangent_product(velocity_form, z, 2, jbuf, dz)
+    elif n == 4:
         stages.tangent_product(velocity_form, z, 4, jbuf, dz)
     else:
         stages.tangent_product(velocity_form, z, n, jbuf, dz)
@@ -83,7 +92,9 @@ def tangent(velocity_form, z, n, jbuf, dz):
 @njit(cache=True, nogil=True, inline="always")
 def combine(K, coef, n_terms, z, step, out):
     """out = z + step sum coef[j] K[j]; registered state sizes get constant-size copies."""
-    if z.size == 4:
+    if z.size == 2:
+        stages.combine(K, coef, n_terms, z, step, out, 2)
+    elif z.size == 4:
         stages.combine(K, coef, n_terms, z, step, out, 4)
     else:
         stages.combine(K, coef, n_terms, z, step, out, z.size)

@@ -6,7 +6,8 @@ lengths in um, so the basic orbit has period 1."""
 import numpy as np
 from numba import njit
 
-from rotorkernels import boundary, continuation, floquet, integrators as ig, models, shooting
+from rotorkernels import continuation, floquet, integrators as ig, models, shooting
+from rotorkernels.continuation import events as boundary
 from rotorkernels.contact import ring_load
 from rotorkernels.models import jeffcott_clearance as jc
 

@@ -1,4 +1,4 @@
-"""Stability-boundary location: the parameter value where max |multiplier| crosses 1.
+"""Events on a branch: the parameter value where max |multiplier| crosses 1 (a stability boundary).
 
 Root finding (Brent) on g(v) = max|lambda|(v) - 1 between two bracketing grid values, with the
 periodic orbit continued from the nearest value already solved, so each evaluation is a short

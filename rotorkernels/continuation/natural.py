@@ -1,4 +1,5 @@
-"""Periodic orbits along a chain of parameter points (natural continuation in shaft speed).
+"""Natural continuation: periodic orbits of forced-orbit problems (rotorkernels.orbits) along a
+chain of parameter points, each started from its neighbours.
 
 Each point starts Newton from the best guess available, in this order: the secant predictor
 through the two previous converged orbits (the scaled state makes neighbouring orbits close),
@@ -11,20 +12,12 @@ from collections import namedtuple
 import numpy as np
 
 from rotorkernels import floquet, shooting
+from rotorkernels.orbits import ForcedOrbitProblem
 
 PointSolution = namedtuple(
     "PointSolution",
     "status reason iterations residual multipliers max_abs stable bifurcation state samples n_rhs",
 )
-
-
-def _shoot(model, guess, p, opts, periods, tol, max_iter):
-    return shooting.shoot(model.kernel, guess, p, float(periods), opts, tol, max_iter)
-
-
-def _settle(model, u0, p, opts, n_periods):
-    z, status, n_rhs = shooting.settle(model.kernel, u0, p, float(n_periods), opts)
-    return z, status == 0, n_rhs
 
 
 # Newton from a neighbour's orbit converges in a few iterations or not at all: give such starts
@@ -34,21 +27,22 @@ QUICK_ITERATIONS = 6
 COLD_RETRIES = 4
 
 
-def _guesses(model, p, opts, history, transient_periods, cold_guess):
+def _guesses(problem, history, transient_periods, cold_guess):
     """Yield (guess, n_rhs spent making it, quick) from cheapest to most robust."""
     if len(history) >= 2:
         yield 2.0 * history[-1] - history[-2], 0, True
     if history:
         yield history[-1], 0, True
-        z, ok, n_rhs = _settle(model, history[-1], p, opts, transient_periods)
+        z, ok, n_rhs = problem.settle(history[-1], transient_periods)
         if ok:
             yield z, n_rhs, False
-    z, ok, n_rhs = _settle(model, cold_guess(p), p, opts, transient_periods)
-    yield (z if ok else cold_guess(p)), n_rhs, False
+    cold = cold_guess(problem.p)
+    z, ok, n_rhs = problem.settle(cold, transient_periods)
+    yield (z if ok else cold), n_rhs, False
     # On a chaotic attractor Newton's basin around the unstable orbit is small: some transient
     # states lie in it and others do not, so try the next few states one period apart.
     for _ in range(COLD_RETRIES if ok else 0):
-        z, ok, n_rhs = _settle(model, z, p, opts, 1)
+        z, ok, n_rhs = problem.settle(z, 1)
         if not ok:
             return
         yield z, n_rhs, False
@@ -59,11 +53,12 @@ def solve_orbit(model, p, opts, history=(), *, cold_guess, periods=1, tol=1e-9, 
     """Periodic orbit, multipliers and orbit samples at one parameter point.
 
     history: converged states of the previous points of the chain (most recent last)."""
+    problem = ForcedOrbitProblem(model, p, opts, periods)
     n_rhs = 0
     best = None
-    for guess, cost, quick in _guesses(model, p, opts, list(history), transient_periods, cold_guess):
+    for guess, cost, quick in _guesses(problem, list(history), transient_periods, cold_guess):
         n_rhs += cost
-        out = _shoot(model, guess, p, opts, periods, tol, min(max_iter, QUICK_ITERATIONS) if quick else max_iter)
+        out = problem.shoot(guess, tol, min(max_iter, QUICK_ITERATIONS) if quick else max_iter)
         n_rhs += out[6]
         if best is None or out[2] == shooting.CONVERGED:
             best = out
@@ -71,12 +66,13 @@ def solve_orbit(model, p, opts, history=(), *, cold_guess, periods=1, tol=1e-9, 
             break
     state, mono, status, reason, iters, res, _ = best
     if status != shooting.CONVERGED:
-        nan = np.full(model.n_state, np.nan)
-        return PointSolution(status, reason, iters, res, nan + 0j, np.nan, False, floquet.NONE,
+        # no orbit: every multiplier component NaN (not NaN + 0j)
+        no_multipliers = np.full(model.n_state, complex(np.nan, np.nan))
+        return PointSolution(status, reason, iters, res, no_multipliers, np.nan, False, floquet.NONE,
                              state, None, n_rhs)
     lams = floquet.multipliers(mono)
     max_abs, stable, bif = floquet.classify(lams)
-    samples = shooting.sample_orbit(model.kernel, state, p, float(periods), n_samples * periods, opts)
+    samples = problem.samples(state, n_samples)
     return PointSolution(status, reason, iters, res, lams, max_abs, stable, bif, state, samples, n_rhs)
 
 

@@ -1,0 +1,52 @@
+"""Validation model `duffing`: x'' + 2 zeta x' + x + gamma x^3 = F cos(omega t), in scaled time
+tau = t / T with T = 2 pi / omega, state (x, dx/dtau). With F = 0 and zeta = 0 it is conservative
+and autonomous (free oscillation, backbone); hardening for gamma > 0, softening for gamma < 0."""
+import numpy as np
+from numba import njit
+
+from rotorkernels.models.spec import Built, ModelSpec, Observable, Parameter
+from rotorkernels.models.velocity import upper_rows, velocity_rows
+
+P_T2, P_DAMP, P_GAMMA, P_FORCE = range(4)   # T^2, 2 zeta T, gamma, F
+
+
+@njit(cache=True, nogil=True, inline="always")
+def rhs(tau, u, p, du):
+    velocity_rows(u, du, 1)
+    x = u[0]
+    du[1] = p[P_T2] * (p[P_FORCE] * np.cos(2.0 * np.pi * tau) - x - p[P_GAMMA] * x * x * x) - p[P_DAMP] * u[1]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def jac(tau, u, p, out):
+    upper_rows(out, 1)
+    out[1, 0] = -p[P_T2] * (1.0 + 3.0 * p[P_GAMMA] * u[0] * u[0])
+    out[1, 1] = -p[P_DAMP]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def rhs_jac(tau, u, p, du, out):
+    rhs(tau, u, p, du)
+    jac(tau, u, p, out)
+
+
+def build(v):
+    period = 2.0 * np.pi / v["omega"]
+    p = np.array([period * period, 2.0 * v["zeta"] * period, v["gamma"], v["force"]])
+    return Built(p, period, {})
+
+
+SPEC = ModelSpec(
+    name="duffing", id=3, module=__name__, n_position=1,
+    description="validation: forced Duffing oscillator (scaled time tau = omega t / 2 pi)",
+    parameters=(
+        Parameter(name="omega", unit="rad s-1", long_name="forcing frequency", axis=True, lo=0,
+                  lo_open=True, help="forcing circular frequency (linear natural frequency 1)"),
+        Parameter(default=0.05, name="zeta", section="duffing", lo=0, help="damping ratio"),
+        Parameter(default=0.1, name="gamma", section="duffing", help="cubic stiffness"),
+        Parameter(default=0.1, name="force", section="duffing", help="forcing amplitude"),
+    ),
+    continuation=("omega",),
+    build=build, cold_guess=lambda p: np.zeros(2), length_scale=1.0,
+    observables=(Observable("x", (1.0,), "1", "displacement"),),
+)

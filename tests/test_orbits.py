@@ -1,0 +1,61 @@
+"""Periodic-orbit problems (rotorkernels.orbits) against closed forms, on the Duffing validation
+model: forced orbits of the linear oscillator, free (conservative) orbits with unknown period."""
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from rotorkernels import integrators as ig, models, shooting
+from rotorkernels.orbits import AutonomousOrbitProblem, ForcedOrbitProblem
+
+DUFFING = models.get("duffing")
+TIGHT = ig.settings("dop853", rtol=1e-12, atol=1e-14, amplitude_limit=1e3)
+
+
+def duffing(omega, zeta=0.0, gamma=0.0, force=0.0):
+    return DUFFING.build({"omega": omega, "zeta": zeta, "gamma": gamma, "force": force})
+
+
+@pytest.mark.parametrize("omega", [0.5, 0.97, 1.6])
+def test_forced_linear_orbit_is_the_steady_state(omega):
+    """gamma = 0: x(t) = Re(X e^(i omega t)), X = F / (1 - omega^2 + 2 i zeta omega); the scaled
+    state is (Re X, T Re(i omega X)) = (Re X, -2 pi Im X). Newton to 1e-12 on DOP853 at rtol
+    1e-12: the state is exact to ~1e-11 relative to max(1, |s|); 1e-9 leaves room."""
+    zeta, force = 0.05, 0.3
+    built = duffing(omega, zeta, 0.0, force)
+    X = force / (1 - omega ** 2 + 2j * zeta * omega)
+    out = ForcedOrbitProblem(DUFFING, built.p, TIGHT).shoot(np.zeros(2), 1e-12, 20)
+    assert out[2] == shooting.CONVERGED
+    np.testing.assert_allclose(out[0], [X.real, -2 * np.pi * X.imag], atol=1e-9 * max(1, abs(X)))
+
+
+def free_period(amplitude, gamma):
+    """Period of x'' + x + gamma x^3 = 0 through x = A, x' = 0: with x = A sin(theta),
+    T = 4 int_0^(pi/2) dtheta / sqrt(1 + gamma A^2 (1 + sin^2 theta) / 2) (quadrature to 1e-13)."""
+    g = lambda th: 1.0 / np.sqrt(1.0 + gamma * amplitude ** 2 * (1.0 + np.sin(th) ** 2) / 2.0)
+    return 4.0 * quad(g, 0.0, np.pi / 2, epsabs=0.0, epsrel=1e-13)[0]
+
+
+@pytest.mark.parametrize("gamma, amplitude", [(0.1, 1e-3), (0.1, 1.0), (0.1, 3.0), (-0.1, 1.5)])
+def test_autonomous_orbit_period_is_the_exact_free_period(gamma, amplitude):
+    """Conservative Duffing (hardening and softening): the period found with phase and amplitude
+    conditions equals the quadrature. Scaled time with omega = 1 is t / 2 pi. The period error
+    is the integration error over one period (DOP853, rtol 1e-12: ~1e-11) plus Newton's residual
+    (1e-11) over |f|: 1e-9 relative bounds both. Both multipliers are 1 (a Jordan block: round-off
+    of size eps splits them by ~sqrt(eps) = 1e-6)."""
+    built = duffing(1.0, gamma=gamma)
+    problem = AutonomousOrbitProblem(DUFFING, built.p, TIGHT)
+    # the one-harmonic balance period 1 / sqrt(1 + 3 gamma A^2 / 4) as the guess (a continuation
+    # supplies its neighbour's period instead)
+    orbit = problem.solve(amplitude, np.zeros(2), 1 / np.sqrt(1 + 0.75 * gamma * amplitude ** 2), tol=1e-11)
+    assert orbit.converged
+    assert orbit.period * 2 * np.pi == pytest.approx(free_period(amplitude, gamma), rel=1e-9)
+    assert orbit.state[0] == amplitude and orbit.state[1] == 0.0
+    np.testing.assert_allclose(orbit.multipliers, [1.0, 1.0], atol=1e-5)
+
+
+def test_autonomous_orbit_reports_failure_instead_of_raising():
+    """A softening spring past its turning amplitude (1 + gamma A^2 < 0 at A = 4, gamma = -0.1)
+    has no periodic orbit: the solve ends with converged False."""
+    built = duffing(1.0, gamma=-0.1)
+    orbit = AutonomousOrbitProblem(DUFFING, built.p, TIGHT).solve(4.0, np.zeros(2), 1.0, max_iter=8)
+    assert not orbit.converged and np.isnan(orbit.multipliers).all()
