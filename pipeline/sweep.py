@@ -10,6 +10,7 @@ into the cube (atomically written) at the end.
 import itertools
 import json
 import os
+import socket
 import sys
 import time
 from dataclasses import dataclass
@@ -17,7 +18,7 @@ from datetime import datetime, timezone
 
 import numpy as np
 
-from pipeline import boundaries, compute, cube
+from pipeline import boundaries, compute, cube, fileio
 
 VERSION = "0.1.0"
 
@@ -159,7 +160,7 @@ def _client(workers, scheduler):
     from dask.distributed import Client, LocalCluster
 
     if scheduler:
-        return Client(scheduler), None
+        return Client(scheduler, timeout=f"{4 * SCHEDULER_TIMEOUT_S}s"), None
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
     n = workers or max(2, os.cpu_count() or 2)
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
@@ -187,23 +188,64 @@ def _fixed_coords(cfg):
 
 def run(cfg, output, workers=None, scheduler=None, resume=False, overwrite=False, chunk_points=None,
         progress=True, stream=sys.stderr):
-    """Run a sweep from a validated config into a netCDF cube at `output`; returns its path."""
-    output, parts = _prepare_output(output, cfg, resume, overwrite)
+    """Run a sweep from a validated config into a netCDF cube at `output`; returns its path.
+    The output is locked for the whole run, so two runs never share part files."""
+    output = os.path.abspath(output)
+    with fileio.output_lock(output, cfg.path or "<default scene>"):
+        if scheduler:
+            check_scheduler(scheduler)
+        output, parts = _prepare_output(output, cfg, resume, overwrite)
+        try:
+            return _run_locked(cfg, output, parts, workers, scheduler, chunk_points,
+                               stream if progress else None)
+        except OSError as exc:
+            raise SweepError(_write_failure(exc, output, parts)) from None
+        finally:
+            if os.path.isdir(parts) and not os.listdir(parts):
+                os.rmdir(parts)       # nothing finished: leave no empty parts directory behind
+
+
+def _run_locked(cfg, output, parts, workers, scheduler, chunk_points, stream):
     config_hash = cfg.hash()
     segs = segments(cfg)
     done = _done_segments(parts, config_hash)
     todo = [s for s in segs if s.id not in done]
     total = sum(len(s.points) for s in segs)
-    bar = Progress(total, total - sum(len(s.points) for s in todo), stream) if progress else None
+    bar = Progress(total, total - sum(len(s.points) for s in todo), stream) if stream else None
     if todo:
         _warm_up(cfg.data, todo[0])
         _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points, bar)
     ds = cube.assemble(cfg.axes, _fixed_coords(cfg), cube.read_parts(parts), _provenance(cfg),
-                       n_multipliers=compute.MODELS[cfg.data["scene"]["model"]].n_state)
+                       n_multipliers=compute.MODELS[cfg.data["scene"]["model"]].n_state,
+                       config_hash=config_hash)
     ds = boundaries.add_boundary_table(cfg.data, ds)
     path = cube.write_cube(ds, output, overwrite=True)
     _remove_parts(parts)
     return path
+
+
+def _write_failure(exc, output, parts):
+    """One line for an OS error during a run: what failed, what is kept, how to go on."""
+    n = len([p for p in os.listdir(parts) if p.endswith(".npz")]) if os.path.isdir(parts) else 0
+    kept = (f"the {n} finished chunk(s) are kept in {parts}; fix the cause and rerun with --resume"
+            if n else "no finished chunk was kept")
+    return f"cannot write {output}: {fileio.os_error_text(exc)}; {kept}"
+
+
+SCHEDULER_TIMEOUT_S = 5
+
+
+def check_scheduler(address, timeout=SCHEDULER_TIMEOUT_S):
+    """Fail within seconds (not Dask's 30 s, and before kernels compile) when nothing listens at
+    a --scheduler address."""
+    host, _, port = address.split("://", 1)[-1].rpartition(":")
+    if not host or not port.isdigit():
+        raise SweepError(f"--scheduler {address}: expected an address like tcp://HOST:PORT")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=timeout).close()
+    except OSError as exc:
+        raise SweepError(f"--scheduler {address}: no scheduler reachable within {timeout} s "
+                         f"({exc.strerror or exc}); is it running, and is the address right?") from None
 
 
 def _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points, bar):

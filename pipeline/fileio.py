@@ -1,0 +1,120 @@
+"""File-system plumbing shared by sweeps, cubes and reports: atomic writes that respect the umask,
+an exclusive lock on a sweep's output, and OS errors turned into one line for the user."""
+import contextlib
+import fcntl
+import json
+import os
+import socket
+import tempfile
+from datetime import datetime, timezone
+from pathlib import Path
+
+
+class FileIOError(Exception):
+    """A file-system problem the user can fix (message for the user: path, cause, what to do)."""
+
+
+def os_error_text(exc, path=None):
+    """'<path>: <cause>' of an OSError (or netCDF's RuntimeError, which carries no errno)."""
+    where = exc.filename if getattr(exc, "filename", None) else path
+    cause = exc.strerror if getattr(exc, "strerror", None) else str(exc)
+    return f"{where}: {cause}" if where else cause
+
+
+def _umask():
+    """The process umask (os.umask can only be read by setting it, so set it straight back)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def fsync_path(path):
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+@contextlib.contextmanager
+def atomic_path(path):
+    """Yield a temp path next to `path`; on success it replaces `path` in one step, so readers see
+    the old file or the complete new one. mkstemp creates files 0600; a normal open() would give
+    0666 & ~umask, so the temp file gets that mode before it becomes visible."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        yield tmp
+        os.chmod(tmp, 0o666 & ~_umask())
+        fsync_path(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+    fsync_path(path.parent)
+
+
+# --- the output lock --------------------------------------------------------------------------
+
+def lock_path(output):
+    """`<cube>.lock` next to the cube: outside `<cube>.parts/`, which a run deletes at its end."""
+    output = Path(output)
+    return output.with_name(output.name + ".lock")
+
+
+def _holder_text(holder):
+    return (f"pid {holder.get('pid', '?')} on {holder.get('host', '?')}, started "
+            f"{holder.get('started', '?')}, config {holder.get('config', '?')}")
+
+
+def _read_holder(path):
+    try:
+        return json.loads(Path(path).read_text())
+    except (OSError, ValueError):
+        return {}          # being written by the other run: its details are not there yet
+
+
+def _lock_fd(path):
+    """An fd holding an exclusive flock on `path`, or None while another process holds it. The
+    kernel drops a flock whenever its process ends (even by SIGKILL), so a killed run leaves no
+    stale lock behind. If the file was unlinked by a finishing run between our open and flock,
+    we locked an orphan inode: open the path again."""
+    while True:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(fd)
+            return None
+        with contextlib.suppress(FileNotFoundError):
+            if os.fstat(fd).st_ino == os.stat(path).st_ino:
+                return fd
+        os.close(fd)
+
+
+@contextlib.contextmanager
+def output_lock(output, config_label):
+    """Hold `<output>.lock` for the duration of a run; refuse while another live run holds it.
+    The file names the holder (pid, host, start time, config) for that refusal."""
+    path = lock_path(output)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd = _lock_fd(path)
+        if fd is None:
+            raise FileIOError(f"{output} is being written by another rotorsweep run "
+                              f"({_holder_text(_read_holder(path))}); wait for it to finish or use "
+                              "another output path")
+        holder = {"pid": os.getpid(), "host": socket.gethostname(), "config": str(config_label),
+                  "started": datetime.now(timezone.utc).isoformat(timespec="seconds")}
+        os.ftruncate(fd, 0)
+        os.write(fd, json.dumps(holder).encode())
+    except OSError as exc:
+        raise FileIOError(f"cannot write the output: {os_error_text(exc, path)}") from None
+    try:
+        yield path
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            path.unlink()                    # while still locked: no one else is using the name
+        os.close(fd)
