@@ -77,3 +77,76 @@ def test_cubes_and_parts_get_the_umask_mode(tmp_path, umask):
         os.umask(old)
     for written in (path, part):
         assert oct(written.stat().st_mode & 0o777) == oct(0o666 & ~umask), written
+
+
+# --- item 4: OS errors as one line, checks before any work -------------------------------------
+
+@pytest.mark.parametrize("args", [["--workers", "0"], ["--workers", "-3"], ["--chunk-points", "0"],
+                                  ["--chunk-points", "-5"], ["--workers", "two"]])
+def test_worker_and_chunk_counts_are_checked_at_parsing(small_config, tmp_path, args):
+    proc = rotorsweep("run", small_config, "-o", tmp_path / "w.nc", *args, check=False)
+    assert proc.returncode == 2 and "must be an integer >= 1" in proc.stderr, proc.stderr
+    assert not cube.parts_dir(tmp_path / "w.nc").exists()
+
+
+def _free_port():
+    import socket
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_an_unreachable_scheduler_fails_fast_before_any_work(small_config, tmp_path):
+    out = tmp_path / "s.nc"
+    address = f"tcp://127.0.0.1:{_free_port()}"          # nothing listens there
+    t0 = time.monotonic()
+    proc = rotorsweep("run", small_config, "-o", out, "--scheduler", address, check=False)
+    assert proc.returncode == 2 and address in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+    assert time.monotonic() - t0 < 20          # not Dask's 30 s connect timeout
+    assert not cube.parts_dir(out).exists() and not fileio.lock_path(out).exists()
+
+
+def run_cli(capsys, *args):
+    rc = cli.main([str(a) for a in args])
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    return rc, err
+
+
+def test_a_read_only_output_directory_is_one_line(small_config, tmp_path, monkeypatch, capsys):
+    def read_only(path):
+        raise OSError(30, "Read-only file system", str(path))
+
+    monkeypatch.setattr(fileio, "_lock_fd", read_only)
+    rc, err = run_cli(capsys, "run", small_config, "-o", tmp_path / "ro.nc", "--workers", "1")
+    assert rc == 2 and "ro.nc.lock: Read-only file system" in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_full_disk_keeps_the_finished_chunks_and_resume_finishes(small_config, tmp_path, monkeypatch, capsys):
+    out = tmp_path / "full.nc"
+    args = ("run", small_config, "-o", out, "--workers", "1", "--chunk-points", "8", "-q")
+    write_part = cube.write_part
+    written = []
+
+    def full_after_one(parts_dir, chunk_id, *rest):
+        if written:
+            raise OSError(28, "No space left on device", str(parts_dir / f"{chunk_id}.npz"))
+        written.append(chunk_id)
+        return write_part(parts_dir, chunk_id, *rest)
+
+    monkeypatch.setattr(cube, "write_part", full_after_one)
+    rc, err = run_cli(capsys, *args)
+    assert rc == 2 and "No space left on device" in err and "the 1 finished chunk(s) are kept" in err, err
+    assert "--resume" in err and len(err.strip().splitlines()) == 1
+    monkeypatch.undo()
+
+    def hdf_error(*_, **__):
+        raise RuntimeError("NetCDF: HDF error")          # what netCDF-C says when the disk fills
+
+    monkeypatch.setattr("xarray.Dataset.to_netcdf", hdf_error)
+    rc, err = run_cli(capsys, *args, "--resume")
+    assert rc == 2 and "NetCDF: HDF error" in err and "--resume" in err, err
+    assert not out.exists() and len(list(cube.parts_dir(out).glob("*.npz"))) > 1
+    monkeypatch.undo()
+    rc, err = run_cli(capsys, *args, "--resume")
+    assert rc == 0 and cube.open_cube(out)["orbit_status"].size == 22
