@@ -7,6 +7,7 @@ import difflib
 import hashlib
 import json
 import math
+import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -224,6 +225,66 @@ def _axis_values(v, name, errors, where):
     return values
 
 
+def _step_count(start, stop, step):
+    return int(math.floor((stop - start) / step + 1e-9)) + 1
+
+
+def _axis_count(v):
+    """Number of values an axis definition gives, without building it (None: malformed, which
+    _axis_values reports)."""
+    if isinstance(v, list):
+        return len(v)
+    if not isinstance(v, dict) or not all(_is_number(v.get(k)) and math.isfinite(v[k]) for k in ("start", "stop")):
+        return None
+    num = v.get("num")
+    if isinstance(num, int) and not isinstance(num, bool) and num >= 1 and "step" not in v:
+        return num
+    step = v.get("step")
+    if _is_number(step) and math.isfinite(step) and step > 0 and "num" not in v and v["stop"] >= v["start"]:
+        return _step_count(float(v["start"]), float(v["stop"]), float(step))
+    return None
+
+
+# The cube is assembled in the driver's memory: the full-grid arrays, the Dataset's typed copy
+# and netCDF's write buffers hold it about three times over.
+CUBE_COPIES_IN_MEMORY = 3
+ORBIT_BYTES_PER_POINT = 512    # ~20 orbit and Floquet variables, mostly float64, <= 8 multipliers
+ATTRACTOR_BYTES_PER_POINT = 512
+
+
+def _bytes_per_point(data):
+    """Rough size of one grid point in the cube: the Poincare samples dominate with attractors."""
+    ana = data["analysis"]
+    if ana["attractor"] is not True:
+        return ORBIT_BYTES_PER_POINT
+    samples = ana["poincare_samples"] if isinstance(ana["poincare_samples"], int) else 4096
+    directions = 2 if ana["sweep_direction"] == "both" else 1
+    return ORBIT_BYTES_PER_POINT + directions * (ATTRACTOR_BYTES_PER_POINT + 2 * 8 * samples)
+
+
+def _memory_bytes():
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+
+
+def _grid_size_problem(n, data, allow_large):
+    """(message, may_confirm) when the grid is too large, else None. numerics.max_points is a
+    guard against typos that --yes lifts; the memory cap is not, since such a run could only
+    fail at its end, when the cube is assembled."""
+    per_point = _bytes_per_point(data)
+    cap = _memory_bytes() // (CUBE_COPIES_IN_MEMORY * per_point)
+    if n > cap:
+        return (f"sweep: the grid has {n} points; at most {cap} fit in this machine's memory "
+                f"({_memory_bytes() / 2**30:.0f} GiB: the cube needs ~{per_point} bytes per point and "
+                f"is held ~{CUBE_COPIES_IN_MEMORY} times while it is assembled), even with --yes; "
+                "split the sweep into several configs"), False
+    limit = data["numerics"]["max_points"]
+    limit = limit if isinstance(limit, int) else SCHEMA["numerics"]["max_points"].default
+    if n > limit and not allow_large:
+        return (f"sweep: the grid has {n} points, above numerics.max_points = {limit}; raise "
+                "numerics.max_points or pass --yes"), True
+    return None
+
+
 def _range_values(v, errors, where):
     keys = set(v)
     unknown = keys - {"start", "stop", "step", "num"}
@@ -252,8 +313,7 @@ def _range_values(v, errors, where):
     if step <= 0:
         errors.append(f"{where}.step: must be > 0 (got {step:g})")
         return None
-    n = int(math.floor((stop - start) / step + 1e-9)) + 1
-    values = start + step * np.arange(n)
+    values = start + step * np.arange(_step_count(start, stop, step))
     return np.array([float(f"{x:.12g}") for x in values])   # no float drift: 10 + 0.1 k exactly
 
 
@@ -339,6 +399,18 @@ def _fill_dependent_defaults(data):
         b["nominal_angle"] = DEFAULT_NOMINAL_ANGLE
 
 
+def _check_grid_size(sweep, data, allow_large, errors, label):
+    """Raise for a too-large grid from the axis definitions alone, before any array is built
+    (a typo like num = 1e9 must not allocate). grid_points lets a front end ask to confirm when
+    max_points is the only problem."""
+    n = math.prod(c for c in (_axis_count(sweep.get(name)) for name in AXES) if c is not None)
+    problem = _grid_size_problem(n, data, allow_large)
+    if problem:
+        message, may_confirm = problem
+        raise ConfigError("\n".join(f"{label}: {e}" for e in errors + [message]),
+                          grid_points=n if may_confirm and not errors else None)
+
+
 def parse_config(text, path=None, allow_large=False):
     """Validate a TOML scene; returns a Config or raises ConfigError listing every problem."""
     label = str(path) if path is not None else "<config>"
@@ -355,6 +427,7 @@ def parse_config(text, path=None, allow_large=False):
             errors.append(f"{section}: required section missing")
     data = {name: _validate_section(name, raw.get(name, {}), errors) for name in SCHEMA}
     sweep = data.pop("sweep")
+    _check_grid_size(sweep, data, allow_large, errors, label)
     axes = {}
     for name in AXES:
         if sweep.get(name) is not None:
@@ -366,11 +439,6 @@ def parse_config(text, path=None, allow_large=False):
         _cross_checks(data, axes, errors)
     if errors:
         raise ConfigError("\n".join(f"{label}: {e}" for e in errors))
-    n = int(np.prod([len(v) for v in axes.values()]))
-    limit = data["numerics"]["max_points"]
-    if n > limit and not allow_large:
-        raise ConfigError(f"{label}: sweep: the grid has {n} points, above numerics.max_points = "
-                          f"{limit}; raise numerics.max_points or pass --yes", grid_points=n)
     _fill_dependent_defaults(data)
     return Config(None if path is None else str(path), text, data, axes)
 

@@ -8,7 +8,7 @@ import time
 import numpy as np
 import pytest
 
-from pipeline import cli, cube, fileio
+from pipeline import cli, config, cube, fileio
 from tests.test_cube import AXES4, PROVENANCE, random_results, _write_random_parts
 from tests.test_pipeline import CLI, SMALL, rotorsweep
 
@@ -150,3 +150,42 @@ def test_a_full_disk_keeps_the_finished_chunks_and_resume_finishes(small_config,
     monkeypatch.undo()
     rc, err = run_cli(capsys, *args, "--resume")
     assert rc == 0 and cube.open_cube(out)["orbit_status"].size == 22
+
+
+# --- item 2: the grid size is checked before any axis is built --------------------------------
+
+def _speed_axis(definition):
+    return SMALL.replace("speed = {start = 70.0, stop = 100.0, step = 3.0}", f"speed = {definition}")
+
+
+@pytest.mark.parametrize("definition, points", [
+    ("{start = 1.0, stop = 1e5, num = 300000}", 600_000),
+    ("{start = 1.0, stop = 4.0, step = 1e-5}", 600_002)])
+def test_max_points_is_checked_without_building_the_axes(definition, points):
+    import tracemalloc
+
+    text = _speed_axis(definition)
+    tracemalloc.start()
+    try:
+        with pytest.raises(config.ConfigError, match="numerics.max_points") as err:
+            config.parse_config(text)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert err.value.grid_points == points
+    assert peak < 8 * points / 4      # building the axis as floats would take >= 8 bytes a point
+
+
+@pytest.mark.parametrize("definition", ["{start = 1.0, stop = 1e5, num = 1000000000000}",
+                                        "{start = 1.0, stop = 1e5, step = 1e-9}"])
+def test_a_grid_beyond_memory_is_refused_even_with_yes(definition):
+    with pytest.raises(config.ConfigError, match="fit in this machine's memory.*even with --yes") as err:
+        config.parse_config(_speed_axis(definition), allow_large=True)
+    assert err.value.grid_points is None          # nothing to confirm
+
+
+def test_the_memory_cap_follows_the_bytes_per_point(monkeypatch):
+    monkeypatch.setattr(config, "_memory_bytes", lambda: 3 * 512 * 1000)     # room for 1000 points
+    config.parse_config(_speed_axis("{start = 1.0, stop = 1e3, num = 500}"), allow_large=True)
+    with pytest.raises(config.ConfigError, match="at most 1000 fit"):
+        config.parse_config(_speed_axis("{start = 1.0, stop = 1e3, num = 501}"), allow_large=True)
