@@ -127,6 +127,7 @@ def open_cube(path):
     except (OSError, ValueError) as exc:
         raise CubeError(f"{path}: cannot be read as netCDF ({exc})") from None
     _check_version(path, ds)
+    _check_variables(path, ds)
     for var in ds.variables.values():  # keep fill values where the writer put them
         if "_FillValue" in var.attrs:
             var.encoding["_FillValue"] = var.attrs.pop("_FillValue")
@@ -152,6 +153,21 @@ def _check_version(path, ds):
     if int(version) != schema.SCHEMA_VERSION:
         raise CubeError(f"{path} is a rotorsweep cube of schema version {int(version)}; this rotorsweep "
                         f"reads version {schema.SCHEMA_VERSION} (re-run the sweep with this version)")
+
+
+def required_variables():
+    """What every cube holds: the periodic-orbit variables (present, as not_applicable, even
+    when only attractors were asked for); the attractor variables are optional."""
+    return [name for name in schema.VARIABLES if name not in schema.ATTRACTOR_VARIABLES]
+
+
+def _check_variables(path, ds):
+    missing = [name for name in required_variables() if name not in ds.data_vars]
+    if "speed" not in ds.dims:
+        missing.insert(0, "speed (axis)")
+    if missing:
+        raise CubeError(f"{path} is an incomplete rotorsweep cube: missing {', '.join(missing)} "
+                        f"(every cube has {', '.join(required_variables())}); re-run the sweep")
 
 
 # --- describing -----------------------------------------------------------------------------

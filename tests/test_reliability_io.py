@@ -189,3 +189,15 @@ def test_the_memory_cap_follows_the_bytes_per_point(monkeypatch):
     config.parse_config(_speed_axis("{start = 1.0, stop = 1e3, num = 500}"), allow_large=True)
     with pytest.raises(config.ConfigError, match="at most 1000 fit"):
         config.parse_config(_speed_axis("{start = 1.0, stop = 1e3, num = 501}"), allow_large=True)
+
+
+# --- item 7: a cube without its required variables is one clear error ---------------------------
+
+@pytest.mark.parametrize("command", [["report"], ["query", "--unstable"], ["query"], ["info"]])
+def test_a_cube_missing_a_required_variable_is_refused(tmp_path, command):
+    shape = (3, 2, 2, 2)
+    ds = cube.build_dataset(AXES4, {}, random_results(shape), PROVENANCE).drop_vars("orbit_status")
+    path = cube.write_cube(ds, tmp_path / "broken.nc")
+    proc = rotorsweep(command[0], path, *command[1:], check=False)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
+    assert "missing orbit_status" in proc.stderr and "broken.nc" in proc.stderr
