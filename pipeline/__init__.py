@@ -67,7 +67,7 @@ def point(speed, clearance, contact_angle=None, preload=None, config=None):
     pt = {"speed": speed, "clearance": clearance,
           "contact_angle": fixed["contact_angle"] if contact_angle is None else contact_angle,
           "preload": fixed["preload"] if preload is None else preload}
-    config_mod.check_point(pt)
+    config_mod.check_point(pt, cfg.data["bearing"])
     # the periodic orbit only, even where the scene also asks for attractors (`point --attractor`)
     data = {**cfg.data, "analysis": {**cfg.data["analysis"], "floquet": True, "attractor": False}}
     row = compute.solve_segment(data, [pt])

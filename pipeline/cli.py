@@ -54,7 +54,7 @@ def _attractor_row(args):
     pt = {"speed": args.speed, "clearance": args.clearance,
           "contact_angle": fixed["contact_angle"] if args.contact_angle is None else args.contact_angle,
           "preload": fixed["preload"] if args.preload is None else args.preload}
-    config_mod.check_point(pt)
+    config_mod.check_point(pt, cfg.data["bearing"])
     return compute.point_detail(cfg.data, pt, periods=16, steps_per_period=8)["row"]
 
 

@@ -59,7 +59,8 @@ def _num(lo=-math.inf, hi=math.inf, lo_open=False, hi_open=False, default=None, 
 
 AXIS_RANGES = {
     "speed": _num(0, 1e5, lo_open=True, help="shaft speed [Hz]"),
-    "clearance": _num(0, 1e-3, hi_open=True, help="radial clearance [m]"),
+    # the upper bound depends on the bearing: _clearance_problem
+    "clearance": _num(0, help="radial clearance [m]"),
     "contact_angle": _num(0, 90, lo_open=True, hi_open=True, help="contact angle [deg]"),
     "preload": _num(0, 1e6, hi_open=True, help="axial preload [N]"),
 }
@@ -377,6 +378,8 @@ def _cross_checks(data, axes, errors):
             errors.append(f"bearing.{name}: is also swept in sweep.{name}; give it in one place only")
     if b["nominal_angle"] is not None and b["preset"] != "angular_contact_medium":
         errors.append(f"bearing.nominal_angle: only for preset \"angular_contact_medium\" (preset is {b['preset']!r})")
+    else:       # a consistent preset: its geometry bounds the clearance
+        _check_clearances(b, axes, errors)
     if b["preload_constant"] == "filipkovsky" and max(axes.get("preload", [b["preload"] or 0.0])) <= 0:
         errors.append("bearing.preload_constant: \"filipkovsky\" needs a preload > 0")
     ana = data["analysis"]
@@ -390,6 +393,26 @@ def _cross_checks(data, axes, errors):
     if num["integrator"] == "dop853" and num["newton_tol"] < num["rtol"]:
         errors.append(f"numerics.newton_tol: must be >= numerics.rtol ({num['rtol']:g}); Newton cannot "
                       "converge below the integration accuracy")
+
+
+def _check_clearances(b, axes, errors):
+    for where, values in (("sweep.clearance", axes.get("clearance", ())), ("bearing.clearance", [b["clearance"] or 0.0])):
+        problem = _clearance_problem(max(values, default=0.0), b)
+        if problem:
+            errors.append(f"{where}: {problem}")
+
+
+def _clearance_problem(clearance, bearing_data):
+    """Error text when a clearance exceeds what the preset's geometry allows, else None: the
+    groove-centre distance A = r_i + r_o - D_b, where Bai's eq. 6 free contact angle reaches
+    90 deg (209: 0.5 mm). Rounded to 6 digits, as A carries the float noise of its sum."""
+    from rotorkernels import bearing
+
+    limit = bearing.preset(bearing_data["preset"], bearing_data["nominal_angle"]).groove_center_distance
+    if clearance <= limit:
+        return None
+    return (f"must be <= {limit:.6g} m for bearing.preset {json.dumps(bearing_data['preset'])} "
+            f"(r_i + r_o - D_b, where the free contact angle reaches 90 deg; got {clearance:g})")
 
 
 def _fill_dependent_defaults(data):
@@ -454,14 +477,17 @@ def load_config(path, allow_large=False):
     return parse_config(text, path=path, allow_large=allow_large)
 
 
-def check_point(point):
-    """Validate a single point (the `point` command) with the sweep-axis rules."""
+def check_point(point, bearing_data):
+    """Validate a single point (the `point` command) with the sweep-axis rules and the bound of
+    the scene's bearing (bearing_data: the config's [bearing] table)."""
     errors = []
     for name in AXES:
         v = point.get(name)
-        if v is None or (name == "contact_angle" and v is None):
+        if v is None:
             continue
         problem = _check_number(float(v), AXIS_RANGES[name])
+        if name == "clearance" and not problem:
+            problem = _clearance_problem(float(v), bearing_data)
         if problem:
             errors.append(f"{name}: {problem} ({AXIS_RANGES[name].help})")
     if errors:

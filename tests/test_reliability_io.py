@@ -201,3 +201,29 @@ def test_a_cube_missing_a_required_variable_is_refused(tmp_path, command):
     proc = rotorsweep(command[0], path, *command[1:], check=False)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
     assert "missing orbit_status" in proc.stderr and "broken.nc" in proc.stderr
+
+
+# --- item 8: the clearance bound is the preset's, with the key, rounded ----------------------
+
+@pytest.mark.parametrize("preset, where, edit, bound", [
+    ("209", "sweep.clearance", "clearance = [7.6e-6, 6e-4]", "0.0005"),
+    ("209", "sweep.clearance", "clearance = [7.6e-6, 2e-3]", "0.0005"),
+    ("209", "bearing.clearance", "[bearing]\nclearance = 6e-4", "0.0005"),
+    ("angular_contact_medium", "sweep.clearance", "clearance = [4e-4]", "0.00035")])
+def test_the_clearance_bound_is_the_presets(preset, where, edit, bound):
+    text = SMALL.replace('preset = "209"', f'preset = "{preset}"')
+    if where == "bearing.clearance":
+        text = text.replace("clearance = [7.6e-6, 19.0e-6]\n", "").replace("[bearing]", edit)
+    else:
+        text = text.replace("clearance = [7.6e-6, 19.0e-6]", edit)
+    with pytest.raises(config.ConfigError) as err:
+        config.parse_config(text)
+    assert f"{where}: must be <= {bound} m for bearing.preset \"{preset}\"" in str(err.value)
+    assert "0.001" not in str(err.value) and "0000000" not in str(err.value)
+    text = text.replace("6e-4", "5e-4").replace("4e-4", "3.5e-4")            # at the bound: fine
+    config.parse_config(text.replace("2e-3", "5e-4"))
+
+
+def test_the_point_command_states_the_presets_clearance_bound():
+    proc = rotorsweep("point", "--speed", "80", "--clearance", "6e-4", check=False)
+    assert proc.returncode == 2 and "clearance: must be <= 0.0005 m" in proc.stderr, proc.stderr
