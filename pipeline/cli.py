@@ -39,7 +39,7 @@ def cmd_run(args):
                         chunk_points=args.chunk_points, progress=not args.quiet)
     print(f"cube: {path}")
     if args.report:
-        files = pipeline.make_report(path, args.report)
+        files = pipeline.make_report(path, args.report, overwrite=args.overwrite)
         print(f"report: {files['html']}")
     return 0
 
@@ -172,7 +172,7 @@ def cmd_query(args):
 def cmd_report(args):
     out = args.output or str(args.cube).rsplit(".", 1)[0] + "_report"
     points = [report_mod.parse_point(items) for items in args.point or []]
-    files = pipeline.make_report(args.cube, out, points=points or None)
+    files = pipeline.make_report(args.cube, out, points=points or None, overwrite=args.overwrite)
     print(f"report: {files['html']}")
     for png in files["png"]:
         print(f"figure: {png}")
@@ -206,7 +206,7 @@ def build_parser():
     r.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
     r.add_argument("--chunk-points", type=_positive_int, help="points per Dask task (default: automatic)")
     r.add_argument("--resume", action="store_true", help="finish an interrupted run from its part files")
-    r.add_argument("--overwrite", action="store_true", help="replace an existing cube")
+    r.add_argument("--overwrite", action="store_true", help="replace an existing cube (and --report DIR)")
     r.add_argument("--yes", action="store_true", help="allow grids above numerics.max_points")
     r.add_argument("--report", metavar="DIR", help="also write the report into DIR")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
@@ -241,6 +241,8 @@ def build_parser():
     rp.add_argument("--point", action="append", nargs="+", metavar="AXIS=VALUE",
                     help="a grid point to show in detail (orbit, Poincare section, spectrum): "
                          "speed=36 clearance=19e-6 (nearest grid point); repeatable")
+    rp.add_argument("--overwrite", action="store_true",
+                    help="replace a report of another cube in the directory")
     rp.set_defaults(func=cmd_report)
 
     i = sub.add_parser("info", help="what a cube holds")

@@ -4,6 +4,7 @@ import contextlib
 import fcntl
 import json
 import os
+import shutil
 import socket
 import tempfile
 from datetime import datetime, timezone
@@ -118,3 +119,67 @@ def output_lock(output, config_label):
         with contextlib.suppress(FileNotFoundError):
             path.unlink()                    # while still locked: no one else is using the name
         os.close(fd)
+
+
+# --- report directories ------------------------------------------------------------------------
+
+REPORT_MARKER = "report.json"      # which cube a report directory was made from
+
+
+def report_identity(ds, cube_path=None):
+    """What makes two reports 'of the same cube': the cube file and its config hash."""
+    return {"cube": str(Path(cube_path).absolute()) if cube_path is not None else None,
+            "config_hash": ds.attrs.get("config_hash")}
+
+
+def check_report_dir(out, identity, overwrite):
+    """Refuse to write a report into `out` where it would mix with other files: a report of
+    another cube (unless overwrite, which replaces it) or anything that is not a report."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise FileIOError(f"{out} exists and is not a directory; the report needs a directory (-o DIR)")
+    if not out.is_dir() or not any(out.iterdir()):
+        return
+    marker = out / REPORT_MARKER
+    if not marker.exists() and not (out / "report.html").exists():
+        raise FileIOError(f"{out} is a non-empty directory that holds no rotorsweep report; "
+                          "choose a new or empty directory for the report")
+    owner = _read_json(marker) or {}          # {}: a report from before markers existed
+    if owner != identity and not overwrite:
+        raise FileIOError(f"{out} holds the report of {owner.get('cube') or 'another cube'} (config hash "
+                          f"{str(owner.get('config_hash', '?'))[:12]}), not of {identity['cube'] or 'this cube'}; "
+                          "pass --overwrite to replace it, or choose another directory")
+
+
+def _read_json(path):
+    try:
+        return json.loads(Path(path).read_text())
+    except (OSError, ValueError):
+        return None
+
+
+@contextlib.contextmanager
+def replaced_dir(out):
+    """Yield a new temp directory next to `out`; on success it takes the place of `out` (the
+    old directory and every file in it go), so no file of an earlier report survives."""
+    out = Path(out).absolute()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp"))
+    try:
+        yield tmp
+        os.chmod(tmp, 0o777 & ~_umask())            # mkdtemp makes it 0700
+        old = tmp.with_suffix(".old")
+        if out.exists():
+            os.rename(out, old)
+        os.rename(tmp, out)
+        shutil.rmtree(old, ignore_errors=True)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def moved(paths, old_dir, new_dir):
+    """`paths` (a dict of paths and lists of paths under old_dir) as they are under new_dir."""
+    def move(p):
+        return Path(new_dir).absolute() / Path(p).relative_to(old_dir)
+    return {k: [move(p) for p in v] if isinstance(v, list) else move(v) for k, v in paths.items()}

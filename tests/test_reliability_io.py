@@ -227,3 +227,54 @@ def test_the_clearance_bound_is_the_presets(preset, where, edit, bound):
 def test_the_point_command_states_the_presets_clearance_bound():
     proc = rotorsweep("point", "--speed", "80", "--clearance", "6e-4", check=False)
     assert proc.returncode == 2 and "clearance: must be <= 0.0005 m" in proc.stderr, proc.stderr
+
+
+# --- item 5: a report directory holds the report of one cube -----------------------------------
+
+@pytest.fixture(scope="module")
+def two_cubes(tmp_path_factory):
+    from tests.synthetic import synthetic_cube
+
+    where = tmp_path_factory.mktemp("cubes")
+    speed, clearance = np.arange(10.0, 60.0, 5.0), [3.8e-6, 19e-6]
+    first = synthetic_cube(speed, clearance, attractor=True)     # more figures than the second
+    second = synthetic_cube(speed, clearance)
+    second.attrs["config_hash"] = "1" * 64
+    return cube.write_cube(first, where / "first.nc"), cube.write_cube(second, where / "second.nc")
+
+
+def _files(directory):
+    return sorted(p.name for p in directory.iterdir())
+
+
+def test_a_report_of_another_cube_is_refused_then_replaced_cleanly(two_cubes, tmp_path):
+    import pipeline
+
+    first, second = two_cubes
+    out, fresh = tmp_path / "rep", tmp_path / "fresh"
+    pipeline.make_report(first, out)
+    before = _files(out)
+    pipeline.make_report(first, out)                  # the same cube again: fine
+    proc = rotorsweep("report", second, "-o", out, check=False)
+    assert proc.returncode == 2 and "first.nc" in proc.stderr and "--overwrite" in proc.stderr, proc.stderr
+    assert _files(out) == before and "report.json" in before
+    files = pipeline.make_report(second, out, overwrite=True)
+    pipeline.make_report(second, fresh)
+    assert _files(out) == _files(fresh) != before      # nothing of the first report is left
+    assert files["html"] == out.absolute() / "report.html" and files["html"].exists()
+    assert str(second.absolute()) in (out / "report.json").read_text()
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []   # no temp dirs left
+
+
+def test_a_report_never_goes_into_a_file_or_a_foreign_directory(two_cubes, tmp_path):
+    first, _ = two_cubes
+    a_file = tmp_path / "notes.txt"
+    a_file.write_text("mine")
+    proc = rotorsweep("report", first, "-o", a_file, check=False)
+    assert proc.returncode == 2 and "not a directory" in proc.stderr and "Traceback" not in proc.stderr
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "thesis.tex").write_text("precious")
+    proc = rotorsweep("report", first, "-o", mine, "--overwrite", check=False)
+    assert proc.returncode == 2 and "holds no rotorsweep report" in proc.stderr, proc.stderr
+    assert _files(mine) == ["thesis.tex"] and a_file.read_text() == "mine"
