@@ -9,6 +9,7 @@ into the cube (atomically written) at the end.
 """
 import itertools
 import json
+import logging
 import os
 import socket
 import sys
@@ -164,7 +165,8 @@ def _client(workers, scheduler):
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
     n = workers or max(2, os.cpu_count() or 2)
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                           dashboard_address="127.0.0.1:0", env={"NUMBA_NUM_THREADS": "1"})
+                           dashboard_address="127.0.0.1:0", env={"NUMBA_NUM_THREADS": "1"},
+                           preload=["pipeline.workerinit"])
     return Client(cluster), cluster
 
 
@@ -265,9 +267,21 @@ def _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points,
                 bar.update(len(index))
             future.release()
     finally:
+        _close(client, cluster)
+
+
+def _close(client, cluster):
+    """Close quietly: after Ctrl-C or an error the nannies warn that they kill workers still busy
+    in a kernel, which is the intent here."""
+    logger = logging.getLogger("distributed")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
         client.close()
         if cluster is not None:
             cluster.close()
+    finally:
+        logger.setLevel(level)
 
 
 def _remove_parts(parts):

@@ -278,3 +278,23 @@ def test_a_report_never_goes_into_a_file_or_a_foreign_directory(two_cubes, tmp_p
     proc = rotorsweep("report", first, "-o", mine, "--overwrite", check=False)
     assert proc.returncode == 2 and "holds no rotorsweep report" in proc.stderr, proc.stderr
     assert _files(mine) == ["thesis.tex"] and a_file.read_text() == "mine"
+
+
+# --- item 6: Ctrl-C is one line -----------------------------------------------------------------
+
+def test_ctrl_c_prints_one_line_and_no_worker_traceback(tmp_path):
+    import signal
+
+    from tests.test_reliability import LONG, wait_for_parts
+
+    cfg = tmp_path / "long.toml"
+    cfg.write_text(LONG)
+    out = tmp_path / "long.nc"
+    proc = subprocess.Popen(CLI + ["run", str(cfg), "-o", str(out), "--workers", "2", "--chunk-points", "16"],
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    wait_for_parts(cube.parts_dir(out), proc)
+    os.killpg(proc.pid, signal.SIGINT)            # what a terminal's Ctrl-C does: the whole group
+    err = proc.communicate(timeout=120)[1]
+    assert proc.returncode == 130
+    lines = [line for line in err.splitlines() if " points " not in line]      # progress lines
+    assert lines == ["rotorsweep: interrupted; finished chunks are kept, rerun with --resume"], err
