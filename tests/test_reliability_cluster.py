@@ -1,0 +1,89 @@
+"""Sweeps on a real distributed cluster: a `dask scheduler` and `dask worker` processes started
+with the distributed CLI on 127.0.0.1, `rotorsweep run --scheduler`, workers (and the driver)
+killed mid-run. The cube must be bitwise the one of an undisturbed local run."""
+import contextlib
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline import cube
+from tests.test_pipeline import CLI, SMALL, data_vars, rotorsweep
+from tests.test_reliability import wait_for_parts
+
+DASK = str(Path(sys.executable).with_name("dask"))
+
+
+def grid_config(tmp_path, speed, clearance, segment_length):
+    path = tmp_path / "grid.toml"
+    path.write_text(SMALL.replace("speed = {start = 70.0, stop = 100.0, step = 3.0}", f"speed = {speed}")
+                    .replace("clearance = [7.6e-6, 19.0e-6]", f"clearance = {clearance}")
+                    .replace("segment_length = 4", f"segment_length = {segment_length}"))
+    return path
+
+
+@contextlib.contextmanager
+def dask_cluster(tmp_path, n_workers, nanny):
+    """A scheduler and n single-thread workers as separate processes, bound to 127.0.0.1 (free
+    ports picked by the OS; the address travels in a scheduler file). Yields (address, client)."""
+    from dask.distributed import Client
+
+    sched_file = tmp_path / "scheduler.json"
+    local = ["--host", "127.0.0.1"]
+    procs = [subprocess.Popen([DASK, "scheduler", *local, "--port", "0", "--dashboard-address", "127.0.0.1:0",
+                               "--scheduler-file", str(sched_file)], stderr=subprocess.DEVNULL)]
+    try:
+        deadline = time.monotonic() + 60
+        while not sched_file.exists() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        env = {**os.environ, "NUMBA_NUM_THREADS": "1"}
+        procs += [subprocess.Popen([DASK, "worker", *local, "--nthreads", "1", "--scheduler-file", str(sched_file),
+                                    "--nanny" if nanny else "--no-nanny"], stderr=subprocess.DEVNULL, env=env)
+                  for _ in range(n_workers)]
+        with Client(scheduler_file=str(sched_file), timeout="30s") as client:
+            client.wait_for_workers(n_workers, timeout=120)
+            yield json.loads(sched_file.read_text())["address"], client
+    finally:
+        for proc in reversed(procs):
+            proc.terminate()
+        for proc in procs:
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+
+
+def worker_pids(client):
+    """pid of each worker process (the one that computes; under a nanny, the nanny's child)."""
+    return list(client.run(os.getpid).values())
+
+
+def assert_same_cube(reference, other):
+    a, b = data_vars(reference), data_vars(other)
+    assert set(a.data_vars) == set(b.data_vars)
+    for name in a.data_vars:
+        np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+
+
+def test_a_sweep_on_a_dask_cli_cluster_survives_a_killed_worker(tmp_path):
+    cfg = grid_config(tmp_path, "{start = 60.0, stop = 250.0, step = 4.0}", "[7.6e-6, 19.0e-6]", 4)
+    local = tmp_path / "local.nc"
+    rotorsweep("run", cfg, "-o", local, "--workers", "2", "-q")
+    out = tmp_path / "cluster.nc"
+    with dask_cluster(tmp_path, n_workers=2, nanny=False) as (address, client):
+        victim = worker_pids(client)[0]
+        proc = subprocess.Popen(CLI + ["run", str(cfg), "-o", str(out), "--scheduler", address,
+                                       "--chunk-points", "4", "-q"],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        wait_for_parts(cube.parts_dir(out), proc)
+        os.kill(victim, signal.SIGKILL)              # no nanny: this worker is gone for good
+        stdout, stderr = proc.communicate(timeout=300)
+        assert proc.returncode == 0, stderr
+        assert len(client.scheduler_info()["workers"]) == 1
+    assert_same_cube(local, out)
