@@ -227,11 +227,12 @@ def _run_locked(cfg, output, parts, workers, scheduler, chunk_points, stream):
 
 
 def _write_failure(exc, output, parts):
-    """One line for an OS error during a run: what failed, what is kept, how to go on."""
+    """One line for an OS error during a run (disk full, read-only, lost scheduler): what
+    failed, what is kept, how to go on."""
     n = len([p for p in os.listdir(parts) if p.endswith(".npz")]) if os.path.isdir(parts) else 0
     kept = (f"the {n} finished chunk(s) are kept in {parts}; fix the cause and rerun with --resume"
             if n else "no finished chunk was kept")
-    return f"cannot write {output}: {fileio.os_error_text(exc)}; {kept}"
+    return f"the run into {output} stopped: {fileio.os_error_text(exc)}; {kept}"
 
 
 SCHEDULER_TIMEOUT_S = 5
