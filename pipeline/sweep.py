@@ -7,6 +7,7 @@ chunk size. Every finished chunk is written at once as a part file next to the o
 re-run with `resume` computes only the segments no part holds, and the parts are assembled
 into the cube (atomically written) at the end.
 """
+import functools
 import itertools
 import json
 import logging
@@ -251,17 +252,34 @@ def check_scheduler(address, timeout=SCHEDULER_TIMEOUT_S):
                          f"({exc.strerror or exc}); is it running, and is the address right?") from None
 
 
+# Dask gives up on a task after its workers died `allowed-failures` (3) times (KilledWorker), as
+# it may be what kills them. Our chunks are plain numerics, so worker deaths are far more likely
+# the machine's doing (OOM killer, preemption): resubmit a chunk that many more times.
+RESUBMITS = 3
+
+
 def _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points, bar):
-    from dask.distributed import as_completed
+    from dask.distributed import KilledWorker, as_completed
 
     client, cluster = _client(workers, scheduler)
     try:
         n_workers = max(1, len(client.scheduler_info()["workers"]))
-        chunks = plan_chunks(todo, n_workers, chunk_points)
-        data = client.scatter(cfg.data, broadcast=True)
-        futures = [client.submit(compute_chunk, data, chunk, pure=False) for chunk in chunks]
-        for future in as_completed(futures):
-            seg_ids, index, results = future.result()
+        # The config goes with every task (a few kB), not scattered: a scattered copy lives only
+        # on workers and is lost for good once every worker holding it has died.
+        submit = functools.partial(client.submit, compute_chunk, cfg.data, pure=False)
+        futures = {submit(chunk): (chunk, 0) for chunk in plan_chunks(todo, n_workers, chunk_points)}
+        pending = as_completed(futures)
+        for future in pending:
+            chunk, resubmits = futures.pop(future)
+            try:
+                seg_ids, index, results = future.result()
+            except KilledWorker:
+                if resubmits == RESUBMITS:
+                    raise SweepError(_killed_chunk(chunk, parts)) from None
+                retry = submit(chunk)
+                futures[retry] = (chunk, resubmits + 1)
+                pending.add(retry)
+                continue
             cube.write_part(parts, f"seg{seg_ids[0]:06d}", index, results,
                             {"config_hash": config_hash, "segments": seg_ids})
             if bar:
@@ -269,6 +287,13 @@ def _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points,
             future.release()
     finally:
         _close(client, cluster)
+
+
+def _killed_chunk(chunk, parts):
+    first = chunk[0].points[0]
+    return (f"the chunk starting at speed={first['speed']:g} Hz, clearance={first['clearance']:g} m "
+            f"killed {RESUBMITS + 1} x 3 workers; finished chunks are kept in {parts}: look for what "
+            "ends the workers (memory?), then rerun with --resume")
 
 
 def _close(client, cluster):

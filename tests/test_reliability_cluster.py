@@ -87,3 +87,62 @@ def test_a_sweep_on_a_dask_cli_cluster_survives_a_killed_worker(tmp_path):
         assert proc.returncode == 0, stderr
         assert len(client.scheduler_info()["workers"]) == 1
     assert_same_cube(local, out)
+
+
+class Killer:
+    """SIGKILLs a random worker process every `every` seconds (their nannies start new ones)."""
+
+    def __init__(self, client, every, seed=0):
+        import threading
+
+        self.client, self.every, self.kills = client, every, 0
+        self.rng = np.random.default_rng(seed)
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+
+    def _run(self):
+        while not self.stop.wait(self.every):
+            with contextlib.suppress(Exception):          # a worker just restarting: next round
+                pids = worker_pids(self.client)
+                os.kill(int(self.rng.choice(pids)), signal.SIGKILL)
+                self.kills += 1
+
+    def __enter__(self):
+        self.thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        self.stop.set()
+        self.thread.join()
+
+
+@pytest.mark.slow
+def test_chaos_workers_killed_every_few_seconds_and_the_driver_once(tmp_path):
+    """A few thousand points (orbits only) while a worker dies every 3 s and the driver once,
+    then --resume: the cube is bitwise the undisturbed one. Figures in docs/reliability.md."""
+    cfg = grid_config(tmp_path, "{start = 100.0, stop = 250.0, step = 0.1}", "[7.6e-6, 19.0e-6]", 8)
+    reference = tmp_path / "reference.nc"
+    t0 = time.monotonic()
+    rotorsweep("run", cfg, "-o", reference, "--workers", "2", "-q")
+    undisturbed_s = time.monotonic() - t0
+    out = tmp_path / "chaos.nc"
+    run = CLI + ["run", str(cfg), "-o", str(out), "--chunk-points", "16", "-q"]
+    with dask_cluster(tmp_path, n_workers=2, nanny=True) as (address, client), Killer(client, every=3.0) as killer:
+        t0 = time.monotonic()
+        driver = subprocess.Popen(run + ["--scheduler", address], stderr=subprocess.PIPE, text=True)
+        try:
+            wait_for_parts(cube.parts_dir(out), driver, minimum=40, timeout=1200)
+        except AssertionError:
+            raise AssertionError(driver.communicate()[1]) from None
+        driver.kill()                                                # the driver, once
+        driver.wait()
+        parts_at_driver_kill = len(list(cube.parts_dir(out).glob("*.npz")))
+        resumed = subprocess.run(run + ["--scheduler", address, "--resume"], capture_output=True, text=True,
+                                 timeout=3600)
+        chaos_s = time.monotonic() - t0
+        assert resumed.returncode == 0, resumed.stderr
+    n_points = cube.open_cube(out)["orbit_status"].size
+    print(f"\nchaos: {n_points} points, {killer.kills} worker kills + 1 driver kill (after "
+          f"{parts_at_driver_kill} parts), {chaos_s:.0f} s; undisturbed local run {undisturbed_s:.0f} s")
+    assert killer.kills >= 3
+    assert_same_cube(reference, out)
