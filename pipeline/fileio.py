@@ -16,14 +16,18 @@ class FileIOError(Exception):
 
 
 def os_error_text(exc, path=None):
-    """'<path>: <cause>' of an OSError (or netCDF's RuntimeError, which carries no errno)."""
+    """'<path>: <cause>' of an OSError; `path` where the error names none."""
     where = exc.filename if getattr(exc, "filename", None) else path
     cause = exc.strerror if getattr(exc, "strerror", None) else str(exc)
     return f"{where}: {cause}" if where else cause
 
 
 def _umask():
-    """The process umask (os.umask can only be read by setting it, so set it straight back)."""
+    """The process umask. Linux shows it in /proc; os.umask can only read it by setting it, which
+    for a moment gives other threads (Dask's) the wrong one."""
+    with contextlib.suppress(OSError, StopIteration, ValueError):
+        with open("/proc/self/status") as f:
+            return int(next(line for line in f if line.startswith("Umask:")).split()[1], 8)
     mask = os.umask(0o022)
     os.umask(mask)
     return mask
@@ -70,13 +74,6 @@ def _holder_text(holder):
             f"{holder.get('started', '?')}, config {holder.get('config', '?')}")
 
 
-def _read_holder(path):
-    try:
-        return json.loads(Path(path).read_text())
-    except (OSError, ValueError):
-        return {}          # being written by the other run: its details are not there yet
-
-
 def _lock_fd(path):
     """An fd holding an exclusive flock on `path`, or None while another process holds it. The
     kernel drops a flock whenever its process ends (even by SIGKILL), so a killed run leaves no
@@ -105,7 +102,7 @@ def output_lock(output, config_label):
         fd = _lock_fd(path)
         if fd is None:
             raise FileIOError(f"{output} is being written by another rotorsweep run "
-                              f"({_holder_text(_read_holder(path))}); wait for it to finish or use "
+                              f"({_holder_text(_read_json(path) or {})}); wait for it to finish or use "
                               "another output path")
         holder = {"pid": os.getpid(), "host": socket.gethostname(), "config": str(config_label),
                   "started": datetime.now(timezone.utc).isoformat(timespec="seconds")}
@@ -152,6 +149,7 @@ def check_report_dir(out, identity, overwrite):
 
 
 def _read_json(path):
+    """The JSON in a file, or None (missing, unreadable, or still being written)."""
     try:
         return json.loads(Path(path).read_text())
     except (OSError, ValueError):
