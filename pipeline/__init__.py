@@ -9,6 +9,7 @@ The Python API mirrors the command line:
     pipeline.make_report(ds, "out/demo_report")                    # rotorsweep report
     pipeline.point(speed=100.0, clearance=7.6e-6)                  # rotorsweep point
 """
+import json
 
 
 def _config(cfg, allow_large=False):
@@ -47,13 +48,21 @@ def unstable_intervals(cube_or_path):
     return query.unstable_intervals(_dataset(cube_or_path))
 
 
-def make_report(cube_or_path, out_dir, points=None):
+def make_report(cube_or_path, out_dir, points=None, overwrite=False):
     """HTML + PNG report of a cube (rotorsweep report); returns the written paths.
     points: grid points to show in detail (orbit, Poincare section, spectrum, table), each a
-    dict {axis: value} or "speed=36 clearance=19e-6" (nearest grid point)."""
-    from pipeline import report
+    dict {axis: value} or "speed=36 clearance=19e-6" (nearest grid point). A directory holding
+    the report of another cube is refused unless overwrite; the report is built next to it and
+    then takes its place, so no file of the earlier report is left."""
+    from pipeline import fileio, report
 
-    return report.make_report(_dataset(cube_or_path), out_dir, points=points)
+    ds = _dataset(cube_or_path)
+    identity = fileio.report_identity(ds, None if ds is cube_or_path else cube_or_path)
+    fileio.check_report_dir(out_dir, identity, overwrite)
+    with fileio.replaced_dir(out_dir) as tmp:
+        files = report.make_report(ds, tmp, points=points)
+        (tmp / fileio.REPORT_MARKER).write_text(json.dumps(identity, indent=2) + "\n")
+    return fileio.moved(files, tmp, out_dir)
 
 
 def point(speed=None, clearance=None, contact_angle=None, preload=None, config=None, **values):

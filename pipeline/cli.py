@@ -11,7 +11,7 @@ import numpy as np
 
 import pipeline
 from pipeline import config as config_mod
-from pipeline import cube, query, schema
+from pipeline import cube, fileio, query, schema
 from pipeline import report as report_mod
 
 EXIT_USAGE = 2
@@ -39,7 +39,7 @@ def cmd_run(args):
                         chunk_points=args.chunk_points, progress=not args.quiet)
     print(f"cube: {path}")
     if args.report:
-        files = pipeline.make_report(path, args.report)
+        files = pipeline.make_report(path, args.report, overwrite=args.overwrite)
         print(f"report: {files['html']}")
     return 0
 
@@ -183,7 +183,7 @@ def cmd_query(args):
 def cmd_report(args):
     out = args.output or str(args.cube).rsplit(".", 1)[0] + "_report"
     points = [report_mod.parse_point(items) for items in args.point or []]
-    files = pipeline.make_report(args.cube, out, points=points or None)
+    files = pipeline.make_report(args.cube, out, points=points or None, overwrite=args.overwrite)
     print(f"report: {files['html']}")
     for png in files["png"]:
         print(f"figure: {png}")
@@ -195,6 +195,17 @@ def cmd_info(args):
     return 0
 
 
+def _positive_int(text):
+    """argparse type: an integer >= 1 (a worker count or chunk size of 0 or less is a typo)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1 (got {text!r})") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1 (got {value})")
+    return value
+
+
 def build_parser():
     ap = argparse.ArgumentParser(prog="rotorsweep", description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="command", required=True)
@@ -202,11 +213,11 @@ def build_parser():
     r = sub.add_parser("run", help="run a sweep from a config into a netCDF cube")
     r.add_argument("config", nargs="?", help="scene TOML (default: the embedded demo scene)")
     r.add_argument("-o", "--output", help="cube path (default out/<scene name>.nc)")
-    r.add_argument("--workers", type=int, help="local Dask worker processes (default: one per core, at least 2)")
+    r.add_argument("--workers", type=_positive_int, help="local Dask worker processes (default: one per core, at least 2)")
     r.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
-    r.add_argument("--chunk-points", type=int, help="points per Dask task (default: automatic)")
+    r.add_argument("--chunk-points", type=_positive_int, help="points per Dask task (default: automatic)")
     r.add_argument("--resume", action="store_true", help="finish an interrupted run from its part files")
-    r.add_argument("--overwrite", action="store_true", help="replace an existing cube")
+    r.add_argument("--overwrite", action="store_true", help="replace an existing cube (and --report DIR)")
     r.add_argument("--yes", action="store_true", help="allow grids above numerics.max_points")
     r.add_argument("--report", metavar="DIR", help="also write the report into DIR")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
@@ -243,6 +254,8 @@ def build_parser():
     rp.add_argument("--point", action="append", nargs="+", metavar="AXIS=VALUE",
                     help="a grid point to show in detail (orbit, Poincare section, spectrum): "
                          "speed=36 clearance=19e-6 (nearest grid point); repeatable")
+    rp.add_argument("--overwrite", action="store_true",
+                    help="replace a report of another cube in the directory")
     rp.set_defaults(func=cmd_report)
 
     i = sub.add_parser("info", help="what a cube holds")
@@ -257,18 +270,24 @@ def main(argv=None):
 
     args = build_parser().parse_args(argv)
     user_errors = (config_mod.ConfigError, cube.CubeError, query.QueryError, SweepError,
-                   BoundaryError, ValueError, FileNotFoundError)
+                   BoundaryError, ValueError, fileio.FileIOError)
     try:
         return args.func(args)
     except user_errors as exc:
-        print(f"rotorsweep {args.command}: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
+        return _error(args, exc)
     except BrokenPipeError:      # output piped into head & co.
         sys.stdout = open(os.devnull, "w")
         return 0
+    except OSError as exc:       # read-only directory, disk full, a file where a directory goes
+        return _error(args, fileio.os_error_text(exc))
     except KeyboardInterrupt:
         print("rotorsweep: interrupted; finished chunks are kept, rerun with --resume", file=sys.stderr)
         return 130
+
+
+def _error(args, message):
+    print(f"rotorsweep {args.command}: error: {message}", file=sys.stderr)
+    return EXIT_USAGE
 
 
 if __name__ == "__main__":

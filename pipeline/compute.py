@@ -57,7 +57,7 @@ def point_values(cfg, given):
     problems += [f"{name}: required (an axis of model {spec.name} that the scene does not fix)" for name in missing]
     if problems:
         raise config.ConfigError("\n".join(problems))
-    config.check_point(values, spec.name)
+    config.check_point(values, cfg.data)
     return values
 
 

@@ -7,6 +7,7 @@ import difflib
 import hashlib
 import json
 import math
+import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -187,6 +188,66 @@ def _axis_values(v, rng, errors, where):
     return values
 
 
+def _step_count(start, stop, step):
+    return int(math.floor((stop - start) / step + 1e-9)) + 1
+
+
+def _axis_count(v):
+    """Number of values an axis definition gives, without building it (None: malformed, which
+    _axis_values reports)."""
+    if isinstance(v, list):
+        return len(v)
+    if not isinstance(v, dict) or not all(_is_number(v.get(k)) and math.isfinite(v[k]) for k in ("start", "stop")):
+        return None
+    num = v.get("num")
+    if isinstance(num, int) and not isinstance(num, bool) and num >= 1 and "step" not in v:
+        return num
+    step = v.get("step")
+    if _is_number(step) and math.isfinite(step) and step > 0 and "num" not in v and v["stop"] >= v["start"]:
+        return _step_count(float(v["start"]), float(v["stop"]), float(step))
+    return None
+
+
+# The cube is assembled in the driver's memory: the full-grid arrays, the Dataset's typed copy
+# and netCDF's write buffers hold it about three times over.
+CUBE_COPIES_IN_MEMORY = 3
+ORBIT_BYTES_PER_POINT = 512    # ~20 orbit and Floquet variables, mostly float64, <= 8 multipliers
+ATTRACTOR_BYTES_PER_POINT = 512
+
+
+def _bytes_per_point(data):
+    """Rough size of one grid point in the cube: the Poincare samples dominate with attractors."""
+    ana = data["analysis"]
+    if ana["attractor"] is not True:
+        return ORBIT_BYTES_PER_POINT
+    samples = ana["poincare_samples"] if isinstance(ana["poincare_samples"], int) else 4096
+    directions = 2 if ana["sweep_direction"] == "both" else 1
+    return ORBIT_BYTES_PER_POINT + directions * (ATTRACTOR_BYTES_PER_POINT + 2 * 8 * samples)
+
+
+def _memory_bytes():
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+
+
+def _grid_size_problem(n, data, allow_large):
+    """(message, may_confirm) when the grid is too large, else None. numerics.max_points is a
+    guard against typos that --yes lifts; the memory cap is not, since such a run could only
+    fail at its end, when the cube is assembled."""
+    per_point = _bytes_per_point(data)
+    cap = _memory_bytes() // (CUBE_COPIES_IN_MEMORY * per_point)
+    if n > cap:
+        return (f"sweep: the grid has {n} points; at most {cap} fit in this machine's memory "
+                f"({_memory_bytes() / 2**30:.0f} GiB: the cube needs ~{per_point} bytes per point and "
+                f"is held ~{CUBE_COPIES_IN_MEMORY} times while it is assembled), even with --yes; "
+                "split the sweep into several configs"), False
+    limit = data["numerics"]["max_points"]
+    limit = limit if isinstance(limit, int) else SCHEMA["numerics"]["max_points"].default
+    if n > limit and not allow_large:
+        return (f"sweep: the grid has {n} points, above numerics.max_points = {limit}; raise "
+                "numerics.max_points or pass --yes"), True
+    return None
+
+
 def _range_values(v, errors, where):
     keys = set(v)
     unknown = keys - {"start", "stop", "step", "num"}
@@ -330,6 +391,18 @@ def _sweep_axes(table, axis_keys, errors):
     return axes
 
 
+def _check_grid_size(sweep, axis_names, data, allow_large, errors, label):
+    """Raise for a too-large grid from the axis definitions alone, before any array is built
+    (a typo like num = 1e9 must not allocate). grid_points lets a front end ask to confirm when
+    max_points is the only problem."""
+    n = math.prod(c for c in (_axis_count(sweep.get(name)) for name in axis_names) if c is not None)
+    problem = _grid_size_problem(n, data, allow_large)
+    if problem:
+        message, may_confirm = problem
+        raise ConfigError("\n".join(f"{label}: {e}" for e in errors + [message]),
+                          grid_points=n if may_confirm and not errors else None)
+
+
 def parse_config(text, path=None, allow_large=False):
     """Validate a TOML scene; returns a Config or raises ConfigError listing every problem."""
     label = str(path) if path is not None else "<config>"
@@ -349,17 +422,15 @@ def parse_config(text, path=None, allow_large=False):
         if section not in raw:
             errors.append(f"{section}: required section missing")
     data = {name: _validate_section(name, raw.get(name, {}), table, errors) for name, table in tables.items()}
-    axes = _sweep_axes(raw.get("sweep", {}), axis_keys, errors) if spec else {}
+    sweep = raw.get("sweep", {})
+    if isinstance(sweep, dict):
+        _check_grid_size(sweep, axis_keys, data, allow_large, errors, label)
+    axes = _sweep_axes(sweep, axis_keys, errors) if spec else {}
     data["sweep"] = {name: [float(x) for x in values] for name, values in axes.items()}
     if not errors:
         _cross_checks(spec, data, axes, errors)
     if errors:
         raise ConfigError("\n".join(f"{label}: {e}" for e in errors))
-    n = int(np.prod([len(v) for v in axes.values()]))
-    limit = data["numerics"]["max_points"]
-    if n > limit and not allow_large:
-        raise ConfigError(f"{label}: sweep: the grid has {n} points, above numerics.max_points = "
-                          f"{limit}; raise numerics.max_points or pass --yes", grid_points=n)
     if spec.fill_defaults:
         spec.fill_defaults(data)
     return Config(None if path is None else str(path), text, data, axes)
@@ -376,9 +447,11 @@ def load_config(path, allow_large=False):
     return parse_config(text, path=path, allow_large=allow_large)
 
 
-def check_point(point, model="jeffcott_clearance"):
-    """Validate a single point (the `point` command) with the model's sweep-axis rules."""
-    _, axis_keys = model_schema(models.get(model))
+def check_point(point, data):
+    """Validate a single point (the `point` command): the model's sweep-axis rules and its own
+    checks with the point's values (e.g. the clearance bound of the scene's bearing)."""
+    spec = models.get(data["scene"]["model"])
+    _, axis_keys = model_schema(spec)
     errors = []
     for name, key in axis_keys.items():
         v = point.get(name)
@@ -387,5 +460,7 @@ def check_point(point, model="jeffcott_clearance"):
         problem = _check_number(float(v), key)
         if problem:
             errors.append(f"{name}: {problem} ({key.help})")
+    if not errors and spec.check:
+        errors = spec.check(data, {k: [float(v)] for k, v in point.items() if v is not None})
     if errors:
         raise ConfigError("\n".join(errors))

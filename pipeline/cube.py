@@ -4,15 +4,14 @@ plus the part files a sweep writes per finished chunk and assembles at the end.
 The schema (axes, variables, dtypes, attrs, flags) lives in pipeline.schema; this module only
 applies it.
 """
+import errno
 import json
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
-from pipeline import schema
+from pipeline import fileio, schema
 
 CONVENTIONS = "CF-1.10"
 COMPRESSION = {"zlib": True, "complevel": 4}
@@ -103,17 +102,11 @@ def write_cube(ds, path, overwrite=False):
     if path.exists() and not overwrite:
         raise CubeError(f"{path} exists; pass --overwrite to replace it")
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
-        ds.drop_encoding().to_netcdf(tmp, engine="netcdf4", encoding=_encoding(ds))
-        _fsync(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
-    _fsync(path.parent)
+    with fileio.atomic_path(path) as tmp:
+        try:
+            ds.drop_encoding().to_netcdf(tmp, engine="netcdf4", encoding=_encoding(ds))
+        except RuntimeError as exc:   # netCDF-C reports a full disk as "NetCDF: HDF error"
+            raise OSError(errno.EIO, f"netCDF write failed ({exc}; is the disk full?)", str(path)) from None
     return path
 
 
@@ -127,14 +120,6 @@ def _encoding(ds):
     return enc
 
 
-def _fsync(path):
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
 def open_cube(path):
     """Open a cube into memory (the file is closed on return); integers stay integers."""
     path = Path(path)
@@ -145,6 +130,7 @@ def open_cube(path):
     except (OSError, ValueError) as exc:
         raise CubeError(f"{path}: cannot be read as netCDF ({exc})") from None
     _check_version(path, ds)
+    _check_variables(path, ds)
     for var in ds.variables.values():  # keep fill values where the writer put them
         if "_FillValue" in var.attrs:
             var.encoding["_FillValue"] = var.attrs.pop("_FillValue")
@@ -170,6 +156,22 @@ def _check_version(path, ds):
     if int(version) != schema.SCHEMA_VERSION:
         raise CubeError(f"{path} is a rotorsweep cube of schema version {int(version)}; this rotorsweep "
                         f"reads version {schema.SCHEMA_VERSION} (re-run the sweep with this version)")
+
+
+def required_variables():
+    """What every cube holds: the periodic-orbit variables (present, as not_applicable, even
+    when only attractors were asked for); the attractor variables are optional."""
+    return [name for name in schema.VARIABLES if name not in schema.ATTRACTOR_VARIABLES]
+
+
+def _check_variables(path, ds):
+    missing = [name for name in required_variables() if name not in ds.data_vars]
+    along = ds.attrs.get("continued_axis", "speed")
+    if along not in ds.dims:
+        missing.insert(0, f"{along} (axis)")
+    if missing:
+        raise CubeError(f"{path} is an incomplete rotorsweep cube: missing {', '.join(missing)} "
+                        f"(every cube has {', '.join(required_variables())}); re-run the sweep")
 
 
 # --- describing -----------------------------------------------------------------------------
@@ -238,17 +240,8 @@ def write_part(parts_dir, chunk_id, index, results, meta):
     arrays = {"index": np.asarray(index, np.int64), "meta": np.array(json.dumps(meta))}
     arrays.update({f"result_{name}": np.asarray(value) for name, value in results.items()})
     path = parts_dir / f"{chunk_id}.npz"
-    fd, tmp = tempfile.mkstemp(dir=parts_dir, prefix=f".{chunk_id}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, **arrays)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
+    with fileio.atomic_path(path) as tmp, open(tmp, "wb") as f:
+        np.savez(f, **arrays)
     return path
 
 
@@ -269,9 +262,12 @@ def _read_part(path):
         raise CubeError(f"{path}: unreadable part file ({exc}); delete it to recompute its points") from None
 
 
-def assemble(axes, fixed, parts, attrs, n_multipliers, allow_missing=False):
+def assemble(axes, fixed, parts, attrs, n_multipliers, allow_missing=False, config_hash=None):
     """The cube of a sweep from its parts: full-grid arrays (NaN / INT_FILL where no part has
-    the point). A point no part holds is an error unless allow_missing."""
+    the point). A point no part holds is an error unless allow_missing. With config_hash, a part
+    of another config (another run writing into the same directory) is an error, never mixed in."""
+    if config_hash is not None:
+        _check_part_hashes(parts, config_hash)
     shape = tuple(len(v) for v in axes.values())
     variables = schema.variables_of(schema.model_of(attrs))
     have = np.zeros(shape, bool)
@@ -288,6 +284,14 @@ def assemble(axes, fixed, parts, attrs, n_multipliers, allow_missing=False):
         raise CubeError(f"{missing} of {have.size} grid points have no result in the part files "
                         f"(first: {_point(axes, np.argwhere(~have)[0])})")
     return build_dataset(axes, fixed, full, attrs)
+
+
+def _check_part_hashes(parts, config_hash):
+    foreign = [chunk_id for chunk_id, _, _, meta in parts if (meta or {}).get("config_hash") != config_hash]
+    if foreign:
+        raise CubeError(f"{len(foreign)} of {len(parts)} part files (first: {foreign[0]}.npz) belong to "
+                        f"another config than this run's (hash {config_hash[:12]}); their results are "
+                        "not mixed into the cube: rerun with --overwrite into a path no other run uses")
 
 
 def _empty(name, shape, values, n_multipliers, variables):

@@ -7,9 +7,12 @@ chunk size. Every finished chunk is written at once as a part file next to the o
 re-run with `resume` computes only the segments no part holds, and the parts are assembled
 into the cube (atomically written) at the end.
 """
+import functools
 import itertools
 import json
+import logging
 import os
+import socket
 import sys
 import time
 from dataclasses import dataclass
@@ -17,7 +20,7 @@ from datetime import datetime, timezone
 
 import numpy as np
 
-from pipeline import boundaries, compute, cube
+from pipeline import boundaries, compute, cube, fileio
 
 VERSION = "0.1.0"
 
@@ -160,11 +163,12 @@ def _client(workers, scheduler):
     from dask.distributed import Client, LocalCluster
 
     if scheduler:
-        return Client(scheduler), None
+        return Client(scheduler, timeout=f"{4 * SCHEDULER_TIMEOUT_S}s"), None
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
     n = workers or max(2, os.cpu_count() or 2)
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                           dashboard_address="127.0.0.1:0", env={"NUMBA_NUM_THREADS": "1"})
+                           dashboard_address="127.0.0.1:0", env={"NUMBA_NUM_THREADS": "1"},
+                           preload=["pipeline.workerinit"])
     return Client(cluster), cluster
 
 
@@ -190,45 +194,122 @@ def _fixed_coords(cfg):
 
 def run(cfg, output, workers=None, scheduler=None, resume=False, overwrite=False, chunk_points=None,
         progress=True, stream=sys.stderr):
-    """Run a sweep from a validated config into a netCDF cube at `output`; returns its path."""
-    output, parts = _prepare_output(output, cfg, resume, overwrite)
+    """Run a sweep from a validated config into a netCDF cube at `output`; returns its path.
+    The output is locked for the whole run, so two runs never share part files."""
+    output = os.path.abspath(output)
+    with fileio.output_lock(output, cfg.path or "<default scene>"):
+        if scheduler:
+            check_scheduler(scheduler)
+        output, parts = _prepare_output(output, cfg, resume, overwrite)
+        try:
+            return _run_locked(cfg, output, parts, workers, scheduler, chunk_points,
+                               stream if progress else None)
+        except OSError as exc:
+            raise SweepError(_write_failure(exc, output, parts)) from None
+        finally:
+            if os.path.isdir(parts) and not os.listdir(parts):
+                os.rmdir(parts)       # nothing finished: leave no empty parts directory behind
+
+
+def _run_locked(cfg, output, parts, workers, scheduler, chunk_points, stream):
     config_hash = cfg.hash()
     segs = segments(cfg)
     done = _done_segments(parts, config_hash)
     todo = [s for s in segs if s.id not in done]
     total = sum(len(s.points) for s in segs)
-    bar = Progress(total, total - sum(len(s.points) for s in todo), stream) if progress else None
+    bar = Progress(total, total - sum(len(s.points) for s in todo), stream) if stream else None
     if todo:
         _warm_up(cfg.data, todo[0])
         _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points, bar)
     ds = cube.assemble(cfg.axes, _fixed_coords(cfg), cube.read_parts(parts), _provenance(cfg),
-                       n_multipliers=compute.model_of(cfg.data).n_state)
+                       n_multipliers=compute.model_of(cfg.data).n_state, config_hash=config_hash)
     ds = boundaries.add_boundary_table(cfg.data, ds)
     path = cube.write_cube(ds, output, overwrite=True)
     _remove_parts(parts)
     return path
 
 
+def _write_failure(exc, output, parts):
+    """One line for an OS error during a run (disk full, read-only, lost scheduler): what
+    failed, what is kept, how to go on."""
+    n = len([p for p in os.listdir(parts) if p.endswith(".npz")]) if os.path.isdir(parts) else 0
+    kept = (f"the {n} finished chunk(s) are kept in {parts}; fix the cause and rerun with --resume"
+            if n else "no finished chunk was kept")
+    return f"the run into {output} stopped: {fileio.os_error_text(exc)}; {kept}"
+
+
+SCHEDULER_TIMEOUT_S = 5
+
+
+def check_scheduler(address, timeout=SCHEDULER_TIMEOUT_S):
+    """Fail within seconds (not Dask's 30 s, and before kernels compile) when nothing listens at
+    a --scheduler address."""
+    host, _, port = address.split("://", 1)[-1].rpartition(":")
+    if not host or not port.isdigit():
+        raise SweepError(f"--scheduler {address}: expected an address like tcp://HOST:PORT")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=timeout).close()
+    except OSError as exc:
+        raise SweepError(f"--scheduler {address}: no scheduler reachable within {timeout} s "
+                         f"({exc.strerror or exc}); is it running, and is the address right?") from None
+
+
+# Dask gives up on a task after its workers died `allowed-failures` (3) times (KilledWorker), as
+# it may be what kills them. Our chunks are plain numerics, so worker deaths are far more likely
+# the machine's doing (OOM killer, preemption): resubmit a chunk that many more times.
+RESUBMITS = 3
+
+
 def _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points, bar):
-    from dask.distributed import as_completed
+    from dask.distributed import KilledWorker, as_completed
 
     client, cluster = _client(workers, scheduler)
     try:
         n_workers = max(1, len(client.scheduler_info()["workers"]))
-        chunks = plan_chunks(todo, n_workers, chunk_points)
-        data = client.scatter(cfg.data, broadcast=True)
-        futures = [client.submit(compute_chunk, data, chunk, pure=False) for chunk in chunks]
-        for future in as_completed(futures):
-            seg_ids, index, results = future.result()
+        # The config goes with every task (a few kB), not scattered: a scattered copy lives only
+        # on workers and is lost for good once every worker holding it has died.
+        submit = functools.partial(client.submit, compute_chunk, cfg.data, pure=False)
+        futures = {submit(chunk): (chunk, 0) for chunk in plan_chunks(todo, n_workers, chunk_points)}
+        pending = as_completed(futures)
+        for future in pending:
+            chunk, resubmits = futures.pop(future)
+            try:
+                seg_ids, index, results = future.result()
+            except KilledWorker:
+                if resubmits == RESUBMITS:
+                    raise SweepError(_killed_chunk(chunk, parts)) from None
+                retry = submit(chunk)
+                futures[retry] = (chunk, resubmits + 1)
+                pending.add(retry)
+                continue
             cube.write_part(parts, f"seg{seg_ids[0]:06d}", index, results,
                             {"config_hash": config_hash, "segments": seg_ids})
             if bar:
                 bar.update(len(index))
             future.release()
     finally:
+        _close(client, cluster)
+
+
+def _killed_chunk(chunk, parts):
+    first = chunk[0].points[0]
+    return (f"the chunk starting at speed={first['speed']:g} Hz, clearance={first['clearance']:g} m "
+            f"killed {RESUBMITS + 1} x 3 workers; finished chunks are kept in {parts}: look for what "
+            "ends the workers (memory?), then rerun with --resume")
+
+
+def _close(client, cluster):
+    """Close quietly: after Ctrl-C or an error the nannies warn that they kill workers still busy
+    in a kernel, which is the intent here."""
+    logger = logging.getLogger("distributed")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
         client.close()
         if cluster is not None:
             cluster.close()
+    finally:
+        logger.setLevel(level)
 
 
 def _remove_parts(parts):

@@ -5,7 +5,7 @@ function holds the machine code of every kernel it calls (shooting holds the int
 integrator holds the models), so editing one module would leave stale code in the others' caches.
 The cache therefore lives in a directory named after a hash of all kernel sources, those of the
 user's models in $ROTORSWEEP_MODELS included:
-$ROTORSWEEP_CACHE (default ~/.cache/rotorsweep)/numba/<hash>. NUMBA_CACHE_DIR, if set, wins.
+$ROTORSWEEP_CACHE (default ~/.cache/rotorsweep)/numba/<hash>. NUMBA_CACHE_DIR, if the user sets it, wins.
 """
 import hashlib
 import importlib.util
@@ -28,5 +28,11 @@ def _cache_dir(src=Path(__file__).parent):
     return os.path.join(base, "numba", digest[:16])
 
 
-if not os.environ.get("NUMBA_CACHE_DIR"):
-    numba.config.CACHE_DIR = _cache_dir()
+# Set through the environment, not only numba.config: Numba re-reads its whole configuration from
+# os.environ whenever the environment changes (a LocalCluster setting NUMBA_NUM_THREADS does), which
+# would silently reset a CACHE_DIR set in numba.config alone. The marker tells our own setting,
+# inherited by a child process that may have other models, from a user's NUMBA_CACHE_DIR.
+_OWN = "ROTORSWEEP_NUMBA_CACHE_DIR"
+if os.environ.get("NUMBA_CACHE_DIR", "") in ("", os.environ.get(_OWN)):
+    os.environ["NUMBA_CACHE_DIR"] = os.environ[_OWN] = _cache_dir()
+    numba.config.CACHE_DIR = os.environ[_OWN]

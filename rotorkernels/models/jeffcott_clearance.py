@@ -203,9 +203,25 @@ def check(data, axes):
     errors = []
     if b["nominal_angle"] is not None and b["preset"] != "angular_contact_medium":
         errors.append(f"bearing.nominal_angle: only for preset \"angular_contact_medium\" (preset is {b['preset']!r})")
+    else:       # a consistent preset: its geometry bounds the clearance
+        for where, values in (("sweep.clearance", axes.get("clearance", ())), ("bearing.clearance", [b["clearance"] or 0.0])):
+            problem = _clearance_problem(max(values, default=0.0), b)
+            if problem:
+                errors.append(f"{where}: {problem}")
     if b["preload_constant"] == "filipkovsky" and max(axes.get("preload", [b["preload"] or 0.0])) <= 0:
         errors.append("bearing.preload_constant: \"filipkovsky\" needs a preload > 0")
     return errors
+
+
+def _clearance_problem(clearance, b):
+    """Error text when a clearance exceeds what the preset's geometry allows, else None: the
+    groove-centre distance A = r_i + r_o - D_b, where Bai's eq. 6 free contact angle reaches
+    90 deg (209: 0.5 mm). Rounded to 6 digits, as A carries the float noise of its sum."""
+    limit = _geometry(b["preset"], b["nominal_angle"]).groove_center_distance
+    if clearance <= limit:
+        return None
+    return (f"must be <= {limit:.6g} m for bearing.preset \"{b['preset']}\" "
+            f"(r_i + r_o - D_b, where the free contact angle reaches 90 deg; got {clearance:g})")
 
 
 def fill_defaults(data):
@@ -225,7 +241,7 @@ SPEC = ModelSpec(
         Parameter(name="speed", unit="Hz", long_name="shaft speed", axis=True, lo=0, hi=1e5,
                   lo_open=True, help="shaft speed [Hz]"),
         Parameter(name="clearance", section="bearing", unit="m", long_name="radial internal clearance",
-                  axis=True, lo=0, hi=1e-3, hi_open=True, unset=0.0, help="radial clearance [m]"),
+                  axis=True, lo=0, unset=0.0, help="radial clearance [m] (bounded by the preset's geometry)"),
         Parameter(name="contact_angle", section="bearing", unit="degree", long_name="bearing contact angle",
                   axis=True, lo=0, hi=90, lo_open=True, hi_open=True, help="contact angle [deg]"),
         Parameter(name="preload", section="bearing", unit="N", long_name="axial preload", axis=True,

@@ -1,0 +1,148 @@
+"""Sweeps on a real distributed cluster: a `dask scheduler` and `dask worker` processes started
+with the distributed CLI on 127.0.0.1, `rotorsweep run --scheduler`, workers (and the driver)
+killed mid-run. The cube must be bitwise the one of an undisturbed local run."""
+import contextlib
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline import cube
+from tests.test_pipeline import CLI, SMALL, data_vars, rotorsweep
+from tests.test_reliability import wait_for_parts
+
+DASK = str(Path(sys.executable).with_name("dask"))
+
+
+def grid_config(tmp_path, speed, clearance, segment_length):
+    path = tmp_path / "grid.toml"
+    path.write_text(SMALL.replace("speed = {start = 70.0, stop = 100.0, step = 3.0}", f"speed = {speed}")
+                    .replace("clearance = [7.6e-6, 19.0e-6]", f"clearance = {clearance}")
+                    .replace("segment_length = 4", f"segment_length = {segment_length}"))
+    return path
+
+
+@contextlib.contextmanager
+def dask_cluster(tmp_path, n_workers, nanny):
+    """A scheduler and n single-thread workers as separate processes, bound to 127.0.0.1 (free
+    ports picked by the OS; the address travels in a scheduler file). Yields (address, client)."""
+    from dask.distributed import Client
+
+    sched_file = tmp_path / "scheduler.json"
+    local = ["--host", "127.0.0.1"]
+    procs = [subprocess.Popen([DASK, "scheduler", *local, "--port", "0", "--dashboard-address", "127.0.0.1:0",
+                               "--scheduler-file", str(sched_file)], stderr=subprocess.DEVNULL)]
+    try:
+        deadline = time.monotonic() + 60
+        while not sched_file.exists() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        env = {**os.environ, "NUMBA_NUM_THREADS": "1"}
+        procs += [subprocess.Popen([DASK, "worker", *local, "--nthreads", "1", "--scheduler-file", str(sched_file),
+                                    "--nanny" if nanny else "--no-nanny"], stderr=subprocess.DEVNULL, env=env)
+                  for _ in range(n_workers)]
+        with Client(scheduler_file=str(sched_file), timeout="30s") as client:
+            client.wait_for_workers(n_workers, timeout=120)
+            yield json.loads(sched_file.read_text())["address"], client
+    finally:
+        for proc in reversed(procs):
+            proc.terminate()
+        for proc in procs:
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+
+
+def worker_pids(client):
+    """pid of each worker process (the one that computes; under a nanny, the nanny's child)."""
+    return list(client.run(os.getpid).values())
+
+
+def assert_same_cube(reference, other):
+    a, b = data_vars(reference), data_vars(other)
+    assert set(a.data_vars) == set(b.data_vars)
+    for name in a.data_vars:
+        np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+
+
+def test_a_sweep_on_a_dask_cli_cluster_survives_a_killed_worker(tmp_path):
+    cfg = grid_config(tmp_path, "{start = 60.0, stop = 250.0, step = 4.0}", "[7.6e-6, 19.0e-6]", 4)
+    local = tmp_path / "local.nc"
+    rotorsweep("run", cfg, "-o", local, "--workers", "2", "-q")
+    out = tmp_path / "cluster.nc"
+    with dask_cluster(tmp_path, n_workers=2, nanny=False) as (address, client):
+        victim = worker_pids(client)[0]
+        proc = subprocess.Popen(CLI + ["run", str(cfg), "-o", str(out), "--scheduler", address,
+                                       "--chunk-points", "4", "-q"],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        wait_for_parts(cube.parts_dir(out), proc)
+        os.kill(victim, signal.SIGKILL)              # no nanny: this worker is gone for good
+        stdout, stderr = proc.communicate(timeout=300)
+        assert proc.returncode == 0, stderr
+        assert len(client.scheduler_info()["workers"]) == 1
+    assert_same_cube(local, out)
+
+
+class Killer:
+    """SIGKILLs a random worker process every `every` seconds (their nannies start new ones)."""
+
+    def __init__(self, client, every, seed=0):
+        import threading
+
+        self.client, self.every, self.kills = client, every, 0
+        self.rng = np.random.default_rng(seed)
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+
+    def _run(self):
+        while not self.stop.wait(self.every):
+            with contextlib.suppress(Exception):          # a worker just restarting: next round
+                pids = worker_pids(self.client)
+                os.kill(int(self.rng.choice(pids)), signal.SIGKILL)
+                self.kills += 1
+
+    def __enter__(self):
+        self.thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        self.stop.set()
+        self.thread.join()
+
+
+@pytest.mark.slow
+def test_chaos_workers_killed_every_few_seconds_and_the_driver_once(tmp_path):
+    """A few thousand points (orbits only) while a worker dies every 3 s and the driver once,
+    then --resume: the cube is bitwise the undisturbed one. Figures in docs/reliability.md."""
+    cfg = grid_config(tmp_path, "{start = 100.0, stop = 250.0, step = 0.1}", "[7.6e-6, 19.0e-6]", 8)
+    reference = tmp_path / "reference.nc"
+    t0 = time.monotonic()
+    rotorsweep("run", cfg, "-o", reference, "--workers", "2", "-q")
+    undisturbed_s = time.monotonic() - t0
+    out = tmp_path / "chaos.nc"
+    run = CLI + ["run", str(cfg), "-o", str(out), "--chunk-points", "16", "-q"]
+    with dask_cluster(tmp_path, n_workers=2, nanny=True) as (address, client), Killer(client, every=3.0) as killer:
+        t0 = time.monotonic()
+        driver = subprocess.Popen(run + ["--scheduler", address], stderr=subprocess.PIPE, text=True)
+        try:
+            wait_for_parts(cube.parts_dir(out), driver, minimum=40, timeout=1200)
+        except AssertionError:
+            raise AssertionError(driver.communicate()[1]) from None
+        driver.kill()                                                # the driver, once
+        driver.wait()
+        parts_at_driver_kill = len(list(cube.parts_dir(out).glob("*.npz")))
+        resumed = subprocess.run(run + ["--scheduler", address, "--resume"], capture_output=True, text=True,
+                                 timeout=3600)
+        chaos_s = time.monotonic() - t0
+        assert resumed.returncode == 0, resumed.stderr
+    n_points = cube.open_cube(out)["orbit_status"].size
+    print(f"\nchaos: {n_points} points, {killer.kills} worker kills + 1 driver kill (after "
+          f"{parts_at_driver_kill} parts), {chaos_s:.0f} s; undisturbed local run {undisturbed_s:.0f} s")
+    assert killer.kills >= 3
+    assert_same_cube(reference, out)
