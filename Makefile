@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow bench bench-scaling fig13 cascade clean
+.PHONY: demo test test-slow bench bench-scaling bench-revisions fig13 cascade clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -33,6 +33,9 @@ bench: $(STAMP)  ## work-precision and baseline benchmarks -> docs/benchmarks/
 
 bench-scaling: $(STAMP)  ## 1 vs 2 workers, chunk sizes, memory of the Fig. 13 sweep (~7 min, quiet machine) -> docs/benchmarks/scaling.*
 	$(BIN)/python -m workflows.bench.scaling
+
+bench-revisions: $(STAMP)  ## per-point cost before/after the model registry (cc006f3 vs HEAD, one run) -> docs/benchmarks/revisions.*
+	$(BIN)/python -m workflows.bench.revisions
 
 clean:
 	rm -rf out .pytest_cache

@@ -25,6 +25,12 @@ PointSolution = namedtuple(
 QUICK_ITERATIONS = 6
 # Further cold starts, one forcing period apart, when Newton fails from the settled transient.
 COLD_RETRIES = 4
+# Slow passage: just past a fold the trajectories linger near the vanished orbit for many periods
+# (31.2 Hz / 15.2 um in Bai 2006, Fig. 13: Newton fails after 30 periods, converges after 100), so
+# the cold transient goes on, SLOW_PASSAGE_CHUNKS more transients at most, until the
+# stroboscopic map has settled (|P(u) - u| <= SETTLED_RTOL max(1, |u|)); then Newton starts there.
+SLOW_PASSAGE_CHUNKS = 10
+SETTLED_RTOL = 1e-4
 
 
 def _guesses(problem, history, transient_periods, cold_guess):
@@ -46,6 +52,24 @@ def _guesses(problem, history, transient_periods, cold_guess):
         if not ok:
             return
         yield z, n_rhs, False
+    if ok:
+        yield from _slow_passage(problem, z, transient_periods)
+
+
+def _slow_passage(problem, z, transient_periods):
+    """Yield the state once the stroboscopic map has settled (at most SLOW_PASSAGE_CHUNKS
+    transients further on); nothing when it does not settle (chaos, a torus) or diverges."""
+    spent = 0
+    for _ in range(SLOW_PASSAGE_CHUNKS):
+        z, ok, n_rhs = problem.settle(z, transient_periods)
+        after, ok_map, n_map = problem.settle(z, 1)
+        spent += n_rhs + n_map
+        if not (ok and ok_map):
+            return
+        if np.abs(after - z).max() <= SETTLED_RTOL * max(1.0, np.abs(z).max()):
+            yield after, spent, False
+            return
+        z = after
 
 
 def solve_orbit(model, p, opts, history=(), *, cold_guess, periods=1, tol=1e-9, max_iter=30,
