@@ -79,7 +79,7 @@ def write(result, out):
 
 
 def _label(rev):
-    return subprocess.run(["git", "log", "-1", "--format=%h %s", rev], cwd=ROOT, capture_output=True,
+    return subprocess.run(["git", "log", "-1", "--format=%s", rev], cwd=ROOT, capture_output=True,
                           text=True).stdout.strip()[:60]
 
 
