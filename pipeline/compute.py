@@ -114,7 +114,7 @@ def _not_requested(model):
     nan = np.full(model.n_state, np.nan)
     return continuation.PointSolution(schema.ORBIT_STATUS.index("not_applicable"),
                                       schema.ORBIT_REASON.index("not_requested"), 0, np.nan,
-                                      nan + 0j, np.nan, False, 0, nan, None, 0)
+                                      nan * (1 + 1j), np.nan, False, 0, nan, None, 0)
 
 
 def _directions(option):
@@ -149,7 +149,7 @@ def _attractor_chain(model, params, sols, opts, ana, order, seconds):
             max_periods=ana["lyapunov_max_periods"],
             min_periods=min(LYAPUNOV_MIN_PERIODS, ana["lyapunov_max_periods"]))
         # a diverged run leaves no attractor to continue from: the next speed starts afresh
-        state = att.end_state if att.code != attractor.DIVERGED else None
+        state = att.end_state if att.code not in (attractor.DIVERGED, attractor.INTEGRATION_FAILED) else None
         seconds[i] += time.perf_counter() - start
         yield i, att
 
@@ -248,9 +248,9 @@ SAME_ORBIT_RTOL = 1e-3
 def _differs(model, row, suffix):
     """1 where the up and down sweeps ended on different attractors: class or period differ, or
     two periodic ones are different orbits (e.g. two coexisting stable period-1 orbits). A
-    periodic attractor whose period was not resolved (k = 0: still settling, as next to a
-    bifurcation) cannot be compared: 0."""
-    unresolved = [row["attractor" + s] == attractor.PERIODIC and row["period" + s] <= 0 for s in ("", suffix)]
+    not_settled attractor (period unresolved: still settling, as next to a bifurcation) cannot
+    be compared: 0."""
+    unresolved = [row["attractor" + s] == attractor.NOT_SETTLED for s in ("", suffix)]
     if any(unresolved):
         return 0
     if row["attractor"] != row["attractor" + suffix] or row["period"] != row["period" + suffix]:

@@ -222,7 +222,8 @@ def unstable_intervals(ds):
 
 
 def attractor_label(code, k):
-    """'period-k', 'periodic' (k unresolved), 'quasi_periodic', 'chaotic', 'diverged', 'not_computed'."""
+    """'period-k', or the class name: 'quasi_periodic', 'chaotic', 'diverged', 'not_settled',
+    'integration_failed', 'not_computed'."""
     if code == schema.ATTRACTOR.index("periodic"):
         return f"period-{k}" if k > 0 else "periodic"
     return schema.ATTRACTOR[code] if 0 <= code < len(schema.ATTRACTOR) else "not_computed"

@@ -8,7 +8,7 @@ observables (orbit mean and half peak-to-peak, Poincare samples) and derived val
 (`variables_of`). The cube names its model (`model`), the model's version and the axis the
 orbits were continued along (`continued_axis`).
 """
-from rotorkernels import models
+from rotorkernels import attractor, models
 
 SCHEMA_VERSION = 1
 DEFAULT_MODEL = "jeffcott_clearance"   # cubes written before models were named in attributes
@@ -50,7 +50,7 @@ ORBIT_REASON = (
     "unknown_model",         # the kernels were given a model id no model is registered under
 )
 BIFURCATION = ("none", "fold", "period_doubling", "neimark_sacker")
-ATTRACTOR = ("not_computed", "periodic", "quasi_periodic", "chaotic", "diverged")
+ATTRACTOR = attractor.ATTRACTOR
 STABLE = ("unstable", "stable")
 
 # Fill values for points where a quantity does not apply.

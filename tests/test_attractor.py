@@ -205,15 +205,17 @@ def test_classify():
     assert at.classify(periodic_sequence(4), np.nan, np.nan, 4) == (at.DIVERGED, 0)
     assert at.classify(periodic_sequence(4), -0.3, 0.01, 4) == (at.PERIODIC, 4)
     assert at.classify(cloud, 0.3, 0.01, 0) == (at.CHAOTIC, 0)
-    assert at.classify(cloud, 0.02, 0.01, 0) == (at.PERIODIC, 0)            # within 3 sigma
+    assert at.classify(cloud, 0.02, 0.01, 0) == (at.NOT_SETTLED, 0)         # within 3 sigma
     assert at.classify(cloud, 0.033, 0.01, 0)[0] == at.CHAOTIC              # 3 sigma + floor
     assert at.classify(torus, 1e-4, 2e-4, 0) == (at.QUASI_PERIODIC, 0)
-    assert at.classify(torus, -0.2, 1e-3, 0) == (at.PERIODIC, 0)            # unresolved period
+    assert at.classify(torus, -0.2, 1e-3, 0) == (at.NOT_SETTLED, 0)         # unresolved period
     # zero exponent but no closed curve: a slowly settling orbit (two clusters), not a torus
     settling = periodic_sequence(2) + 1e-3 * rng.normal(size=(128, 4))
-    assert at.classify(settling, -1e-3, 1e-4, 0) == (at.PERIODIC, 0)
+    assert at.classify(settling, -1e-3, 1e-4, 0) == (at.NOT_SETTLED, 0)
     assert at.classify(settling, -1e-3, 1e-4, 0, check_curve=False) == (at.QUASI_PERIODIC, 0)
     assert at.classify(torus, 0.0, 0.0, 0, ig.STATUS_NAN) == (at.DIVERGED, 0)
+    # a step-size underflow is the integrator's failure, not the rotor's divergence
+    assert at.classify(torus, 0.0, 0.0, 0, ig.STATUS_STEP_UNDERFLOW) == (at.INTEGRATION_FAILED, 0)
     assert at.ATTRACTOR[at.QUASI_PERIODIC] == "quasi_periodic"
 
 

@@ -59,3 +59,35 @@ def test_autonomous_orbit_reports_failure_instead_of_raising():
     built = duffing(1.0, gamma=-0.1)
     orbit = AutonomousOrbitProblem(DUFFING, built.p, TIGHT).solve(4.0, np.zeros(2), 1.0, max_iter=8)
     assert not orbit.converged and np.isnan(orbit.multipliers).all()
+
+
+def test_a_point_without_orbit_has_every_multiplier_component_nan():
+    """Failure is data, uniformly: no orbit means NaN real and imaginary parts (not NaN + 0j)."""
+    from pipeline import compute
+    from rotorkernels import continuation
+
+    jeff = models.get("jeffcott_clearance")
+    built = jeff.build({"speed": 60.0, "clearance": 3.8e-6, "preset": "209", "stiffness": "bai2006",
+                        "preload_constant": "consistent", "cage_rotation": True, "mass": 2.0,
+                        "damping": 300.0, "radial_load": "gravity", "gravity": 9.8})
+    sol = continuation.solve_orbit(jeff, built.p, TIGHT, cold_guess=jeff.cold_guess, max_iter=1,
+                                   tol=1e-300, transient_periods=0)
+    assert sol.status != shooting.CONVERGED
+    row = compute.point_variables(jeff, sol, built, 0.0)
+    assert np.isnan(row["multiplier_real"]).all() and np.isnan(row["multiplier_imag"]).all()
+
+
+def test_follow_returns_a_branch_with_a_status_per_step():
+    """Natural continuation of the forced linear oscillator over omega: every step converges to
+    the closed-form steady state; an unknown strategy is refused by name."""
+    from rotorkernels import continuation
+
+    omegas = [0.6, 0.7, 0.8]
+    params = [duffing(w, 0.05, 0.0, 0.3).p for w in omegas]
+    branch = continuation.follow(DUFFING, params, TIGHT, cold_guess=DUFFING.cold_guess, tol=1e-12)
+    assert branch.complete and branch.failed == []
+    for w, sol in zip(omegas, branch.solutions):
+        X = 0.3 / (1 - w ** 2 + 0.1j * w)
+        np.testing.assert_allclose(sol.state, [X.real, -2 * np.pi * X.imag], atol=1e-9)
+    with pytest.raises(ValueError, match="unknown continuation strategy 'palc'; known: natural"):
+        continuation.follow(DUFFING, params, TIGHT, strategy="palc", cold_guess=DUFFING.cold_guess)

@@ -69,8 +69,9 @@ def sweep_labels(ds):
 
 def attractor_counts(ds, suffix=""):
     """{label: n} of the attractor classes of one sweep direction: periodic by period k (and
-    'period not resolved' for a periodic class without k), quasi-periodic, chaotic, diverged
-    (always listed) and not computed (when any)."""
+    'period not resolved' for a periodic class without k, as cubes before not_settled hold),
+    quasi-periodic, chaotic, diverged (always listed), not settled, integration failed and not
+    computed (when any)."""
     cls = ds["attractor" + suffix].values.ravel()
     per = ds["period" + suffix].values.ravel()
     periodic = cls == schema.ATTRACTOR.index("periodic")
@@ -82,6 +83,10 @@ def attractor_counts(ds, suffix=""):
         out["periodic, period not resolved"] = unresolved
     for name in ("quasi_periodic", "chaotic", "diverged"):
         out[name.replace("_", "-")] = int((cls == schema.ATTRACTOR.index(name)).sum())
+    for name in ("not_settled", "integration_failed"):
+        n = int((cls == schema.ATTRACTOR.index(name)).sum())
+        if n:
+            out[name.replace("_", " ")] = n
     missing = int((cls == schema.ATTRACTOR.index("not_computed")).sum()
                   + (~np.isin(cls, range(len(schema.ATTRACTOR)))).sum())
     if missing:

@@ -7,8 +7,8 @@ kernels return exponents *per unit tau* (per forcing period); `lyapunov_si` divi
 1/s. Pure numerics: arrays in, arrays out, failures as status codes (the integrators' STATUS_*).
 """
 from rotorkernels.attractor.diagnosis import (  # noqa: F401 (the package's API)
-    ATTRACTOR, CHAOTIC, DIVERGED, LLE_FLOOR, NOT_COMPUTED, PERIODIC, QUASI_PERIODIC, SIGMAS,
-    Attractor, classify, closed_curve, diagnose, exponents_of_orbit, periodic_orbit_of,
+    ATTRACTOR, CHAOTIC, DIVERGED, INTEGRATION_FAILED, LLE_FLOOR, NOT_COMPUTED, NOT_SETTLED, PERIODIC,
+    QUASI_PERIODIC, SIGMAS, Attractor, classify, failure_class, closed_curve, diagnose, exponents_of_orbit, periodic_orbit_of,
     settle_on_orbit)
 from rotorkernels.attractor.lyapunov import (  # noqa: F401
     Lyapunov, derived_lle, largest_lyapunov, lyapunov_si, lyapunov_spectrum)

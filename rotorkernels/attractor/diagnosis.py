@@ -10,8 +10,18 @@ from rotorkernels.attractor.lyapunov import _run_benettin
 from rotorkernels.attractor.period import default_period_rtol, detect_period
 from rotorkernels.attractor.poincare import _poincare
 
-ATTRACTOR = ("not_computed", "periodic", "quasi_periodic", "chaotic", "diverged")
-NOT_COMPUTED, PERIODIC, QUASI_PERIODIC, CHAOTIC, DIVERGED = range(5)
+# not_settled: the samples neither repeat nor form a torus and the exponent is negative -- the
+# transient budget ran out before the state settled (a period longer than max_period, or
+# critical slowing down next to a bifurcation); integration_failed: the integrator could not keep
+# its tolerance (step-size underflow), which is not a divergence of the rotor.
+ATTRACTOR = ("not_computed", "periodic", "quasi_periodic", "chaotic", "diverged", "not_settled",
+             "integration_failed")
+NOT_COMPUTED, PERIODIC, QUASI_PERIODIC, CHAOTIC, DIVERGED, NOT_SETTLED, INTEGRATION_FAILED = range(7)
+
+
+def failure_class(status):
+    """The class of a run that stopped with integrator status `status` (not STATUS_OK)."""
+    return INTEGRATION_FAILED if status == ig.STATUS_STEP_UNDERFLOW else DIVERGED
 
 # classify(): an exponent counts as positive (chaos) when lle > SIGMAS * stderr + LLE_FLOOR and
 # as negative (a stable orbit) when lle < -(SIGMAS * stderr + LLE_FLOOR); in between it is zero
@@ -64,20 +74,23 @@ def classify(samples, lle, lle_stderr, period_k, status=ig.STATUS_OK, *, sigmas=
     """(code into ATTRACTOR, k) from the Poincare samples, the largest exponent and its standard
     error, and the detected period.
 
-    - diverged: a failed integration (status != STATUS_OK), NaN samples, or a NaN exponent;
+    - diverged: a failed integration (NaN or amplitude limit), NaN samples, or a NaN exponent;
+      integration_failed: the integrator's step size underflowed;
     - periodic, k = period_k, when the samples repeat with period k > 0;
     - chaotic when lle > sigmas * lle_stderr + floor (positive beyond its uncertainty);
-    - periodic with k = 0 (period not resolved: longer than max_period, or not settled to the
-      detection tolerance, typically close to a bifurcation) when lle < -(sigmas * lle_stderr +
-      floor);
+    - not_settled (a contracting attractor whose period is not resolved: longer than max_period,
+      or not settled to the detection tolerance, typically close to a bifurcation) when
+      lle < -(sigmas * lle_stderr + floor);
     - zero within the uncertainty: quasi_periodic -- unless check_curve is set and the tail
-      samples do not lie on a closed curve (`closed_curve`): then periodic, k = 0. This is what
+      samples do not lie on a closed curve (`closed_curve`): then not_settled. This is what
       an orbit next to a bifurcation looks like (a multiplier near -1 or +1: the state settles
       onto, or drifts off, the orbit over thousands of periods, leaving clustered or collinear
       points and |lle| ~ 0), and what the sweeps find within ~0.1 Hz of a period doubling.
     lle, lle_stderr and floor share units: per forcing period (per unit tau) for the default
     floor. `samples` may be None when only the exponent is known (no curve check then)."""
-    if status != ig.STATUS_OK or not np.isfinite(lle):
+    if status != ig.STATUS_OK:
+        return failure_class(status), 0
+    if not np.isfinite(lle):
         return DIVERGED, 0
     if samples is not None and not np.all(np.isfinite(samples)):
         return DIVERGED, 0
@@ -87,9 +100,9 @@ def classify(samples, lle, lle_stderr, period_k, status=ig.STATUS_OK, *, sigmas=
     if lle > margin:
         return CHAOTIC, 0
     if lle < -margin:
-        return PERIODIC, 0
+        return NOT_SETTLED, 0
     if check_curve and samples is not None and not closed_curve(samples):
-        return PERIODIC, 0
+        return NOT_SETTLED, 0
     return QUASI_PERIODIC, 0
 
 
@@ -202,8 +215,8 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
     for attempt in range(1 + ESCAPES):
         samples, status, end = _poincare(model.kernel, u0, p, opts, int(n_transient), int(n_samples))
         if status != ig.STATUS_OK:
-            return Attractor(DIVERGED, 0, np.nan, np.nan, samples, end, int(status), 0.0, nan,
-                             nan + 0j, False)
+            return Attractor(failure_class(status), 0, np.nan, np.nan, samples, end, int(status), 0.0,
+                             nan, nan * (1 + 1j), False)
         k = detect_period(samples, max_period, period_rtol)
         orbit = periodic_orbit_of(model, end, p, opts, k, period_rtol) if k > 0 and orbit_lle else None
         # Samples that repeat on an unstable orbit only show a start too close to it (a weakly
@@ -212,7 +225,7 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
             break
         u0 = end + ESCAPE_KICK * max(1.0, float(np.abs(end).max()))
         n_transient = max(int(n_transient), 1)
-    lams = nan + 0j
+    lams = nan * (1 + 1j)      # no orbit: both parts NaN
     if orbit is not None:
         k, _, lams = orbit
         if np.abs(lams).max() < 1.0 and not lyapunov_always:
@@ -225,7 +238,7 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
         model, end, p, opts, 0, renorm_periods, max_periods, n_blocks, rtol_stop, min_periods,
         atol_stop, align_periods, weighted)
     code, k = classify(samples, expo[0], stderr[0], k, lstatus)
-    if code == PERIODIC and k == 0 and lstatus == ig.STATUS_OK:
+    if code == NOT_SETTLED and lstatus == ig.STATUS_OK:
         # a contracting attractor whose samples had not settled: by the end of the Lyapunov run
         # they have, so sample again there
         again, status2, end3 = _poincare(model.kernel, end2, p, opts, 0, int(n_samples))
@@ -233,9 +246,9 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
         orbit = periodic_orbit_of(model, end3, p, opts, k2, period_rtol) if k2 > 0 else None
         if orbit is not None and np.abs(orbit[2]).max() < 1.0:
             k, _, lams = orbit
-            samples, end2 = again, end3
+            code, samples, end2 = PERIODIC, again, end3
     if code != PERIODIC or k == 0:
-        lams = nan + 0j
+        lams = nan * (1 + 1j)      # no orbit: both parts NaN
     return Attractor(code, k, float(expo[0]) / period, float(stderr[0]) / period, samples, end2,
                      int(lstatus), n_done * float(renorm_periods), np.asarray(expo) / period, lams,
                      False)

@@ -91,7 +91,7 @@ def solve_orbit(model, p, opts, history=(), *, cold_guess, periods=1, tol=1e-9, 
     state, mono, status, reason, iters, res, _ = best
     if status != shooting.CONVERGED:
         # no orbit: every multiplier component NaN (not NaN + 0j)
-        no_multipliers = np.full(model.n_state, complex(np.nan, np.nan))
+        no_multipliers = np.full(model.n_state, np.nan * (1 + 1j))
         return PointSolution(status, reason, iters, res, no_multipliers, np.nan, False, floquet.NONE,
                              state, None, n_rhs)
     lams = floquet.multipliers(mono)
