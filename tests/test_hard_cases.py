@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from rotorkernels import attractor as at, continuation, floquet, integrators as ig, models, shooting
+from rotorkernels import attractor as at, continuation, floquet, integrators as ig, shooting
 from rotorkernels.continuation import events as boundary
 from rotorkernels.models import jeffcott_clearance as jc
 from tests.reference import BaiPoint, PreloadedPoint

@@ -3,7 +3,7 @@
 import numpy as np
 from numba import njit
 
-from rotorkernels.models.spec import Built, ModelSpec, Parameter
+from rotorkernels.models.spec import validation_spec
 from rotorkernels.models.velocity import upper_rows, velocity_rows
 
 
@@ -49,16 +49,5 @@ def rhs_jac(tau, u, p, du, out):
     _jac(k, p, out)
 
 
-NAMES = ("zeta", "delta", "eps")
-
-
-def build(v):
-    return Built(np.array([float(v[k]) for k in NAMES]), 1.0, {})
-
-
-SPEC = ModelSpec(
-    name="damped_mathieu", id=2, module=__name__, n_position=2,
-    description="validation: damped Mathieu equation, twice (scaled time)",
-    parameters=tuple(Parameter(name=k, default=0.0) for k in NAMES),
-    build=build, cold_guess=lambda p: np.zeros(4), length_scale=1.0,
-)
+SPEC = validation_spec("damped_mathieu", 2, __name__, ("zeta", "delta", "eps"),
+                       "validation: damped Mathieu equation, twice (scaled time)")

@@ -1,9 +1,8 @@
 """Validation model `linear_oscillator`: u'' + C u' + K u = 0 with K = [[p0, p1], [p1, p2]],
 C = diag(p3, p4) (scaled time); its flow is expm(A t), its spectra the eigenvalues of A."""
-import numpy as np
 from numba import njit
 
-from rotorkernels.models.spec import Built, ModelSpec, Parameter
+from rotorkernels.models.spec import validation_spec
 from rotorkernels.models.velocity import upper_rows, velocity_rows
 
 
@@ -33,16 +32,5 @@ def rhs_jac(tau, u, p, du, out):
     jac(tau, u, p, out)
 
 
-NAMES = ("k11", "k12", "k22", "c1", "c2")
-
-
-def build(v):
-    return Built(np.array([float(v[k]) for k in NAMES]), 1.0, {})
-
-
-SPEC = ModelSpec(
-    name="linear_oscillator", id=1, module=__name__, n_position=2,
-    description="validation: 2-DOF linear oscillator (scaled time)",
-    parameters=tuple(Parameter(name=k, default=0.0) for k in NAMES),
-    build=build, cold_guess=lambda p: np.zeros(4), length_scale=1.0,
-)
+SPEC = validation_spec("linear_oscillator", 1, __name__, ("k11", "k12", "k22", "c1", "c2"),
+                       "validation: 2-DOF linear oscillator (scaled time)")

@@ -102,3 +102,13 @@ class ModelSpec:
         """Observables of scaled state(s) (..., n_state): array (..., n_observables) in SI."""
         weights = np.array([o.weights for o in self.observables], float)
         return self.to_physical(u, period)[..., :weights.shape[1]] @ weights.T
+
+
+def validation_spec(name, id, module, names, description):
+    """The spec of a 2-DOF validation model in scaled time (period 1) whose kernel parameters are
+    its values `names` in order; such a model has no sweep axis and is used by the kernels' tests."""
+    def build(v):
+        return Built(np.array([float(v[k]) for k in names]), 1.0, {})
+    return ModelSpec(name=name, id=id, module=module, n_position=2, description=description,
+                     parameters=tuple(Parameter(name=k, default=0.0) for k in names), build=build,
+                     cold_guess=lambda p: np.zeros(4), length_scale=1.0)
