@@ -4,12 +4,15 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow bench bench-scaling bench-revisions fig13 cascade clean
+.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions fig13 cascade clean
 
-$(STAMP): pyproject.toml
+# CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
+CONSTRAINTS ?= constraints.txt
+
+$(STAMP): pyproject.toml $(CONSTRAINTS)
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[test]"
+	$(BIN)/python -m pip install --quiet $(if $(CONSTRAINTS),-c $(CONSTRAINTS)) -e ".[test]"
 	touch $(STAMP)
 
 demo: $(STAMP)  ## demo sweep on a local Dask cluster -> out/demo.nc and out/demo_report/
@@ -39,3 +42,9 @@ bench-revisions: $(STAMP)  ## per-point cost before/after the model registry (cc
 
 clean:
 	rm -rf out .pytest_cache
+
+upgrade:  ## newest allowed versions: fresh venv without constraints, the tests, then constraints.txt from what passed
+	rm -rf $(VENV)
+	$(MAKE) CONSTRAINTS= test
+	(head -2 constraints.txt; $(BIN)/python -m pip freeze --exclude-editable) > constraints.txt.new
+	mv constraints.txt.new constraints.txt

@@ -208,6 +208,7 @@ def _positive_int(text):
 
 def build_parser():
     ap = argparse.ArgumentParser(prog="rotorsweep", description=__doc__.splitlines()[0])
+    ap.add_argument("--version", action="version", version=f"rotorsweep {_version()}")
     sub = ap.add_subparsers(dest="command", required=True)
 
     r = sub.add_parser("run", help="run a sweep from a config into a netCDF cube")
@@ -262,6 +263,17 @@ def build_parser():
     i.add_argument("cube")
     i.set_defaults(func=cmd_info)
     return ap
+
+
+def _version():
+    """The installed package's version, else the one cubes record (a source checkout)."""
+    from importlib import metadata
+
+    from pipeline import sweep
+    try:
+        return metadata.version("rotorsweep")
+    except metadata.PackageNotFoundError:
+        return sweep.VERSION
 
 
 def main(argv=None):

@@ -20,8 +20,8 @@ results are those of the straightforward formulation, operation by operation.
 """
 import numpy as np
 from numba import njit
-from scipy.integrate._ivp import dop853_coefficients as _dop
 
+from rotorkernels import dop853_tableau as _dop
 from rotorkernels.models import dispatch
 
 STATUS_OK, STATUS_NAN, STATUS_AMPLITUDE, STATUS_STEP_UNDERFLOW, STATUS_UNKNOWN_MODEL = range(5)

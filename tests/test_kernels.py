@@ -427,3 +427,15 @@ def test_numba_cache_is_keyed_on_all_kernel_sources(tmp_path):
     model = tmp_path / "models" / "jeffcott_clearance.py"
     model.write_text(model.read_text() + "\n# edited\n")
     assert rotorkernels._cache_dir(tmp_path) != rotorkernels._cache_dir(src)
+
+
+def test_vendored_dop853_tableau_is_scipys():
+    """rotorkernels/dop853_tableau.py holds scipy's (private) DOP853 floats digit for digit."""
+    ref = pytest.importorskip("scipy.integrate._ivp.dop853_coefficients")
+    from rotorkernels import dop853_tableau as tab
+
+    n = tab.N_STAGES
+    assert n == ref.N_STAGES
+    for ours, theirs in ((tab.A, ref.A[:n, :n]), (tab.B, ref.B), (tab.C, ref.C[:n]), (tab.E3, ref.E3),
+                         (tab.E5, ref.E5)):
+        np.testing.assert_array_equal(ours, theirs)
