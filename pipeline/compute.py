@@ -23,10 +23,17 @@ def scene_values(data, spec):
     return {p.name: data[p.section][p.name] for p in spec.parameters if p.section is not None}
 
 
+def builder(data):
+    """point {axis: value} -> Built kernel inputs (p, period, derived values), the scene's values
+    gathered once (a segment builds many points)."""
+    spec = model_of(data)
+    values = scene_values(data, spec)
+    return lambda point: spec.build({**values, **point})
+
+
 def point_params(data, point):
     """Built kernel inputs (p, period, derived values) at one grid point {axis: value}."""
-    spec = model_of(data)
-    return spec.build({**scene_values(data, spec), **point})
+    return builder(data)(point)
 
 
 def integrator_settings(data):
@@ -69,9 +76,10 @@ def solve_segment(data, points):
     ana = data["analysis"]
     opts = integrator_settings(data)
     params, seconds, sols = [], [], []
+    build = builder(data)
     for pt in points:
         start = time.perf_counter()
-        params.append(point_params(data, pt))
+        params.append(build(pt))
         seconds.append(time.perf_counter() - start)
     if ana["floquet"]:
         sols = _orbit_chain(model, params, opts, data["numerics"], seconds)

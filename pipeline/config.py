@@ -367,7 +367,7 @@ def _cross_checks(spec, data, axes, errors):
                       "converge below the integration accuracy")
 
 
-def _scene_model(raw, errors):
+def _scene_model(raw):
     """The ModelSpec the scene names, or None (its problem is reported by the scene section)."""
     scene = raw.get("scene")
     name = scene.get("model") if isinstance(scene, dict) else None
@@ -411,7 +411,7 @@ def parse_config(text, path=None, allow_large=False):
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{label}: not valid TOML: {exc}") from None
     errors = []
-    spec = _scene_model(raw, errors)
+    spec = _scene_model(raw)
     sections, axis_keys = model_schema(spec) if spec else ({}, {})
     tables = {**SCHEMA, **sections}
     known = list(tables) + ["sweep"]

@@ -15,9 +15,16 @@ from pathlib import Path
 import numba
 
 
+PLUGINS_VARIABLE = "ROTORSWEEP_MODELS"
+
+
+def plugin_modules():
+    """Module names of the user's models, from $ROTORSWEEP_MODELS (comma-separated)."""
+    return [m.strip() for m in os.environ.get(PLUGINS_VARIABLE, "").split(",") if m.strip()]
+
+
 def _plugin_sources():
-    names = [m.strip() for m in os.environ.get("ROTORSWEEP_MODELS", "").split(",") if m.strip()]
-    found = [importlib.util.find_spec(name) for name in names]
+    found = [importlib.util.find_spec(name) for name in plugin_modules()]
     return [Path(spec.origin) for spec in found if spec is not None and spec.origin]
 
 

@@ -12,12 +12,12 @@ import importlib.util
 import os
 import sys
 
+from rotorkernels import plugin_modules
 from rotorkernels.models import damped_mathieu, duffing, jeffcott_clearance, linear_oscillator
 from rotorkernels.models.spec import Built, ModelSpec, Observable, Parameter  # noqa: F401 (API)
 
 BUILTIN = (jeffcott_clearance, linear_oscillator, damped_mathieu, duffing)
 BUILTIN_NAMES = tuple(m.SPEC.name for m in BUILTIN)
-PLUGINS_VARIABLE = "ROTORSWEEP_MODELS"
 
 REGISTRY = {}
 
@@ -46,11 +46,6 @@ def get(name):
         return REGISTRY[name]
     except KeyError:
         raise ModelError(f"unknown model {name!r}; registered: {', '.join(REGISTRY)}") from None
-
-
-def plugin_modules():
-    """Module names in $ROTORSWEEP_MODELS."""
-    return [m.strip() for m in os.environ.get(PLUGINS_VARIABLE, "").split(",") if m.strip()]
 
 
 def _load_dispatch():
