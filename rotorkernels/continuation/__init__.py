@@ -1,7 +1,8 @@
 """Strategies that follow periodic-orbit problems (rotorkernels.orbits) along a parameter:
 natural continuation (`natural`: each point started from its neighbours) and events (`events`:
-locating where a multiplier crosses the unit circle between two solved points). Pseudo-arclength
-continuation through folds joins them here as one more entry of STRATEGIES.
+locating where a multiplier crosses the unit circle between two solved points) on a grid, and
+pseudo-arclength continuation through folds with located fold / period-doubling /
+Neimark-Sacker points and period-doubling branch switching (`arclength`).
 
 `follow(model, params, opts, strategy=...)` is the one entry point: it follows the forced-orbit
 problems at the parameter vectors `params` and returns a Branch with a status per step."""
