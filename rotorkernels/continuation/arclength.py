@@ -98,7 +98,7 @@ class Family(NamedTuple):
     periods: float = 1.0
 
     def lam(self, X):
-        return X[-1] * self.scale
+        return float(X[-1] * self.scale)
 
     def problem(self, lam):
         return ForcedOrbitProblem(self.model, self.params(lam), self.opts, self.periods)
