@@ -1,16 +1,29 @@
 """The boundary table of a cube: every change of stability between neighbouring values of the
-continued axis (shaft speed for jeffcott_clearance) on a line, refined by rotorkernels.boundary
-(root finding on the continued orbit branch) far below the grid step, and stored in the cube
-along a `boundary` dimension."""
+continued axis (shaft speed for jeffcott_clearance) on a line, refined far below the grid step,
+and stored in the cube along a `boundary` dimension.
+
+Refinement follows the branch of the stable grid point by pseudo-arclength continuation
+(rotorkernels.continuation.arclength) towards the unstable one and takes the first event where
+a multiplier leaves the unit circle, located by its own test function: a fold (+1), where the
+orbit ceases to exist and the unstable grid point's orbit lies on another branch, is located as
+accurately as a period doubling or a Neimark-Sacker point. (Brent's method on max|lambda| - 1
+between the two grid points cannot locate a fold: there is no continuous function to bracket.)
+Only if the branch shows no such event within a grid step beyond the bracket does Brent's
+method on the grid's natural continuation (rotorkernels.continuation.events) refine it.
+"""
 import itertools
 
 import numpy as np
 
 from pipeline import compute, schema
 from rotorkernels import continuation, floquet
-from rotorkernels.continuation import events as boundary
+from rotorkernels.continuation import arclength, events as boundary
 
 XTOL_REL = 1e-8
+# The branch is followed at most a grid step beyond the bracket, in steps a fraction of it.
+BRANCH_SETTINGS = arclength.Settings(ds=0.1, ds_max=0.25, max_steps=100)
+_EVENT_TYPE = {arclength.FOLD: floquet.FOLD, arclength.PERIOD_DOUBLING: floquet.PERIOD_DOUBLING,
+               arclength.NEIMARK_SACKER: floquet.NEIMARK_SACKER}
 
 
 def _others(ds, axis):
@@ -26,15 +39,22 @@ def _lines(ds, axis):
 
 
 def _solver(data, values, axis):
-    """solve(value of `axis`, guess) -> the orbit there, the other axes at `values`."""
+    """solve(value of `axis`, guess) -> the orbit there, the other axes at `values`; and
+    family(scale) -> the arclength family along `axis`."""
     model = compute.model_of(data)
     opts = compute.integrator_settings(data)
     newton = compute.newton_settings(model, data["numerics"])
+    build = compute.builder(data)
+
+    def params(value):
+        return build({**values, axis: value}).p
 
     def solve(value, guess):
-        params = compute.point_params(data, {**values, axis: value})
-        return continuation.solve_orbit(model, params.p, opts, [guess], **newton)
-    return solve
+        return continuation.solve_orbit(model, params(value), opts, [guess], **newton)
+
+    def family(scale):
+        return arclength.Family(model, params, opts, scale=scale)
+    return solve, family
 
 
 def _crossings(line):
@@ -50,19 +70,23 @@ def boundary_rows(data, ds):
     fixed = compute.fixed_values(data)
     rows = []
     for where, line in _lines(ds, axis):
-        solve = _solver(data, {**fixed, **where}, axis)
+        solvers = _solver(data, {**fixed, **where}, axis)
         grid = line[axis].values
         for i in _crossings(line):
             row = {**{f"boundary_{k}": v for k, v in where.items()},
                    "boundary_grid_low": grid[i], "boundary_grid_high": grid[i + 1],
                    "boundary_direction": 0 if line["stable"].values[i] == 1 else 1}
-            rows.append({**row, **_refine(solve, line, axis, i)})
+            rows.append({**row, **_refine(solvers, line, axis, i)})
     return rows
 
 
-def _refine(solve, line, axis, i):
+def _refine(solvers, line, axis, i):
+    solve, family = solvers
     a, b = float(line[axis].values[i]), float(line[axis].values[i + 1])
     name = f"boundary_{axis}"
+    event = _first_event_on_branch(family(b - a), line, axis, i)
+    if event is not None:
+        return {name: event.point.lam, "boundary_status": 0, "boundary_type": _EVENT_TYPE[event.kind]}
     try:
         found = boundary.locate_boundary(solve, a, b, line["orbit_state"].values[i],
                                          line["orbit_state"].values[i + 1], xtol_rel=XTOL_REL)
@@ -71,6 +95,19 @@ def _refine(solve, line, axis, i):
         return {name: np.nan, "boundary_status": 1, "boundary_type": floquet.crossing_type(lead)}
     return {name: found.value, "boundary_status": 0,
             "boundary_type": floquet.crossing_type(found.solution.multipliers[0])}
+
+
+def _first_event_on_branch(family, line, axis, i):
+    """The first stability-losing event on the branch of the stable one of grid points i, i + 1,
+    followed towards the other (at most a grid step beyond it); None if there is none."""
+    grid = line[axis].values
+    k, other = (i, i + 1) if line["stable"].values[i] == 1 else (i + 1, i)
+    a, b = float(grid[k]), float(grid[other])
+    span = abs(b - a)
+    branch = arclength.continue_orbit(family, a, line["orbit_state"].values[k],
+                                      (min(a, b) - span, max(a, b) + span), BRANCH_SETTINGS,
+                                      direction=1 if b > a else -1)
+    return next((e for e in branch.events if e.kind in _EVENT_TYPE), None)
 
 
 def add_boundary_table(data, ds):

@@ -210,3 +210,31 @@ def test_settings_that_cannot_work_are_named():
     text = "\n".join(problems)
     assert "ds = 0.0" in text and "max_steps" in text and "max_angle" in text
     assert al.Settings(ds=-1.0).problems()
+
+
+def test_sweep_boundary_table_locates_the_fold_on_the_branch(bai):
+    """The grid sweep at 19 um brackets the loss of stability near 28.4 Hz between a stable orbit
+    and an orbit of another branch (past the fold Newton lands there). Its boundary table puts
+    the boundary at the fold of the stable branch, typed as a fold, to the table's 1e-8."""
+    import xarray as xr
+
+    from pipeline import boundaries, schema
+
+    model, opts, family_at, start = bai
+    cfg = config.load_config("configs/bai2006_fig13.toml")
+    fixed = {k: v for k, v in compute.fixed_values(cfg.data).items() if v is not None}
+    speeds = [26.0, 26.5, 27.0, 27.5, 28.0, 28.3, 28.5]   # natural continuation from 26 Hz
+    rows = compute.solve_segment(cfg.data, [{**fixed, "speed": s, "clearance": 19e-6} for s in speeds])
+    variables = schema.variables_of(cfg.model)
+    ds = xr.Dataset({name: (("clearance", "speed") + variables[name][0], values[None])
+                     for name, values in rows.items() if name in variables},
+                    coords={"speed": ("speed", speeds, {"units": "Hz", "long_name": "shaft speed"}),
+                            "clearance": ("clearance", [19e-6], {"units": "m", "long_name": "radial clearance"})})
+    assert ds["stable"].values[0, -2:].tolist() == [1, 0]
+    ds.attrs["continued_axis"] = "speed"
+    row = next(r for r in boundaries.boundary_rows(cfg.data, ds) if r["boundary_grid_low"] == 28.3)
+    family = family_at(19e-6, 20.0)
+    branch = al.continue_orbit(family, 26.0, start(family, 26.0), (26.0, 29.0), BAI_SETTINGS)
+    fold = next(e for e in branch.events if e.kind == al.FOLD)
+    assert row["boundary_type"] == schema.BIFURCATION.index("fold")
+    assert row["boundary_speed"] == pytest.approx(fold.point.lam, rel=1e-8)
