@@ -6,6 +6,7 @@ The Python API mirrors the command line:
     path = pipeline.run("configs/demo.toml", "out/demo.nc")        # rotorsweep run
     ds = pipeline.open_cube(path)                                  # an xarray.Dataset
     pipeline.unstable_intervals(ds)                                # rotorsweep query --unstable
+    pipeline.continue_branches("configs/bai2006_fold.toml", "out/fold.nc")   # rotorsweep continue
     pipeline.make_report(ds, "out/demo_report")                    # rotorsweep report
     pipeline.point(speed=100.0, clearance=7.6e-6)                  # rotorsweep point
 """
@@ -36,6 +37,15 @@ def run(config=None, output=None, *, allow_large=False, **kwargs):
     return sweep.run(cfg, output or f"out/{cfg.data['scene']['name']}.nc", **kwargs)
 
 
+def continue_branches(config=None, output=None, **kwargs):
+    """Pseudo-arclength branches of a config's [continuation] (rotorsweep continue); returns the
+    result's path. kwargs: workers, scheduler, overwrite, stream."""
+    from pipeline import continuation
+
+    cfg = _config(config)
+    return continuation.run(cfg, output or f"out/{cfg.data['scene']['name']}_continuation.nc", **kwargs)
+
+
 def open_cube(path):
     from pipeline import cube
 
@@ -54,13 +64,23 @@ def make_report(cube_or_path, out_dir, points=None, overwrite=False):
     dict {axis: value} or "speed=36 clearance=19e-6" (nearest grid point). A directory holding
     the report of another cube is refused unless overwrite; the report is built next to it and
     then takes its place, so no file of the earlier report is left."""
-    from pipeline import fileio, report
+    from pipeline import continuation, fileio, report
 
-    ds = _dataset(cube_or_path)
+    is_path = isinstance(cube_or_path, (str, bytes)) or hasattr(cube_or_path, "__fspath__")
+    if is_path and continuation.is_continuation_file(cube_or_path):
+        ds = continuation.open_result(cube_or_path)
+    else:
+        ds = _dataset(cube_or_path)
     identity = fileio.report_identity(ds, None if ds is cube_or_path else cube_or_path)
     fileio.check_report_dir(out_dir, identity, overwrite)
     with fileio.replaced_dir(out_dir) as tmp:
-        files = report.make_report(ds, tmp, points=points)
+        if continuation.is_continuation(ds):
+            from pipeline.report import branch_result
+            if points:
+                raise ValueError("--point applies to sweep cubes, not to continuation results")
+            files = branch_result.make_report(ds, tmp)
+        else:
+            files = report.make_report(ds, tmp, points=points)
         (tmp / fileio.REPORT_MARKER).write_text(json.dumps(identity, indent=2) + "\n")
     return fileio.moved(files, tmp, out_dir)
 

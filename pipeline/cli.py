@@ -1,4 +1,4 @@
-"""`rotorsweep` command line: run, point, query, report, info.
+"""`rotorsweep` command line: run, continue, point, query, report, info.
 
 User mistakes (bad config, bad cube, bad query) print one clear message and exit with code 2;
 no traceback."""
@@ -38,6 +38,20 @@ def cmd_run(args):
                         scheduler=args.scheduler, resume=args.resume, overwrite=args.overwrite,
                         chunk_points=args.chunk_points, progress=not args.quiet)
     print(f"cube: {path}")
+    if args.report:
+        files = pipeline.make_report(path, args.report, overwrite=args.overwrite)
+        print(f"report: {files['html']}")
+    return 0
+
+
+def cmd_continue(args):
+    from pipeline import continuation
+
+    cfg = pipeline._config(args.config)
+    out = args.output or f"out/{cfg.data['scene']['name']}_continuation.nc"
+    path = continuation.run(cfg, out, workers=args.workers, scheduler=args.scheduler, overwrite=args.overwrite,
+                            stream=None if args.quiet else sys.stderr)
+    print(f"continuation: {path}")
     if args.report:
         files = pipeline.make_report(path, args.report, overwrite=args.overwrite)
         print(f"report: {files['html']}")
@@ -169,6 +183,11 @@ def _point_text(r):
 
 
 def cmd_query(args):
+    from pipeline import continuation
+
+    if continuation.is_continuation_file(args.cube):
+        print(query._render(continuation.events_table(continuation.open_result(args.cube)), args.format))
+        return 0
     ds = cube.open_cube(args.cube)
     ds = query.select(ds, query.parse_where(args.where or []))
     if args.unstable:
@@ -191,7 +210,12 @@ def cmd_report(args):
 
 
 def cmd_info(args):
-    print(cube.describe(cube.open_cube(args.cube)))
+    from pipeline import continuation
+
+    if continuation.is_continuation_file(args.cube):
+        print(continuation.describe(continuation.open_result(args.cube)))
+    else:
+        print(cube.describe(cube.open_cube(args.cube)))
     return 0
 
 
@@ -223,6 +247,17 @@ def build_parser():
     r.add_argument("--report", metavar="DIR", help="also write the report into DIR")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=cmd_run)
+
+    c = sub.add_parser("continue", help="pseudo-arclength branches (folds, period doublings, branch "
+                                         "switching) of a config's [continuation] into a netCDF result")
+    c.add_argument("config", nargs="?", help="scene TOML with a [continuation] section (default: the demo scene, along speed)")
+    c.add_argument("-o", "--output", help="result path (default out/<scene name>_continuation.nc)")
+    c.add_argument("--workers", type=_positive_int, help="local Dask worker processes (default: one per core, at least 2)")
+    c.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
+    c.add_argument("--overwrite", action="store_true", help="replace an existing result (and --report DIR)")
+    c.add_argument("--report", metavar="DIR", help="also write the report into DIR")
+    c.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+    c.set_defaults(func=cmd_continue)
 
     p = sub.add_parser("point", help="periodic orbit and Floquet multipliers at one point")
     p.add_argument("--config", help="scene TOML (default: Bai 2006, 209 bearing, the paper's constant)")

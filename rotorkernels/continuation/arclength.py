@@ -257,7 +257,8 @@ def _step(family, a, ds, settings, counter):
 def _signs(lams):
     """Signs of the three test functions (fold/branch point, period doubling, Neimark-Sacker)."""
     def sign(values):
-        phase = np.prod(values / np.abs(values))
+        size = np.abs(values)
+        phase = np.prod(np.where(size > 0, values / np.where(size > 0, size, 1.0), 1.0))
         return 1.0 if phase.real >= 0 else -1.0
     i, j = np.triu_indices(lams.size, 1)
     return sign(lams - 1.0), sign(lams + 1.0), sign(lams[i] * lams[j] - 1.0)

@@ -1,0 +1,366 @@
+"""`rotorsweep continue`: pseudo-arclength branches of a scene (rotorkernels.continuation.arclength)
+on a Dask cluster, into a netCDF *continuation result*.
+
+The config's [continuation] section names the continued parameter (any float parameter of the
+scene's model: a sweep axis such as speed or clearance, or a section value such as the damping)
+and its range (default: the sweep's values of it). Every combination of the other swept axes is
+one *line*, one Dask task: the orbit is solved at the start, followed through folds to the end
+of the range, and each period doubling met spawns the period-2k branch (branch switching) up to
+`period_doubling_switches` deep. Every branch of every line is one entry of the `branch`
+dimension (its points along `point`, padded with NaN / INT_FILL), its located fold / period
+doubling / Neimark-Sacker points entries of the `event` dimension.
+"""
+import functools
+import itertools
+import json
+import os
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+from pipeline import compute, cube, fileio, schema
+from pipeline.config import ConfigError
+from rotorkernels.continuation import arclength as al, solve_orbit
+
+RESULT_KIND = "continuation"
+# orbit samples per forcing period for the amplitudes (max |q| and half peak-to-peak)
+AMPLITUDE_SAMPLES = 64
+
+
+@dataclass(frozen=True)
+class Plan:
+    parameter: str
+    start: float
+    stop: float
+    lines: tuple            # dicts {other swept axis: value}
+    settings: al.Settings
+    periods: int
+    switches: int
+
+    @property
+    def range(self):
+        return (min(self.start, self.stop), max(self.start, self.stop))
+
+
+def plan(data):
+    """The continuation a validated scene asks for; raises ConfigError naming every key that
+    cannot work (before any work starts)."""
+    spec = compute.model_of(data)
+    sec = data["continuation"]
+    name = sec["parameter"] or spec.continuation[0]
+    floats = [p.name for p in spec.parameters if p.kind == "float"]
+    if name not in floats:
+        raise ConfigError(f"continuation.parameter: {name!r} is not a float parameter of model {spec.name} "
+                          f"(continuable: {', '.join(floats)})")
+    par = spec.parameter(name)
+    sweep = data["sweep"]
+    errors = []
+    start, stop = sec["start"], sec["stop"]
+    for key, value, pick in (("start", start, min), ("stop", stop, max)):
+        if value is None and name not in sweep:
+            errors.append(f"continuation.{key}: required ({name} is not swept, so the sweep gives no range)")
+    if errors:
+        raise ConfigError("\n".join(errors))
+    start = float(sweep[name][0]) if start is None else float(start)
+    stop = float(sweep[name][-1]) if stop is None else float(stop)
+    if start == stop:
+        errors.append(f"continuation.start and continuation.stop: both {start!r}; the range is empty")
+    for key, value in (("start", start), ("stop", stop)):
+        if not _within(value, par):
+            errors.append(f"continuation.{key}: {value!r} is outside the allowed values of {name} ({par.help or par.long_name})")
+    settings = al.Settings(ds=sec["ds"], ds_min=sec["ds_min"], ds_max=sec["ds_max"], max_steps=sec["max_steps"],
+                           max_angle=sec["max_angle"], tol=data["numerics"]["newton_tol"])
+    errors += [f"continuation.{p}" for p in settings.problems()]
+    if errors:
+        raise ConfigError("\n".join(errors))
+    others = [a for a in sweep if a != name]
+    lines = tuple(dict(zip(others, map(float, combo))) for combo in itertools.product(*(sweep[a] for a in others)))
+    return Plan(name, start, stop, lines, settings, sec["periods"], sec["period_doubling_switches"])
+
+
+def _within(value, par):
+    above = value > par.lo if par.lo_open else value >= par.lo
+    below = value < par.hi if par.hi_open else value <= par.hi
+    return above and below
+
+
+def _family(data, pl, where):
+    """(arclength Family along the parameter at the line `where`, lambda -> Built)."""
+    build = compute.builder(data)
+    values = {**compute.fixed_values(data), **where}
+
+    def built(lam):
+        return build({**values, pl.parameter: lam})
+    family = al.Family(compute.model_of(data), lambda lam: built(lam).p, compute.integrator_settings(data),
+                       scale=pl.range[1] - pl.range[0], periods=float(pl.periods))
+    return family, built
+
+
+def continue_line(data, where):
+    """The branches of one line (a Dask task): a list of dicts of numpy arrays (branch_record)."""
+    pl = plan(data)
+    family, built = _family(data, pl, where)
+    model = family.model
+    sol = solve_orbit(model, family.params(pl.start), family.opts, periods=pl.periods,
+                      **compute.newton_settings(model, data["numerics"]))
+    if sol.status != 0:
+        empty = al.Branch([], [], al.START_FAILED, f"no periodic orbit converged at {pl.parameter} = {pl.start!r}",
+                          family.periods, sol.n_rhs)
+        return [branch_record(family, built, empty, -1)]
+    first = al.continue_orbit(family, pl.start, sol.state, pl.range, pl.settings,
+                              direction=1 if pl.stop > pl.start else -1)
+    records = [branch_record(family, built, first, -1)]
+    queue = [(first, 0, 0)]
+    while queue:
+        branch, depth, index = queue.pop(0)
+        if depth == pl.switches:
+            continue
+        parent = family.with_periods(branch.periods)
+        for event in (e for e in branch.events if e.kind == al.PERIOD_DOUBLING):
+            child = al.switch_period_doubling(parent, event, pl.range, pl.settings)
+            records.append(branch_record(family, built, child, index))
+            queue.append((child, depth + 1, len(records) - 1))
+    return records
+
+
+def branch_record(family, built, branch, parent):
+    """One branch as plain arrays (what a Dask task returns)."""
+    model = family.model
+    fam = family.with_periods(branch.periods)
+    pts = branch.points
+    X = np.array([p.X for p in pts]).reshape(len(pts), model.n_state + 1)
+    steps = np.linalg.norm(np.diff(X, axis=0), axis=1) if len(pts) > 1 else np.zeros(0)
+    amp = np.array([_amplitudes(fam, built, p) for p in pts]).reshape(len(pts), 2, len(model.observables))
+    ev = branch.events
+    return {
+        "parameter": np.array([p.lam for p in pts]),
+        "arclength": np.concatenate(([0.0], np.cumsum(steps)))[:len(pts)],
+        "state": X[:, :-1] if len(pts) else np.zeros((0, model.n_state)),
+        "multipliers": np.array([p.multipliers for p in pts]).reshape(len(pts), model.n_state),
+        "amplitude_max": amp[:, 0], "amplitude_half_pp": amp[:, 1],
+        "period": np.array([branch.periods * built(p.lam).period for p in pts]),
+        "periods": int(branch.periods), "parent": int(parent), "end": int(branch.end), "detail": branch.detail,
+        "n_rhs": int(branch.n_rhs),
+        "event_type": np.array([e.kind for e in ev], int),
+        "event_parameter": np.array([e.point.lam for e in ev]),
+        "event_index": np.array([e.index for e in ev], int),
+        "event_state": np.array([e.point.state for e in ev]).reshape(len(ev), model.n_state),
+        "event_multipliers": np.array([e.point.multipliers for e in ev]).reshape(len(ev), model.n_state),
+        "event_amplitude_max": np.array([_amplitudes(fam, built, e.point)[0] for e in ev]).reshape(len(ev), len(model.observables)),
+    }
+
+
+def _amplitudes(family, built, point):
+    """(max |o|, half peak-to-peak of o) over the orbit for each observable o, in SI."""
+    u = al.orbit_samples(family, point, AMPLITUDE_SAMPLES)
+    o = family.model.observe(u, built(point.lam).period)
+    return np.abs(o).max(axis=0), 0.5 * (o.max(axis=0) - o.min(axis=0))
+
+
+# --- the result file -----------------------------------------------------------------------------
+
+def _parameter_attrs(spec, name):
+    par = spec.parameter(name)
+    return {"units": par.unit, "long_name": par.long_name or par.help or name}
+
+
+def _flags(meanings, first=0):
+    """CF flag attributes of an int8 variable (flag_values of the variable's own type)."""
+    return {"flag_values": np.arange(first, first + len(meanings), dtype="int8"), "flag_meanings": " ".join(meanings)}
+
+
+def to_dataset(data, pl, lines, provenance):
+    """The continuation result: lines = [(where, [branch records])] in plan order."""
+    spec = compute.model_of(data)
+    records = [(where, r) for where, recs in lines for r in recs]
+    n_branch, n_pt = len(records), max([len(r["parameter"]) for _, r in records] + [1])
+    n, n_obs = spec.n_state, len(spec.observables)
+
+    def pad(key, tail=(), fill=np.nan):
+        out = np.full((n_branch, n_pt) + tail, fill)
+        for b, (_, r) in enumerate(records):
+            out[b, :len(r[key])] = r[key]
+        return out
+    mult = np.full((n_branch, n_pt, n), np.nan + 0j)
+    for b, (_, r) in enumerate(records):
+        mult[b, :len(r["multipliers"])] = r["multipliers"]
+    absmax = np.abs(mult).max(axis=2)
+    present = ~np.isnan(absmax)
+    stable = np.where(present, absmax < 1.0, -1).astype("int8")
+    ev = [(b, r, k) for b, (_, r) in enumerate(records) for k in range(len(r["event_type"]))]
+    ev_mult = np.array([r["event_multipliers"][k] for _, r, k in ev]).reshape(len(ev), n)
+    par_attrs = _parameter_attrs(spec, pl.parameter)
+    obs_units = [o.unit for o in spec.observables]
+    amp_unit = obs_units[0] if len(set(obs_units)) == 1 else "various"
+    v = {
+        "parameter": (("branch", "point"), pad("parameter"), {**par_attrs, "comment": f"the continued parameter: {pl.parameter}"}),
+        "arclength": (("branch", "point"), pad("arclength"), {"units": "1", "long_name": "arclength along the branch (normalized state and parameter)"}),
+        "orbit_state": (("branch", "point", "state"), pad("state", (n,)), dict(schema.VARIABLES["orbit_state"][2])),
+        "amplitude_max": (("branch", "point", "observable"), pad("amplitude_max", (n_obs,)), {"units": amp_unit, "long_name": "max |observable| over the orbit"}),
+        "amplitude_half_pp": (("branch", "point", "observable"), pad("amplitude_half_pp", (n_obs,)), {"units": amp_unit, "long_name": "half peak-to-peak of the observable over the orbit"}),
+        "orbit_period": (("branch", "point"), pad("period"), {"units": "s", "long_name": "period of the orbit (k forcing periods)"}),
+        "multiplier_real": (("branch", "point", "multiplier"), mult.real, {"units": "1", "long_name": "Floquet multiplier, real part"}),
+        "multiplier_imag": (("branch", "point", "multiplier"), mult.imag, {"units": "1", "long_name": "Floquet multiplier, imaginary part"}),
+        "max_abs_multiplier": (("branch", "point"), absmax, {"units": "1", "long_name": "largest Floquet multiplier modulus"}),
+        "stable": (("branch", "point"), stable, {"long_name": "orbit is stable (max |multiplier| < 1)",
+                                                 **_flags(("no_point", "unstable", "stable"), first=-1)}),
+        "branch_points": (("branch",), np.array([len(r["parameter"]) for _, r in records], "int32"), {"units": "1", "long_name": "points on the branch"}),
+        "branch_periods": (("branch",), np.array([r["periods"] for _, r in records], "int32"), {"units": "1", "long_name": "forcing periods per orbit (k of period-k)"}),
+        "branch_parent": (("branch",), np.array([r["parent"] for _, r in records], "int32"), {"units": "1", "long_name": "branch index of the branch this one was switched from (-1: none)"}),
+        "branch_end": (("branch",), np.array([r["end"] for _, r in records], "int8"), {"long_name": "how the branch ended", **_flags(al.END_REASONS)}),
+        "branch_detail": (("branch",), np.array([r["detail"] for _, r in records], object), {"long_name": "how the branch ended, in words"}),
+        "event_type": (("event",), np.array([r["event_type"][k] for _, r, k in ev], "int8"), {"long_name": "located bifurcation point", **_flags(al.EVENT_TYPES)}),
+        "event_branch": (("event",), np.array([b for b, _, _ in ev], "int32"), {"units": "1", "long_name": "branch index of the event"}),
+        "event_point": (("event",), np.array([r["event_index"][k] for _, r, k in ev], "int32"), {"units": "1", "long_name": "branch point just before the event"}),
+        "event_parameter": (("event",), np.array([r["event_parameter"][k] for _, r, k in ev], float), {**par_attrs, "comment": "located on the branch to the arclength tolerance"}),
+        "event_multiplier_real": (("event", "multiplier"), ev_mult.real, {"units": "1", "long_name": "Floquet multiplier at the event, real part"}),
+        "event_multiplier_imag": (("event", "multiplier"), ev_mult.imag, {"units": "1", "long_name": "Floquet multiplier at the event, imaginary part"}),
+        "event_state": (("event", "state"), np.array([r["event_state"][k] for _, r, k in ev]).reshape(len(ev), n), dict(schema.VARIABLES["orbit_state"][2])),
+        "event_amplitude_max": (("event", "observable"), np.array([r["event_amplitude_max"][k] for _, r, k in ev]).reshape(len(ev), n_obs), {"units": amp_unit, "long_name": "max |observable| over the orbit at the event"}),
+    }
+    coords = {"observable": ("observable", [o.name for o in spec.observables], {"long_name": "observable (units: " + ", ".join(obs_units) + ")"})}
+    for axis in (pl.lines[0] if pl.lines else {}):
+        attrs = spec.parameter(axis)
+        coords[axis] = ("branch", np.array([w[axis] for w, _ in records]), {"units": attrs.unit, "long_name": attrs.long_name or axis})
+    attrs = {**provenance, "result_kind": RESULT_KIND, "parameter": pl.parameter,
+             "range": json.dumps(list(pl.range)), "Conventions": "CF-1.10"}
+    return xr.Dataset(v, coords=coords, attrs=attrs)
+
+
+def write(ds, path):
+    """Atomic netCDF write: compressed numbers, integers without a fill value (so a plain
+    xarray.open_dataset keeps the flags integer; padding has its own flag value), text
+    uncompressed (HDF5 filters do not apply to variable-length strings)."""
+    enc = {name: {"_FillValue": None} for name in ds.coords}
+    for name, var in ds.data_vars.items():
+        if var.dtype.kind == "O":
+            enc[name] = {}
+        else:
+            enc[name] = {**cube.COMPRESSION, **({"_FillValue": None} if var.dtype.kind in "iu" else {})}
+    with fileio.atomic_path(path) as tmp:
+        ds.to_netcdf(tmp, engine="netcdf4", encoding=enc)
+    return path
+
+
+def open_result(path):
+    """Open a continuation result into memory; CubeError if the file is not one."""
+    try:
+        with xr.open_dataset(path, engine="netcdf4", mask_and_scale=False) as ds:
+            ds = ds.load()
+    except (OSError, ValueError) as exc:
+        raise cube.CubeError(f"{path}: cannot be read as netCDF ({exc})") from None
+    if not is_continuation(ds):
+        raise cube.CubeError(f"{path}: not a continuation result (no result_kind = {RESULT_KIND!r})")
+    return ds
+
+
+def is_continuation(ds):
+    return ds.attrs.get("result_kind") == RESULT_KIND
+
+
+def is_continuation_file(path):
+    """A quick look at the global attributes (no data read)."""
+    try:
+        with xr.open_dataset(path, engine="netcdf4", mask_and_scale=False) as ds:
+            return is_continuation(ds)
+    except (OSError, ValueError):
+        return False
+
+
+# --- running -------------------------------------------------------------------------------------
+
+def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr):
+    """Run the continuation a config asks for into a netCDF result at `output`; returns its path."""
+    from pipeline import sweep
+
+    pl = plan(cfg.data)
+    output = os.path.abspath(output)
+    if os.path.exists(output) and not overwrite:
+        raise cube.CubeError(f"{output} exists; pass --overwrite to replace it")
+    with fileio.output_lock(output, cfg.path or "<default scene>"):
+        if scheduler:
+            sweep.check_scheduler(scheduler)
+        lines = _run_lines(cfg, pl, workers, scheduler, stream)
+        ds = to_dataset(cfg.data, pl, lines, {**sweep._provenance(cfg), "title": f"rotorsweep continuation: {cfg.data['scene']['name']}"})
+        return write(ds, output)
+
+
+def _run_lines(cfg, pl, workers, scheduler, stream):
+    from dask.distributed import as_completed
+
+    from pipeline import sweep
+
+    _say(stream, f"continuing {pl.parameter} from {pl.start:g} to {pl.stop:g} on {len(pl.lines)} line(s)")
+    client, cluster = sweep._client(workers, scheduler)
+    try:
+        submit = functools.partial(client.submit, continue_line, cfg.data, pure=False)
+        futures = {submit(where): k for k, where in enumerate(pl.lines)}
+        results = [None] * len(pl.lines)
+        for done, future in enumerate(as_completed(futures), 1):
+            k = futures[future]
+            results[k] = future.result()
+            _say(stream, f"[{done}/{len(pl.lines)}] {_line_label(pl.lines[k])}: {_line_summary(results[k])}")
+    finally:
+        sweep._close(client, cluster)
+    return list(zip(pl.lines, results))
+
+
+def _say(stream, text):
+    if stream:
+        print(text, file=stream, flush=True)
+
+
+def _line_label(where):
+    return ", ".join(f"{k}={v:g}" for k, v in where.items()) or "the scene"
+
+
+def _line_summary(records):
+    counts = {}
+    for r in records:
+        for kind in r["event_type"]:
+            counts[al.EVENT_LABELS[kind]] = counts.get(al.EVENT_LABELS[kind], 0) + 1
+    events = ", ".join(f"{n} {label}" for label, n in counts.items()) or "no events"
+    ends = ", ".join(sorted({al.END_REASONS[r["end"]] for r in records}))
+    return f"{len(records)} branch(es), {sum(len(r['parameter']) for r in records)} points, {events}; ended: {ends}"
+
+
+# --- what a result holds -------------------------------------------------------------------------
+
+def describe(ds):
+    """`rotorsweep info` of a continuation result."""
+    par = ds.attrs["parameter"]
+    unit = ds["parameter"].attrs.get("units", "")
+    lines = [f"continuation result: scene {ds.attrs.get('scene', '?')}, model {ds.attrs.get('model', '?')}",
+             f"parameter {par} [{unit}] over {json.loads(ds.attrs['range'])}",
+             f"{ds.sizes['branch']} branch(es), {ds.sizes.get('event', 0)} located event(s)"]
+    for b in range(ds.sizes["branch"]):
+        where = ", ".join(f"{c}={float(ds[c].values[b]):g}" for c in ds.coords if ds[c].dims == ("branch",))
+        lines.append(f"  branch {b}: period-{int(ds['branch_periods'].values[b])}"
+                     f"{f' from branch {int(ds.branch_parent.values[b])}' if ds.branch_parent.values[b] >= 0 else ''}"
+                     f"{f' ({where})' if where else ''}, {int(ds['branch_points'].values[b])} points, "
+                     f"ended {al.END_REASONS[int(ds['branch_end'].values[b])]}: {ds['branch_detail'].values[b]}")
+    return "\n".join(lines)
+
+
+def events_table(ds):
+    """The located events as columns (for query's renderer): type, branch, parameter, period,
+    the critical multiplier, max |observable|."""
+    par = ds.attrs["parameter"]
+    mult = ds["event_multiplier_real"].values + 1j * ds["event_multiplier_imag"].values
+    kinds = ds["event_type"].values
+    targets = np.array([{0: 1.0, 1: -1.0}.get(int(k), np.nan) for k in kinds])
+    critical = [m[np.argmin(np.abs(m - t))] if np.isfinite(t) else m[np.argmin(np.abs(np.abs(m) - 1.0))]
+                for m, t in zip(mult, targets)] if len(kinds) else []
+    branch = ds["event_branch"].values
+    cols = {"type": [al.EVENT_LABELS[int(k)] for k in kinds], "branch": branch.tolist(),
+            "periods": ds["branch_periods"].values[branch].tolist() if len(branch) else [],
+            par: ds["event_parameter"].values.tolist(),
+            "multiplier_real": [float(c.real) for c in critical], "multiplier_imag": [float(c.imag) for c in critical]}
+    for c in ds.coords:
+        if ds[c].dims == ("branch",):
+            cols[c] = ds[c].values[branch].tolist() if len(branch) else []
+    for j, name in enumerate(ds["observable"].values):
+        cols[f"amplitude_max_{name}"] = ds["event_amplitude_max"].values[:, j].tolist()
+    return cols

@@ -1,0 +1,159 @@
+"""The report of a continuation result (`rotorsweep continue`): branch diagrams as users of AUTO
+or BifurcationKit read them (an orbit amplitude against the continued parameter, stable branches
+solid, unstable dashed, located folds LP, period doublings PD and Neimark-Sacker points NS
+marked and labelled), max |multiplier| along the branches, and the table of located points.
+
+A branch that turns back at a fold is not a function of the parameter: it is drawn in its own
+order (runs of one stability along the branch), never sorted by the parameter."""
+import html
+from pathlib import Path
+
+import numpy as np
+
+from pipeline import continuation, query
+from pipeline.report import page, style
+from pipeline.report.figures.max_multiplier import LINE_COLOURS
+from rotorkernels.continuation import arclength as al
+
+EVENT_MARKERS = {"LP": ("s", "#C00000"), "PD": ("^", "#0060C0"), "NS": ("D", "#008040"), "BP": ("o", "#666666")}
+
+
+def stability_runs(x, y, stable):
+    """[(x, y, stable)] pieces of one branch where stability is constant, in branch order; each
+    piece shares its first point with the previous one so the drawn line is unbroken."""
+    keep = np.isfinite(x) & np.isfinite(y)
+    x, y, stable = x[keep], y[keep], stable[keep]
+    if not x.size:
+        return []
+    cuts = [0] + [i for i in range(1, x.size) if stable[i] != stable[i - 1]] + [x.size]
+    return [(x[max(a - 1, 0):b], y[max(a - 1, 0):b], bool(stable[a])) for a, b in zip(cuts[:-1], cuts[1:])]
+
+
+def _shown(value, units):
+    """(value, units) as the report shows them: lengths in um (clearances, amplitudes)."""
+    return (value * 1e6, "µm") if units == "m" else (value, units)
+
+
+def _branch_label(ds, b):
+    where = ", ".join("{} = {:.4g} {}".format(c, *_shown(float(ds[c].values[b]), ds[c].attrs.get("units", "")))
+                      for c in ds.coords if ds[c].dims == ("branch",))
+    k = int(ds["branch_periods"].values[b])
+    return f"period-{k}" + (f" ({where})" if where else "")
+
+
+def _panel(hv, ds, yname, ylabel, backend, ref_one=False):
+    """All branches: y against the parameter, solid where stable, dashed where not, events on top."""
+    par = ds.attrs["parameter"]
+    xunit = ds["parameter"].attrs.get("units", "")
+    xdim = hv.Dimension(par, label=f"{par} [{xunit}]")
+    ydim = hv.Dimension(yname, label=ylabel)
+    elements = []
+    for b in range(ds.sizes["branch"]):
+        x = ds["parameter"].values[b]
+        y = _values(ds, yname)[b]
+        colour = LINE_COLOURS[b % len(LINE_COLOURS)]
+        for i, (xs, ys, stable) in enumerate(stability_runs(x, y, ds["stable"].values[b] == 1)):
+            label = _branch_label(ds, b) if i == 0 else ""
+            curve = hv.Curve((xs, ys), xdim, ydim, label=label)
+            opts = style.line_style(backend, 2.0 if stable else 1.6, dash=not stable)
+            hover = {"tools": ["hover"]} if backend == "bokeh" else {}
+            elements.append(curve.opts(color=colour, **opts, **hover, backend=backend))
+    if ref_one:
+        x = ds["parameter"].values
+        ref = hv.Curve(([np.nanmin(x), np.nanmax(x)], [1.0, 1.0]), xdim, ydim, label="|λ| = 1")
+        elements.append(ref.opts(color="#C00000", **style.line_style(backend, 1.2, dash=True), backend=backend))
+    elements += _event_markers(hv, ds, yname, xdim, ydim, backend)
+    size = {"width": 1100, "height": 460} if backend == "bokeh" else {"fig_inches": (12, 4.8), "aspect": 1.9}
+    return hv.Overlay(elements).opts(show_grid=True, legend_position="right", **size, backend=backend)
+
+
+def _values(ds, yname):
+    """(branch, point) values of a plotted quantity: max |multiplier| or an observable's
+    amplitude (max |o| over the orbit), in the units the report shows."""
+    if yname == "max_abs_multiplier":
+        return ds["max_abs_multiplier"].values
+    j = list(ds["observable"].values).index(yname)
+    return _shown(ds["amplitude_max"].values[:, :, j], ds["amplitude_max"].attrs.get("units"))[0]
+
+
+def _event_values(ds, yname):
+    if yname == "max_abs_multiplier":
+        return np.ones(ds.sizes.get("event", 0))
+    j = list(ds["observable"].values).index(yname)
+    return _shown(ds["event_amplitude_max"].values[:, j], ds["amplitude_max"].attrs.get("units"))[0]
+
+
+def _event_markers(hv, ds, yname, xdim, ydim, backend):
+    """One marker layer and one label layer per event type present."""
+    if not ds.sizes.get("event", 0):
+        return []
+    labels = np.array([al.EVENT_LABELS[int(k)] for k in ds["event_type"].values])
+    x, y = ds["event_parameter"].values, _event_values(ds, yname)
+    out = []
+    for kind in dict.fromkeys(labels):
+        sel = labels == kind
+        marker, colour = EVENT_MARKERS[kind]
+        pts = hv.Scatter((x[sel], y[sel]), xdim, ydim, label=kind)
+        hover = {"tools": ["hover"]} if backend == "bokeh" else {}
+        out.append(pts.opts(**style.marker_style(backend, colour, 10 if backend == "bokeh" else 7, marker), **hover,
+                            backend=backend))
+        text = hv.Labels((x[sel], y[sel], [kind] * int(sel.sum())), [xdim, ydim], "label")
+        offset = {"yoffset": 0} if backend == "bokeh" else {}
+        out.append(text.opts(text_color=colour, text_align="left", **offset, backend=backend)
+                   if backend == "bokeh" else text.opts(color=colour, backend=backend))
+    return out
+
+
+def figures(ds, backend):
+    """(caption, filename, figure) of each figure."""
+    hv = style.holoviews()
+    obs = list(ds["observable"].values)
+    units = _shown(1.0, ds["amplitude_max"].attrs.get("units", ""))[1]
+    out = [(f"Branch diagram: max |{o}| over the orbit", f"branch_{o}.png",
+            _panel(hv, ds, o, f"max |{o}| [{units}]", backend)) for o in obs[:2]]
+    out.append(("Largest Floquet multiplier modulus along the branches", "branch_max_multiplier.png",
+                _panel(hv, ds, "max_abs_multiplier", "max |multiplier|", backend, ref_one=True)))
+    return out
+
+
+def _events_html(ds):
+    cols = continuation.events_table(ds)
+    if not cols["type"]:
+        return "<h2>Located points</h2><p>no fold, period doubling or Neimark-Sacker point on the branches</p>"
+    head = "".join(f"<th>{html.escape(k)}</th>" for k in cols)
+    rows = "\n".join("<tr>" + "".join(f"<td>{html.escape(_cell(v))}</td>" for v in vals) + "</tr>"
+                     for vals in zip(*cols.values()))
+    return f'<h2>Located points</h2><table class="intervals"><thead><tr>{head}</tr></thead>\n<tbody>{rows}</tbody></table>'
+
+
+def _cell(v):
+    return f"{v:.10g}" if isinstance(v, float) else str(v)
+
+
+def _header_html(ds, title):
+    lines = continuation.describe(ds).splitlines()
+    items = "".join(f"<li>{html.escape(s.strip())}</li>" for s in lines[2:])
+    return (f"<h1>{html.escape(title)}</h1><p>{html.escape(lines[0])}<br>{html.escape(lines[1])}</p><ul>{items}</ul>"
+            "<p>Stable branches solid, unstable dashed; LP: fold (limit point), PD: period doubling, "
+            "NS: Neimark-Sacker, BP: branch point.</p>")
+
+
+def make_report(ds, out_dir, title=None):
+    """report.html, one PNG per figure and events.csv into out_dir; returns the paths as
+    pipeline.report.make_report does."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    title = title or f"Continuation report: {ds.attrs.get('scene', '')}"
+    csv_path = out / "events.csv"
+    csv_path.write_text(query._render(continuation.events_table(ds), "csv") + "\n")
+    pngs = []
+    with style.backend("matplotlib") as hv:
+        for _, filename, fig in figures(ds, "matplotlib"):
+            hv.save(fig, out / filename, backend="matplotlib", dpi=style.DPI)
+            pngs.append(out / filename)
+    html_path = out / "report.html"
+    with style.backend("bokeh"):
+        figs = [(caption, fig) for caption, _, fig in figures(ds, "bokeh")]
+        page.save_html(html_path, title, _header_html(ds, title), figs, _events_html(ds),
+                       ds.attrs.get("config_toml", ""))
+    return {"html": html_path, "png": pngs, "csv": csv_path, "points": []}

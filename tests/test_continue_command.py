@@ -1,0 +1,133 @@
+"""`rotorsweep continue`: config checks before any work, the continuation result file, info,
+query and report on it, and branch switching through the pipeline."""
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline import config, continuation
+from rotorkernels.continuation import arclength as al
+
+CLI = [str(Path(sys.executable).with_name("rotorsweep"))]
+
+DUFFING = """
+[scene]
+name = "duffing_hardening"
+model = "duffing"
+
+[duffing]
+zeta = 0.05
+gamma = 1.0
+force = 0.1
+
+[sweep]
+omega = [0.5, 2.0]
+
+[numerics]
+rtol = 1e-12
+atol = 1e-14
+newton_tol = 1e-10
+amplitude_limit = 100.0      # the Duffing oscillator is dimensionless (the default is bearing-scale, 1 mm)
+
+[continuation]
+ds = 0.02
+"""
+
+
+def rotorsweep(*args, check=True):
+    proc = subprocess.run(CLI + [str(a) for a in args], capture_output=True, text=True, timeout=600)
+    if check and proc.returncode != 0:
+        raise AssertionError(f"rotorsweep {args} failed ({proc.returncode}):\n{proc.stdout}\n{proc.stderr}")
+    return proc
+
+
+def test_invalid_continuation_settings_stop_the_command_before_work(tmp_path):
+    cfg_path = tmp_path / "bad.toml"
+    cfg_path.write_text(DUFFING.replace("ds = 0.02", "ds = 0.0"))
+    proc = rotorsweep("continue", cfg_path, "-o", tmp_path / "x.nc", check=False)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert "continuation.ds" in proc.stderr and "continuing" not in proc.stderr
+    assert not (tmp_path / "x.nc").exists()
+
+
+def test_invalid_settings_messages():
+    """The messages name the key and say what is wrong."""
+    cases = {"ds = 0.0": "continuation.ds", 'parameter = "speed"': "is not a float parameter of model duffing",
+             'parameter = "zeta"': "continuation.start: required", "start = 1.0\nstop = 1.0": "the range is empty",
+             "ds_min = 0.1": "ds_min <= ds <= ds_max", 'parameter = "nonsense"': "continuable: omega, zeta, gamma, force"}
+    for new, message in cases.items():
+        with pytest.raises(config.ConfigError, match=message.replace("(", r"\(")):
+            continuation.plan(config.parse_config(DUFFING.replace("ds = 0.02", new)).data)
+
+
+@pytest.fixture(scope="module")
+def duffing_result(tmp_path_factory):
+    d = tmp_path_factory.mktemp("cont")
+    cfg_path = d / "duffing.toml"
+    cfg_path.write_text(DUFFING)
+    out = d / "duffing.nc"
+    proc = rotorsweep("continue", cfg_path, "-o", out, "--workers", "2", "--report", d / "report")
+    return out, d, proc
+
+
+def test_continue_writes_branches_and_folds(duffing_result):
+    out, d, proc = duffing_result
+    assert "[1/1]" in proc.stderr and "2 LP" in proc.stderr            # progress per line
+    ds = continuation.open_result(out)
+    assert ds.attrs["parameter"] == "omega" and ds.sizes["branch"] == 1
+    assert ds["branch_end"].values.tolist() == [al.LEFT_RANGE]
+    assert ds["event_type"].values.tolist() == [al.FOLD, al.FOLD]
+    # the same folds as the kernels' continuation in this process (the file carries them intact)
+    cfg = config.parse_config(DUFFING)
+    pl = continuation.plan(cfg.data)
+    family, _ = continuation._family(cfg.data, pl, {})
+    direct = al.continue_orbit(family, 0.5, np.zeros(2), (0.5, 2.0), pl.settings)
+    np.testing.assert_allclose(ds["event_parameter"].values, [e.point.lam for e in direct.events], rtol=1e-12)
+    # stable, unstable between the folds, stable: as the multipliers say
+    n = int(ds["branch_points"].values[0])
+    mu = np.hypot(ds["multiplier_real"].values[0, :n], ds["multiplier_imag"].values[0, :n]).max(axis=1)
+    assert ((ds["stable"].values[0, :n] == 1) == (mu < 1)).all()
+    assert (ds["stable"].values[0, n:] == -1).all() and np.isnan(ds["parameter"].values[0, n:]).all()
+    # the amplitude at the upper fold: the resonance peak, x ~ F / (2 zeta) = 1 scaled by the
+    # cubic stiffness; the half peak-to-peak of a symmetric orbit equals its max |x| (to the
+    # sampling, 64 per period: cos(pi / 64) ~ 1 - 1.2e-3)
+    amp = ds["event_amplitude_max"].values[0, 0]
+    half = ds["amplitude_half_pp"].values[0, int(ds["event_point"].values[0])]
+    assert 0.5 < amp < 2.0 and half == pytest.approx(ds["amplitude_max"].values[0, int(ds["event_point"].values[0]), 0], rel=2e-3)
+    # plain xarray keeps the flags integer
+    import xarray as xr
+    with xr.open_dataset(out) as raw:
+        assert raw["event_type"].dtype.kind == "i" and raw["branch_end"].dtype.kind == "i"
+
+
+def test_info_query_report_on_a_continuation_result(duffing_result):
+    out, d, _ = duffing_result
+    info = rotorsweep("info", out).stdout
+    assert "parameter omega" in info and "ended left_range" in info
+    rows = json.loads(rotorsweep("query", out, "--format", "json").stdout)
+    assert [r["type"] for r in rows] == ["LP", "LP"]
+    assert all(abs(r["multiplier_real"] - 1.0) < 1e-6 for r in rows)
+    html = (d / "report" / "report.html").read_text()
+    assert "Branch diagram" in html and "Located points" in html
+    assert (d / "report" / "branch_x.png").stat().st_size > 10_000
+
+
+def test_branch_switching_through_the_pipeline():
+    """Bai 2006, 19 um, from 29 down to 27 Hz (above the lower branch's fold at 28.40 Hz only the
+    upper branch exists, so the start is on it): the line's task returns the period-1 branch,
+    the period-2 branch switched at its period doubling (27.42 Hz) and the period-4 branch
+    switched at the period-2 branch's, each parent recorded."""
+    text = Path("configs/bai2006_fig13.toml").read_text()
+    text = text.replace("speed = {start = 10.0, stop = 250.0, step = 0.1}", "speed = [27.0, 29.0]")
+    text = text.replace("clearance = [3.8e-6, 7.6e-6, 11.4e-6, 15.2e-6, 19.0e-6]", "clearance = [19.0e-6]")
+    cfg = config.parse_config(text + "\n[continuation]\nstart = 29.0\nstop = 27.0\nds_max = 0.5\n")
+    (where,) = continuation.plan(cfg.data).lines
+    records = continuation.continue_line(cfg.data, where)
+    assert [r["periods"] for r in records][:3] == [1, 2, 4]
+    assert [r["parent"] for r in records][:3] == [-1, 0, 1]
+    pd1 = records[0]["event_parameter"][records[0]["event_type"] == al.PERIOD_DOUBLING]
+    pd2 = records[1]["event_parameter"][records[1]["event_type"] == al.PERIOD_DOUBLING]
+    assert pd1.size == 1 and pd2.size >= 1 and pd2[0] > pd1[0]
