@@ -166,6 +166,15 @@ def _parameter_attrs(spec, name):
     return {"units": par.unit, "long_name": par.long_name or par.help or name}
 
 
+def _global_parents(lines):
+    """Parent branch indices over the whole result (a line's records number them locally)."""
+    out, offset = [], 0
+    for _, recs in lines:
+        out += [r["parent"] + offset if r["parent"] >= 0 else -1 for r in recs]
+        offset += len(recs)
+    return np.array(out, "int32")
+
+
 def _flags(meanings, first=0):
     """CF flag attributes of an int8 variable (flag_values of the variable's own type)."""
     return {"flag_values": np.arange(first, first + len(meanings), dtype="int8"), "flag_meanings": " ".join(meanings)}
@@ -208,7 +217,7 @@ def to_dataset(data, pl, lines, provenance):
                                                  **_flags(("no_point", "unstable", "stable"), first=-1)}),
         "branch_points": (("branch",), np.array([len(r["parameter"]) for _, r in records], "int32"), {"units": "1", "long_name": "points on the branch"}),
         "branch_periods": (("branch",), np.array([r["periods"] for _, r in records], "int32"), {"units": "1", "long_name": "forcing periods per orbit (k of period-k)"}),
-        "branch_parent": (("branch",), np.array([r["parent"] for _, r in records], "int32"), {"units": "1", "long_name": "branch index of the branch this one was switched from (-1: none)"}),
+        "branch_parent": (("branch",), _global_parents(lines), {"units": "1", "long_name": "branch index of the branch this one was switched from (-1: none)"}),
         "branch_end": (("branch",), np.array([r["end"] for _, r in records], "int8"), {"long_name": "how the branch ended", **_flags(al.END_REASONS)}),
         "branch_detail": (("branch",), np.array([r["detail"] for _, r in records], object), {"long_name": "how the branch ended, in words"}),
         "event_type": (("event",), np.array([r["event_type"][k] for _, r, k in ev], "int8"), {"long_name": "located bifurcation point", **_flags(al.EVENT_TYPES)}),
@@ -341,6 +350,10 @@ def describe(ds):
                      f"{f' from branch {int(ds.branch_parent.values[b])}' if ds.branch_parent.values[b] >= 0 else ''}"
                      f"{f' ({where})' if where else ''}, {int(ds['branch_points'].values[b])} points, "
                      f"ended {al.END_REASONS[int(ds['branch_end'].values[b])]}: {ds['branch_detail'].values[b]}")
+    for iv in bistable_intervals(ds):
+        where = ", ".join(f"{k}={v:g}" for k, v in iv.items() if k not in ("lo", "hi", "branches"))
+        lines.append(f"  two stable orbits coexist: {par} {iv['lo']:.10g} to {iv['hi']:.10g} {unit}"
+                     f"{f' ({where})' if where else ''}, branches {iv['branches']}")
     return "\n".join(lines)
 
 
@@ -364,3 +377,77 @@ def events_table(ds):
     for j, name in enumerate(ds["observable"].values):
         cols[f"amplitude_max_{name}"] = ds["event_amplitude_max"].values[:, j].tolist()
     return cols
+
+
+# --- coexisting stable orbits ---------------------------------------------------------------------
+
+def stable_runs(ds, b):
+    """[(lo, hi)] parameter intervals of branch b's runs of stable orbits; a run's end at a
+    located event (fold, period doubling, ...) is the event's parameter, else the last stable
+    point's."""
+    n = int(ds["branch_points"].values[b])
+    lam = ds["parameter"].values[b, :n]
+    stable = ds["stable"].values[b, :n] == 1
+    located = {int(p): float(v) for br, p, v in zip(ds["event_branch"].values, ds["event_point"].values,
+                                                    ds["event_parameter"].values) if br == b}
+    runs, start = [], None
+    for i in range(n):
+        if stable[i] and start is None:
+            start = located.get(i - 1, lam[i])
+        if start is not None and (i == n - 1 or not stable[i + 1]):
+            end = located.get(i, lam[i]) if i < n - 1 else lam[i]
+            runs.append((min(start, end), max(start, end)))
+            start = None
+    return runs
+
+
+def bistable_intervals(ds):
+    """Where two stable orbits coexist on one line: [{line values..., lo, hi, branches}], the
+    overlaps of stable runs of the line's branches (a fold pair's outer branches, a stable
+    period-2 orbit beside a stable period-1 one), merged per pair of branches. Overlaps within
+    one period-2k branch are not counted: a switched branch that loops holds both halves of
+    the same orbits (s and its image after k periods)."""
+    keys = [c for c in ds.coords if ds[c].dims == ("branch",)]
+    width = np.ptp(json.loads(ds.attrs["range"]))
+    lines = {}
+    for b in range(ds.sizes["branch"]):
+        lines.setdefault(tuple(float(ds[c].values[b]) for c in keys), []).append(b)
+    found = {}
+    for where, branches in lines.items():
+        runs = [(lo, hi, b) for b in branches for lo, hi in stable_runs(ds, b)]
+        for (lo1, hi1, b1), (lo2, hi2, b2) in itertools.combinations(runs, 2):
+            lo, hi = max(lo1, lo2), min(hi1, hi2)
+            same_orbits = b1 == b2 and ds["branch_periods"].values[b1] > 1
+            if hi - lo > 1e-9 * width and not same_orbits:     # not runs that only touch at an event
+                found.setdefault((where, tuple(sorted({b1, b2}))), []).append((lo, hi))
+    out = []
+    for (where, pair), intervals in found.items():
+        for lo, hi in _merged(intervals):
+            out.append({**dict(zip(keys, where)), "lo": lo, "hi": hi, "branches": list(pair)})
+    return out
+
+
+def _merged(intervals):
+    out = []
+    for lo, hi in sorted(intervals):
+        if out and lo <= out[-1][1]:
+            out[-1] = (out[-1][0], max(out[-1][1], hi))
+        else:
+            out.append((lo, hi))
+    return out
+
+
+def stability_classes(ds):
+    """Per line: [(lo, hi, n)] pieces of the parameter range with n stable orbits on the line's
+    branches (0: none found, 1: stable, 2+: multistable)."""
+    keys = [c for c in ds.coords if ds[c].dims == ("branch",)]
+    lo_r, hi_r = json.loads(ds.attrs["range"])
+    lines = {}
+    for b in range(ds.sizes["branch"]):
+        lines.setdefault(tuple(float(ds[c].values[b]) for c in keys), []).extend(stable_runs(ds, b))
+    out = {}
+    for where, runs in lines.items():
+        edges = sorted({lo_r, hi_r, *(x for run in runs for x in run if lo_r <= x <= hi_r)})
+        pieces = [(a, b, sum(lo <= 0.5 * (a + b) <= hi for lo, hi in runs)) for a, b in zip(edges[:-1], edges[1:])]
+        out[where] = pieces
+    return keys, out

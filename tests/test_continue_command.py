@@ -97,6 +97,9 @@ def test_continue_writes_branches_and_folds(duffing_result):
     amp = ds["event_amplitude_max"].values[0, 0]
     half = ds["amplitude_half_pp"].values[0, int(ds["event_point"].values[0])]
     assert 0.5 < amp < 2.0 and half == pytest.approx(ds["amplitude_max"].values[0, int(ds["event_point"].values[0]), 0], rel=2e-3)
+    # the hardening resonance is bistable exactly between its folds (the outer branches stable)
+    (iv,) = continuation.bistable_intervals(ds)
+    assert (iv["lo"], iv["hi"]) == tuple(sorted(ds["event_parameter"].values))
     # plain xarray keeps the flags integer
     import xarray as xr
     with xr.open_dataset(out) as raw:
@@ -106,12 +109,12 @@ def test_continue_writes_branches_and_folds(duffing_result):
 def test_info_query_report_on_a_continuation_result(duffing_result):
     out, d, _ = duffing_result
     info = rotorsweep("info", out).stdout
-    assert "parameter omega" in info and "ended left_range" in info
+    assert "parameter omega" in info and "ended left_range" in info and "two stable orbits coexist" in info
     rows = json.loads(rotorsweep("query", out, "--format", "json").stdout)
     assert [r["type"] for r in rows] == ["LP", "LP"]
     assert all(abs(r["multiplier_real"] - 1.0) < 1e-6 for r in rows)
     html = (d / "report" / "report.html").read_text()
-    assert "Branch diagram" in html and "Located points" in html
+    assert "Branch diagram" in html and "Located points" in html and "bistable" in html
     assert (d / "report" / "branch_x.png").stat().st_size > 10_000
 
 

@@ -104,6 +104,35 @@ def _event_markers(hv, ds, yname, xdim, ydim, backend):
     return out
 
 
+CLASS_COLOURS = {0: ("no stable orbit on the branches", "#D55E00"), 1: ("stable", "#56B4E9"),
+                 2: ("bistable (two stable orbits)", "#7B3294")}
+
+
+def _stability_map(hv, ds, backend):
+    """One band per line: the parameter range split where the number of stable orbits on the
+    line's branches changes (none / one / two or more: bistable)."""
+    keys, lines = continuation.stability_classes(ds)
+    par = ds.attrs["parameter"]
+    xdim = hv.Dimension(par, label=f"{par} [{ds['parameter'].attrs.get('units', '')}]")
+    rects = {c: [] for c in CLASS_COLOURS}
+    ticks = []
+    for i, (where, pieces) in enumerate(lines.items()):
+        units = [ds[k].attrs.get("units", "") for k in keys]
+        ticks.append((i, ", ".join("{:.4g} {}".format(*_shown(v, u)) for v, u in zip(where, units)) or "line"))
+        for lo, hi, n in pieces:
+            rects[min(n, 2)].append((lo, i - 0.42, hi, i + 0.42))
+    elements = []
+    for c, (name, colour) in CLASS_COLOURS.items():
+        data = rects[c] or [(0, 0, 0, 0)]
+        hover = {"tools": ["hover"]} if backend == "bokeh" else {}
+        el = hv.Rectangles(data, kdims=[xdim, "y", "x1", "y1"], label=name)
+        elements.append(el.opts(**style.fill_style(backend, colour), **hover, backend=backend))
+    x = ds["parameter"].values
+    size = {"width": 1100, "height": 140 + 40 * len(lines)} if backend == "bokeh" else {"fig_inches": (12, 1.6 + 0.5 * len(lines)), "aspect": "auto"}
+    return hv.Overlay(elements).opts(yticks=ticks, ylim=(-0.5, len(lines) - 0.5), xlim=(np.nanmin(x), np.nanmax(x)),
+                                     ylabel=", ".join(keys) or "", legend_position="right", **size, backend=backend)
+
+
 def figures(ds, backend):
     """(caption, filename, figure) of each figure."""
     hv = style.holoviews()
@@ -111,9 +140,20 @@ def figures(ds, backend):
     units = _shown(1.0, ds["amplitude_max"].attrs.get("units", ""))[1]
     out = [(f"Branch diagram: max |{o}| over the orbit", f"branch_{o}.png",
             _panel(hv, ds, o, f"max |{o}| [{units}]", backend)) for o in obs[:2]]
+    out.insert(0, ("Stability along the parameter: stable, none stable, bistable", "branch_stability_map.png",
+                   _stability_map(hv, ds, backend)))
     out.append(("Largest Floquet multiplier modulus along the branches", "branch_max_multiplier.png",
                 _panel(hv, ds, "max_abs_multiplier", "max |multiplier|", backend, ref_one=True)))
     return out
+
+
+def _bistable_html(ds):
+    rows = continuation.bistable_intervals(ds)
+    if not rows:
+        return "<h2>Coexisting stable orbits</h2><p>none on the computed branches</p>"
+    head = "".join(f"<th>{html.escape(k)}</th>" for k in rows[0])
+    body = "\n".join("<tr>" + "".join(f"<td>{html.escape(_cell(v))}</td>" for v in r.values()) + "</tr>" for r in rows)
+    return f'<h2>Coexisting stable orbits</h2><table class="intervals"><thead><tr>{head}</tr></thead>\n<tbody>{body}</tbody></table>'
 
 
 def _events_html(ds):
@@ -154,6 +194,6 @@ def make_report(ds, out_dir, title=None):
     html_path = out / "report.html"
     with style.backend("bokeh"):
         figs = [(caption, fig) for caption, _, fig in figures(ds, "bokeh")]
-        page.save_html(html_path, title, _header_html(ds, title), figs, _events_html(ds),
+        page.save_html(html_path, title, _header_html(ds, title), figs, _events_html(ds) + _bistable_html(ds),
                        ds.attrs.get("config_toml", ""))
     return {"html": html_path, "png": pngs, "csv": csv_path, "points": []}

@@ -47,8 +47,9 @@ END_REASONS = (
     "integration_failed",  # the flow diverged (NaN, amplitude limit) even at the minimum step
     "start_failed",        # no orbit at the starting parameter
     "rejoined",            # a switched (period-2k) branch met its period-k parent again
+    "closed_loop",         # the branch came back to its first point (an isola, a period-doubling bubble)
 )
-LEFT_RANGE, STEP_BUDGET, NEWTON_FAILED, INTEGRATION_FAILED, START_FAILED, REJOINED = range(6)
+LEFT_RANGE, STEP_BUDGET, NEWTON_FAILED, INTEGRATION_FAILED, START_FAILED, REJOINED, CLOSED_LOOP = range(7)
 
 EVENT_TYPES = ("fold", "period_doubling", "neimark_sacker", "branch_point")
 FOLD, PERIOD_DOUBLING, NEIMARK_SACKER, BRANCH_POINT = range(4)
@@ -358,12 +359,24 @@ def follow_branch(family, first, lam_range, settings=Settings(), stop_at_branch_
             break
         kinds = _record_events(family, a, b, points, events, settings, counter)
         points.append(b)
+        if _passes(points[0].X, a.X, b.X) and len(points) > 3:
+            end, detail = CLOSED_LOOP, f"back at its first point after {len(points)} points"
+            break
         if stop_at_branch_point and BRANCH_POINT in kinds:
             end, detail = REJOINED, f"met the period-{family.periods / 2:g} branch at lambda = {events[-1].point.lam!r}"
             break
         if b.iterations <= settings.fast_newton:
             ds = min(settings.ds_max, ds * settings.grow)
     return Branch(points, events, end, detail, family.periods, counter.n)
+
+
+def _passes(X, Xa, Xb):
+    """The step from Xa to Xb passes through X (to a tenth of the step: the chord of a smooth
+    branch deviates from it by O(curvature * step^2))."""
+    step = Xb - Xa
+    length = np.linalg.norm(step)
+    w = float((X - Xa) @ step) / length ** 2
+    return 0.0 <= w <= 1.0 and np.linalg.norm(Xa + w * step - X) < 0.1 * length
 
 
 def _record_events(family, a, b, points, events, settings, counter):
