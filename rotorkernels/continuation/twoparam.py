@@ -58,7 +58,7 @@ from rotorkernels.continuation import arclength as al
 END_REASONS = al.END_REASONS[:5] + ("closed",)   # closed: came back to its first point (an isola)
 LEFT_RANGE, STEP_BUDGET, NEWTON_FAILED, INTEGRATION_FAILED, START_FAILED, CLOSED = range(6)
 
-# The multiplier of the critical eigenvalue and the sign of I in A = M + sign I, by event kind.
+# The critical multiplier by event kind: A = M - critical I is singular on the curve.
 CRITICAL = {al.FOLD: 1.0, al.PERIOD_DOUBLING: -1.0}
 CODIM2_LABELS = ("cusp", "fold_flip", "resonance_1_2")
 CUSP, FOLD_FLIP, RESONANCE_1_2 = range(3)
