@@ -142,6 +142,8 @@ def test_statuses_and_rejected_arguments():
     assert linear.end == tp.START_FAILED and linear.points == [] and "lambda = " in linear.detail
     with pytest.raises(ValueError, match="ds = 0"):
         tp.continue_bifurcation(plane, upper, 0.1, ((0.5, 3.0), (0.01, 0.25)), tp.Settings(ds=0.0, ds_min=0.0))
+    with pytest.raises(ValueError, match="outside the box"):
+        tp.continue_bifurcation(plane, upper, 0.3, ((0.5, 3.0), (0.01, 0.25)))
     with pytest.raises(ValueError, match="only fold and period_doubling"):
         tp.continue_bifurcation(plane, upper._replace(kind=al.NEIMARK_SACKER), 0.1, ((0.5, 3.0), (0.01, 0.25)))
 

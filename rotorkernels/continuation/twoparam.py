@@ -284,17 +284,14 @@ def _solve_on_segment(plane, kind, a, b, index, value, settings, counter):
 
 
 def _exit(plane, a, b, box):
-    """(Y index, scaled edge value, text) of the first box edge the segment a -> b crosses."""
-    n = a.Y.size
-    scales = (plane.lam_scale, plane.nu_scale)
+    """(Y index, scaled edge value, text) of the first box edge crossed going from a (inside) to b
+    (outside)."""
     crossings = []
-    for k, ((lo, hi), name) in enumerate(zip(box, ("lambda", "nu"))):
-        for edge in (lo, hi):
-            e = edge / scales[k]
-            ya, yb = a.Y[n - 2 + k], b.Y[n - 2 + k]
-            if (yb - e) * (ya - e) < 0 or (yb == e and ya != e):
-                crossings.append(((e - ya) / (yb - ya), n - 2 + k, e, f"{name} reached {edge!r}"))
-    return min(crossings)[1:] if crossings else None
+    for k, ((lo, hi), name, scale) in enumerate(zip(box, ("lambda", "nu"), (plane.lam_scale, plane.nu_scale))):
+        va, vb = (a.lam, b.lam) if k == 0 else (a.nu, b.nu)
+        for edge in [e for e, beyond in ((lo, vb < lo), (hi, vb > hi)) if beyond]:
+            crossings.append(((edge - va) / (vb - va), a.Y.size - 2 + k, edge / scale, f"{name} reached {edge!r}"))
+    return min(crossings)[1:]
 
 
 def _inside(point, box):
@@ -411,9 +408,12 @@ def continue_bifurcation(plane, event, nu0, box, settings=Settings(), direction=
     """Follow the fold or period doubling `event` (located by arclength on a branch of
     plane.family(nu0)) in (lambda, nu) from nu0, towards increasing nu for direction +1.
 
-    Raises ValueError for arguments that cannot work (settings, event kind); every numerical
-    failure is the returned Curve's status."""
+    Raises ValueError for arguments that cannot work (settings, event kind, a start outside the
+    box) before any integration; every numerical failure is the returned Curve's status."""
     problems = settings.problems()
+    (lo, hi), (nu_lo, nu_hi) = box
+    if not (lo <= event.point.lam <= hi and nu_lo <= nu0 <= nu_hi):
+        problems.append(f"the event (lambda = {event.point.lam!r}, nu = {nu0!r}) lies outside the box {box!r}")
     if event.kind not in CRITICAL:
         problems.append(f"event kind {al.EVENT_TYPES[event.kind]!r}: only fold and period_doubling curves "
                         "are continued")
