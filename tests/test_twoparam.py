@@ -57,8 +57,8 @@ def test_period_doubling_curve_crosses_the_fig13_grid_at_the_sweeps_refined_boun
     refinement (orbits to Newton tol 1e-9 at rtol 1e-10, Brent to 1e-8 relative) is the looser
     of the two; both solve |multiplier| = 1 on the same orbits, so they differ by the multiplier
     errors (<~1e-8 at rtol 1e-10, docs/benchmarks) over the slope d|mu|/d(speed) (~0.1 per Hz),
-    ~1e-9 relative (measured: 2e-12 to 1.5e-9). Every curve point has a multiplier at -1 within 1e-6: |g| <= 1e-9 puts it
-    there to ~1e-9 plus the monodromy's error."""
+    ~1e-9 relative (measured: 2e-12 to 1.5e-9). Every curve point has a multiplier at -1 within
+    1e-6: |g| <= 1e-9 puts it there to ~1e-9 plus the monodromy's error (measured: 2.3e-9)."""
     data, plane = fig13
     [pd] = [e for e in branch_events(plane, 3.8e-6, 85.0, 100.0) if e.kind == al.PERIOD_DOUBLING]
     assert pd.point.lam == pytest.approx(93.065, abs=1e-3)

@@ -359,8 +359,9 @@ def follow_curve(plane, kind, first, box, settings=Settings(), marks=(), counter
     while len(points) <= settings.max_steps:
         a = points[-1]
         b, failure = _step(plane, kind, a, ds, settings, counter)
-        if b is not None and (b.iterations > settings.max_newton - 2 or al._angle(a.tangent, b.tangent) > settings.max_angle):
-            b, failure = None, NEWTON_FAILED
+        if b is not None and (b.iterations > settings.max_newton - 2
+                              or al._angle(a.tangent, b.tangent) > settings.max_angle):
+            b, failure = None, NEWTON_FAILED     # arclength.follow_branch's rule: stay on the curve
         if b is None:
             if ds <= settings.ds_min * 1.000001:
                 end = failure
