@@ -94,6 +94,26 @@ def test_fold_curve_is_a_closed_loop_through_the_one_parameter_folds(fig13):
         np.testing.assert_allclose(on_curve, folds, rtol=1e-9)
 
 
+def test_neimark_sacker_curve_crosses_the_fig13_grid_at_the_sweeps_refined_boundaries(fig13):
+    """The NS point at 11.4 um, 129.95 Hz (pair near +-i), continued in clearance: a closed curve
+    between ~5.58 and ~12.33 um that crosses 11.4 and 7.6 um twice each, where the speeds equal
+    the sweep's refined boundaries (a complex pair crossing |mu| = 1 is a continuous crossing of
+    max|mu| - 1, so the grid's Brent refinement is valid for NS): 1e-6 relative as for the PD
+    curve (the grid's Brent tolerance 1e-8 relative dominates; measured 6e-12 to 1.4e-8). Every
+    point has its pair on the unit circle within 1e-6 (|G| <= 1e-9; measured <= 1e-9)."""
+    data, plane = fig13
+    ns = next(e for e in branch_events(plane, 11.4e-6, 110.0, 140.0) if e.kind == al.NEIMARK_SACKER)
+    assert ns.point.lam == pytest.approx(129.95, abs=0.01)
+    curve = tp.continue_bifurcation(plane, ns, 11.4e-6, BAI_BOX, tp.Settings(ds=0.02, ds_max=0.2), direction=-1,
+                                    marks=FIG13)
+    assert curve.end == tp.CLOSED and curve.codim2 == []
+    assert max(abs(abs(p.critical) - 1.0) for p in curve.points) < 1e-6
+    assert 5.5e-6 < min(p.nu for p in curve.points) and max(p.nu for p in curve.points) < 12.4e-6
+    assert [round(p.nu * 1e7) for p in curve.marked] == [114, 76, 76, 114]
+    for point in curve.marked:
+        assert point.lam == pytest.approx(grid_boundary(data, point), rel=1e-6)
+
+
 def duffing_plane(gamma=1.0):
     params = lambda omega, force: DUFFING.build({"omega": omega, "zeta": 0.05, "gamma": gamma, "force": force}).p
     return tp.Plane(DUFFING, params, TIGHT, lam_scale=1.0, nu_scale=0.1)
@@ -144,8 +164,8 @@ def test_statuses_and_rejected_arguments():
         tp.continue_bifurcation(plane, upper, 0.1, ((0.5, 3.0), (0.01, 0.25)), tp.Settings(ds=0.0, ds_min=0.0))
     with pytest.raises(ValueError, match="outside the box"):
         tp.continue_bifurcation(plane, upper, 0.3, ((0.5, 3.0), (0.01, 0.25)))
-    with pytest.raises(ValueError, match="only fold and period_doubling"):
-        tp.continue_bifurcation(plane, upper._replace(kind=al.NEIMARK_SACKER), 0.1, ((0.5, 3.0), (0.01, 0.25)))
+    with pytest.raises(ValueError, match="only fold, period_doubling and neimark_sacker"):
+        tp.continue_bifurcation(plane, upper._replace(kind=al.BRANCH_POINT), 0.1, ((0.5, 3.0), (0.01, 0.25)))
 
 
 def test_shipped_continuation_benchmark_is_its_json_rendered():
@@ -157,3 +177,27 @@ def test_shipped_continuation_benchmark_is_its_json_rendered():
 
     result = json.loads((DOCS / "continuation.json").read_text())
     assert continuation.markdown(result) == (DOCS / "continuation.md").read_text()
+
+
+def _fake_point(kind, multipliers, kappa=None, tangent=(0.0, 1.0)):
+    """A CurvePoint with only what the codimension-2 flags read (2 x 2 monodromy)."""
+    lams = np.asarray(multipliers, complex)
+    Y = np.array([0.0, 0.0] + ([kappa] if kappa is not None else []) + [1.0, 1.0])
+    return tp.CurvePoint(Y, 1.0, 1.0, np.eye(2), lams, tp._critical(kind, Y, lams), np.array([0.0, 0.0, *tangent]),
+                         None, 0, 0.0, 0.0)
+
+
+def test_codimension_two_flags():
+    """The flags between two curve points, on made-up multipliers: fold-flip on a fold curve (the
+    other multiplier through -1), fold-flip and 1:2 on a PD curve, a cusp (the parameter part of
+    the tangent reverses), the 1:4 and 1:3 resonances on an NS curve (kappa through 0, -1/2)."""
+    between = tp._codim2_between
+    assert between(al.FOLD, _fake_point(al.FOLD, [1, -0.9]), _fake_point(al.FOLD, [1, -1.1])) == [tp.FOLD_FLIP]
+    assert between(al.FOLD, _fake_point(al.FOLD, [1, 0.5]), _fake_point(al.FOLD, [1, 0.5], tangent=(0, -1))) == [tp.CUSP]
+    pd = al.PERIOD_DOUBLING
+    assert between(pd, _fake_point(pd, [-1, 0.9]), _fake_point(pd, [-1, 1.1])) == [tp.FOLD_FLIP]
+    assert between(pd, _fake_point(pd, [-1, -0.9]), _fake_point(pd, [-1, -1.1])) == [tp.RESONANCE_1_2]
+    ns = al.NEIMARK_SACKER
+    pair = lambda kappa: [complex(kappa, np.sqrt(1 - kappa ** 2)), complex(kappa, -np.sqrt(1 - kappa ** 2))]
+    assert between(ns, _fake_point(ns, pair(0.1), 0.1), _fake_point(ns, pair(-0.1), -0.1)) == [tp.RESONANCE_1_4]
+    assert between(ns, _fake_point(ns, pair(-0.4), -0.4), _fake_point(ns, pair(-0.6), -0.6)) == [tp.RESONANCE_1_3]
