@@ -40,7 +40,7 @@ bench-scaling: $(STAMP)  ## 1 vs 2 workers, chunk sizes, memory of the Fig. 13 s
 bench-revisions: $(STAMP)  ## per-point cost before/after the model registry (cc006f3 vs HEAD, one run) -> docs/benchmarks/revisions.*
 	$(BIN)/python -m workflows.bench.revisions
 
-bench-continuation: $(STAMP)  ## pseudo-arclength continuation vs a scipy peer, Duffing resonance curve (~1.5 min) -> docs/benchmarks/continuation.*
+bench-continuation: $(STAMP)  ## pseudo-arclength continuation vs a scipy peer, Duffing resonance curve (~1 min) -> docs/benchmarks/continuation.*
 	$(BIN)/python -m workflows.bench.continuation
 
 clean:

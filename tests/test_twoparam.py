@@ -193,7 +193,8 @@ def test_codimension_two_flags():
     the tangent reverses), the 1:4 and 1:3 resonances on an NS curve (kappa through 0, -1/2)."""
     between = tp._codim2_between
     assert between(al.FOLD, _fake_point(al.FOLD, [1, -0.9]), _fake_point(al.FOLD, [1, -1.1])) == [tp.FOLD_FLIP]
-    assert between(al.FOLD, _fake_point(al.FOLD, [1, 0.5]), _fake_point(al.FOLD, [1, 0.5], tangent=(0, -1))) == [tp.CUSP]
+    reversed_tangent = _fake_point(al.FOLD, [1, 0.5], tangent=(0, -1))
+    assert between(al.FOLD, _fake_point(al.FOLD, [1, 0.5]), reversed_tangent) == [tp.CUSP]
     pd = al.PERIOD_DOUBLING
     assert between(pd, _fake_point(pd, [-1, 0.9]), _fake_point(pd, [-1, 1.1])) == [tp.FOLD_FLIP]
     assert between(pd, _fake_point(pd, [-1, -0.9]), _fake_point(pd, [-1, -1.1])) == [tp.RESONANCE_1_2]
