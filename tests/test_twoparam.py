@@ -1,7 +1,7 @@
 """Two-parameter continuation of bifurcation points (rotorkernels.continuation.twoparam): the
-period-doubling and fold curves of the Bai 2006 model in (speed, clearance) against the sweep's
-refined boundaries and one-parameter fold locations, the forced Duffing fold curve in
-(omega, force) against a scipy reference, and the statuses."""
+period-doubling, Neimark-Sacker and fold curves of the Bai 2006 model in (speed, clearance)
+against the sweep's refined boundaries and one-parameter fold locations, the forced Duffing fold
+curve in (omega, force) against a scipy reference, the codimension-2 flags and the statuses."""
 import math
 
 import numpy as np
