@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions fig13 cascade clean
+.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions bench-continuation fig13 cascade clean
 
 # CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
 CONSTRAINTS ?= constraints.txt
@@ -39,6 +39,9 @@ bench-scaling: $(STAMP)  ## 1 vs 2 workers, chunk sizes, memory of the Fig. 13 s
 
 bench-revisions: $(STAMP)  ## per-point cost before/after the model registry (cc006f3 vs HEAD, one run) -> docs/benchmarks/revisions.*
 	$(BIN)/python -m workflows.bench.revisions
+
+bench-continuation: $(STAMP)  ## pseudo-arclength continuation vs a scipy peer, Duffing resonance curve (~1 min) -> docs/benchmarks/continuation.*
+	$(BIN)/python -m workflows.bench.continuation
 
 clean:
 	rm -rf out .pytest_cache
