@@ -263,6 +263,25 @@ def preload_of(nominal_angle, preload, stiffness, contact_angle=None, outer_race
     return bearing.preload_at_angle(geom, preload, math.radians(contact_angle), CONSTANTS[stiffness])
 
 
+def bearing_load(q, state, n_balls, length_scale=LENGTH_SCALE):
+    """Generalized bearing force P(q) [N] and its stiffness dP/dq [N/m] at positions q [m]:
+    the kernel's ball sums (contact.ring_load) in SI, for static and linear analysis."""
+    el = length_scale
+    x = np.asarray(q, float) / el
+    alpha = state.contact_angle
+    geometry_args = (state.axial_approach * np.sin(alpha) / el, np.cos(alpha), np.sin(alpha), int(n_balls),
+                     1.0, 0.0, np.cos(2.0 * np.pi / n_balls), np.sin(2.0 * np.pi / n_balls))
+    a = ring_load(x[0], x[1], x[4], *geometry_args)
+    b = ring_load(x[2], x[3], -x[4], *geometry_args)
+    force = np.array([a[0], a[1], b[0], b[1], a[2] - b[2]])
+    unit_gain = np.zeros(N_PARAMS)       # gain -I, no damping: the lower-left block is dP/dq
+    unit_gain[P_GAIN:P_GAIN + 25] = -np.eye(N_POS).ravel()
+    jac = np.zeros((2 * N_POS, 2 * N_POS))
+    _jacobian(jac, unit_gain, a, b)
+    k = state.contact_constant
+    return k * el ** 1.5 * force, k * el ** 0.5 * jac[N_POS:, :N_POS]
+
+
 # --- forcing frequencies -----------------------------------------------------------------------
 
 class Ratio(NamedTuple):
