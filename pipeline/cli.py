@@ -1,4 +1,4 @@
-"""`rotorsweep` command line: run, continue, point, query, report, info.
+"""`rotorsweep` command line: run, continue, point, query, report, modes, info.
 
 User mistakes (bad config, bad cube, bad query) print one clear message and exit with code 2;
 no traceback."""
@@ -72,13 +72,30 @@ def _given(args):
     """The point's axis values from --speed/--clearance/--contact-angle/--preload and --at."""
     given = {"speed": args.speed, "clearance": args.clearance, "contact_angle": args.contact_angle,
              "preload": args.preload}
-    for item in args.at or []:
+    return {**given, **_at(args.at)}
+
+
+def _at(items):
+    """{axis: value} from --at AXIS=NUMBER options."""
+    given = {}
+    for item in items or []:
         name, sep, value = item.partition("=")
         try:
             given[name.strip()] = float(value)
         except ValueError:
             raise config_mod.ConfigError(f"--at {item}: expected AXIS=NUMBER, e.g. speed=100") from None
     return given
+
+
+def cmd_modes(args):
+    from pipeline import modes
+
+    speeds = None
+    if args.campbell:
+        start, stop, num = args.campbell.split(":")
+        speeds = np.linspace(float(start), float(stop), int(num))
+    print(modes.command(pipeline._config(args.config), _at(args.at), speeds, args.output))
+    return 0
 
 
 def _attractor_result(row):
@@ -293,6 +310,13 @@ def build_parser():
     rp.add_argument("--overwrite", action="store_true",
                     help="replace a report of another cube in the directory")
     rp.set_defaults(func=cmd_report)
+
+    m = sub.add_parser("modes", help="static equilibrium, natural frequencies, whirl, Campbell table (rigid_preloaded)")
+    m.add_argument("config")
+    m.add_argument("--at", action="append", metavar="AXIS=VALUE", help="axis value (default: the first grid value)")
+    m.add_argument("--campbell", metavar="START:STOP:NUM", help="shaft speeds [Hz] of the Campbell table")
+    m.add_argument("-o", "--output", help="Campbell table CSV (speed_hz, mode, frequency_hz, damping_ratio, whirl, label)")
+    m.set_defaults(func=cmd_modes)
 
     i = sub.add_parser("info", help="what a cube holds")
     i.add_argument("cube")

@@ -84,7 +84,7 @@ def solve_segment(data, points):
     if ana["floquet"]:
         sols = _orbit_chain(model, params, opts, data["numerics"], seconds)
     else:
-        sols = [_not_requested(model)] * len(points)
+        sols = [_no_orbit(model, "not_requested")] * len(points)
     rows = [point_variables(model, sol, par, 0.0) for sol, par in zip(sols, params)]
     if ana["attractor"]:
         for direction, suffix in _directions(ana["sweep_direction"]):
@@ -106,22 +106,36 @@ def newton_settings(model, num):
 
 
 def _orbit_chain(model, params, opts, num, seconds):
-    """Periodic orbits along the segment by natural continuation, timed per point."""
-    sols = []
-    chain = continuation.natural(model, [par.p for par in params], opts, **newton_settings(model, num))
-    start = time.perf_counter()
-    for i, sol in enumerate(chain):
-        sols.append(sol)
-        now = time.perf_counter()
-        seconds[i] += now - start
-        start = now
-    return sols
+    """Periodic orbits along the segment by natural continuation, timed per point; each run of
+    periodically forced points is one chain (a quasi-periodically forced point has no orbit)."""
+    sols = [None] * len(params)
+    for run in _periodic_runs(params):
+        chain = continuation.natural(model, [params[i].p for i in run], opts, **newton_settings(model, num))
+        start = time.perf_counter()
+        for i, sol in zip(run, chain):
+            sols[i] = sol
+            now = time.perf_counter()
+            seconds[i] += now - start
+            start = now
+    return [_no_orbit(model, "quasi_periodic_forcing") if sol is None else sol for sol in sols]
 
 
-def _not_requested(model):
+def _periodic_runs(params):
+    """Index runs of consecutive points with periodic forcing."""
+    runs, run = [], []
+    for i, par in enumerate(params):
+        if par.periodic:
+            run.append(i)
+        elif run:
+            runs.append(run)
+            run = []
+    return runs + [run] if run else runs
+
+
+def _no_orbit(model, reason):
     nan = np.full(model.n_state, np.nan)
     return continuation.PointSolution(schema.ORBIT_STATUS.index("not_applicable"),
-                                      schema.ORBIT_REASON.index("not_requested"), 0, np.nan,
+                                      schema.ORBIT_REASON.index(reason), 0, np.nan,
                                       nan * (1 + 1j), np.nan, False, 0, nan, None, 0)
 
 
@@ -155,7 +169,7 @@ def _attractor_chain(model, params, sols, opts, ana, order, seconds):
             n_samples=ana["poincare_samples"], max_period=ana["max_period"],
             lyapunov_always=not ana["derive_when_stable"], stable_orbit=stable_orbit,
             max_periods=ana["lyapunov_max_periods"],
-            min_periods=min(LYAPUNOV_MIN_PERIODS, ana["lyapunov_max_periods"]))
+            min_periods=min(LYAPUNOV_MIN_PERIODS, ana["lyapunov_max_periods"]), periodic=par.periodic)
         # a diverged run leaves no attractor to continue from: the next speed starts afresh
         state = att.end_state if att.code not in (attractor.DIVERGED, attractor.INTEGRATION_FAILED) else None
         seconds[i] += time.perf_counter() - start

@@ -309,8 +309,10 @@ class Config:
 
     @property
     def continued_axis(self):
-        """The axis orbits are continued along: the model's first continuation parameter."""
-        return self.model.continuation[0]
+        """The axis orbits are continued along: the model's first continuation parameter that
+        the scene sweeps over several values, else its first."""
+        along = self.model.continuation
+        return next((a for a in along if len(self.axes.get(a, ())) > 1), along[0])
 
     @property
     def n_points(self):

@@ -350,10 +350,31 @@ def preload_state(geom: BearingGeometry, preload: float, clearance: float = 0.0,
     big_a = geom.groove_center_distance
     u = _solve_stretch(p0, n, big_a, math.cos(alpha0), constant_of)
     alpha, delta_n = _loaded_geometry(big_a, math.cos(alpha0), u)
+    return _preloaded(alpha, delta_n, c, p0, n, constant_of(alpha), constant)
+
+
+def preload_at_angle(geom: BearingGeometry, preload: float, contact_angle: float,
+                     constant: str = "consistent") -> PreloadState:
+    """The static state under axial preload P0 with the contact angle imposed (not solved from
+    the groove geometry): N K(alpha) delta_n^{3/2} sin(alpha) = P0 with K = hertz_constant(geom,
+    alpha), no clearance. ``constant`` as in preload_state."""
+    p0, alpha = float(preload), float(contact_angle)
+    if not (np.isfinite(p0) and p0 > 0.0):
+        raise ValueError(f"axial preload must be a finite force > 0 N, got {preload}")
+    if not 0.0 < alpha < math.pi / 2:
+        raise ValueError(f"contact angle must be in (0, pi/2) rad, got {contact_angle}")
+    k_hertz = hertz_constant(geom, alpha)
+    delta_n = (p0 / (geom.n_balls * k_hertz * math.sin(alpha))) ** (2.0 / 3.0)
+    return _preloaded(alpha, delta_n, 0.0, p0, geom.n_balls, k_hertz, constant)
+
+
+def _preloaded(alpha, delta_n, clearance, p0, n, k_hertz, constant) -> PreloadState:
+    """PreloadState at loaded angle alpha and normal approach delta_n, with the constant K of
+    the chosen normalization (see preload_state)."""
     sin_a, cos_a = math.sin(alpha), math.cos(alpha)
-    s0 = (delta_n + c) / sin_a  # so that s0 sin(alpha) - c = delta_n in the force law
+    s0 = (delta_n + clearance) / sin_a  # so that s0 sin(alpha) - c = delta_n in the force law
     if constant == "consistent":
-        k_used = constant_of(alpha)
+        k_used = k_hertz
     else:
         k_used = 1.5 * p0 / n * s0 ** -1.5 * sin_a ** -2.5
     root = math.sqrt(delta_n)

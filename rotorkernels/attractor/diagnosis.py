@@ -184,7 +184,7 @@ ESCAPE_KICK = 1e-3
 def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_period=32,
              period_rtol=None, orbit_lle=True, lyapunov_always=False, stable_orbit=None,
              renorm_periods=1.0, max_periods=2000, n_blocks=10, rtol_stop=0.02, min_periods=None,
-             atol_stop=1e-4, align_periods=20.0, weighted=True):
+             atol_stop=1e-4, align_periods=20.0, weighted=True, periodic=True):
     """One parameter point from u0 at tau = 0: Poincare samples after a transient, their period
     (tolerance `default_period_rtol(opts)` unless given), the largest exponent, and `classify`.
 
@@ -201,7 +201,11 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
     in 1/s (NaN when not computed), samples, end_state (the state at the last whole period
     reached: the start of the next speed in a continuation of the attractor), status,
     periods_used (measured Lyapunov periods; 0 when none ran), exponents [1/s], multipliers,
-    derived."""
+    derived.
+    periodic=False: a quasi-periodically forced model (not 1-periodic in tau): time runs on
+    through the whole diagnosis, the samples are stroboscopic at tau = 1, 2, ..., and no
+    periodic orbit is refined (there is none to shoot for)."""
+    clock = 0.0 if periodic else 1.0
     if period_rtol is None:
         period_rtol = default_period_rtol(opts)
     u0 = np.asarray(u0, float)
@@ -213,12 +217,13 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
         n_transient -= used
     nan = np.full(model.n_state, np.nan)
     for attempt in range(1 + ESCAPES):
-        samples, status, end = _poincare(model.kernel, u0, p, opts, int(n_transient), int(n_samples))
+        samples, status, end = _poincare(model.kernel, u0, p, opts, int(n_transient), int(n_samples), 0.0, clock)
         if status != ig.STATUS_OK:
             return Attractor(failure_class(status), 0, np.nan, np.nan, samples, end, int(status), 0.0,
                              nan, nan * (1 + 1j), False)
         k = detect_period(samples, max_period, period_rtol)
-        orbit = periodic_orbit_of(model, end, p, opts, k, period_rtol) if k > 0 and orbit_lle else None
+        refine = k > 0 and orbit_lle and periodic
+        orbit = periodic_orbit_of(model, end, p, opts, k, period_rtol) if refine else None
         # Samples that repeat on an unstable orbit only show a start too close to it (a weakly
         # unstable orbit is left slowly): kick the state off it and take a new transient.
         if orbit is None or np.abs(orbit[2]).max() <= 1.0 + UNSTABLE_MARGIN or attempt == ESCAPES:
@@ -234,16 +239,16 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
                              expo, lams, True)
     if k > 0 and not orbit_lle and not lyapunov_always:
         return Attractor(PERIODIC, k, np.nan, np.nan, samples, end, int(status), 0.0, nan, lams, False)
-    expo, stderr, n_done, lstatus, end2, _ = _run_benettin(
+    expo, stderr, n_done, lstatus, end2, t_end = _run_benettin(
         model, end, p, opts, 0, renorm_periods, max_periods, n_blocks, rtol_stop, min_periods,
-        atol_stop, align_periods, weighted)
+        atol_stop, align_periods, weighted, clock * (n_transient + n_samples - 1), clock)
     code, k = classify(samples, expo[0], stderr[0], k, lstatus)
     if code == NOT_SETTLED and lstatus == ig.STATUS_OK:
         # a contracting attractor whose samples had not settled: by the end of the Lyapunov run
         # they have, so sample again there
-        again, status2, end3 = _poincare(model.kernel, end2, p, opts, 0, int(n_samples))
+        again, status2, end3 = _poincare(model.kernel, end2, p, opts, 0, int(n_samples), clock * t_end, clock)
         k2 = detect_period(again, max_period, period_rtol) if status2 == ig.STATUS_OK else 0
-        orbit = periodic_orbit_of(model, end3, p, opts, k2, period_rtol) if k2 > 0 else None
+        orbit = periodic_orbit_of(model, end3, p, opts, k2, period_rtol) if k2 > 0 and periodic else None
         if orbit is not None and np.abs(orbit[2]).max() < 1.0:
             k, _, lams = orbit
             code, samples, end2 = PERIODIC, again, end3

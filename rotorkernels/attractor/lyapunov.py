@@ -89,18 +89,21 @@ def _estimate(csum, n_done, n_blocks, dt, weighted):
 
 @njit(cache=True, nogil=True)
 def _benettin(kernel, u0, p, opts, n_transient, align_intervals, renorm,
-              max_intervals, min_intervals, n_blocks, rtol_stop, atol_stop, weighted):
+              max_intervals, min_intervals, n_blocks, rtol_stop, atol_stop, weighted, start=0.0,
+              clock=0.0):
     """Benettin/QR kernel. Returns (exponents per unit tau, stderr, intervals measured, status,
-    end state, end time); the end state is taken at the next whole period."""
+    end state, end time); the end state is taken at the next whole period. start: the time of
+    u0; clock as in _poincare (1: time runs on through the transient)."""
     n = kernel[1]
     nan = np.full(n, np.nan)
     u = u0.copy()
     h = 0.0
     for k in range(n_transient):
-        u, status, _, h = ig.flow(kernel, 0.0, 1.0, u, p, False, opts, h)
+        t = start + k * clock
+        u, status, _, h = ig.flow(kernel, t, t + 1.0, u, p, False, opts, h)
         if status != ig.STATUS_OK:
-            return nan, nan.copy(), 0, status, u, float(k + 1)
-    t0 = float(n_transient)
+            return nan, nan.copy(), 0, status, u, start + float(k + 1)
+    t0 = start + float(n_transient)
     z = ig.initial_state(u, n, True)
     csum = np.zeros((max_intervals + 1, n))
     n_done = 0
@@ -141,7 +144,8 @@ def _benettin(kernel, u0, p, opts, n_transient, align_intervals, renorm,
 
 
 def _run_benettin(model, u0, p, opts, n_transient, renorm_periods, max_periods, n_blocks, rtol_stop,
-                  min_periods=None, atol_stop=1e-4, align_periods=20.0, weighted=True):
+                  min_periods=None, atol_stop=1e-4, align_periods=20.0, weighted=True, start=0.0,
+                  clock=0.0):
     renorm = float(renorm_periods)
     if not renorm > 0:
         raise ValueError(f"renorm_periods must be > 0, got {renorm_periods!r}")
@@ -155,7 +159,8 @@ def _run_benettin(model, u0, p, opts, n_transient, renorm_periods, max_periods, 
     min_intervals = max(n_blocks, int(round(min_periods / renorm)))
     align_intervals = max(0, int(round(align_periods / renorm)))
     return _benettin(model.kernel, np.asarray(u0, float), p, opts, int(n_transient), align_intervals, renorm, max_intervals, min_intervals,
-                     int(n_blocks), float(rtol_stop), float(atol_stop), bool(weighted))
+                     int(n_blocks), float(rtol_stop), float(atol_stop), bool(weighted), float(start),
+                     float(clock))
 
 
 def lyapunov_spectrum(model, u0, p, opts, n_transient=200, renorm_periods=1.0, max_periods=2000,

@@ -6,10 +6,12 @@ from rotorkernels import integrators as ig
 
 
 @njit(cache=True, nogil=True)
-def _poincare(kernel, u0, p, opts, n_transient, n_samples):
+def _poincare(kernel, u0, p, opts, n_transient, n_samples, t0=0.0, clock=0.0):
     """Samples at tau = n_transient + i, i = 0 .. n_samples - 1, starting from u0 at tau = 0.
 
-    Returns (samples, status, end state); rows after a failure stay NaN."""
+    clock: 0 for a model 1-periodic in tau; 1 for a quasi-periodically forced one, whose time
+    runs on from t0 (the time of u0). Returns (samples, status, end state); rows after a failure
+    stay NaN."""
     out = np.full((n_samples, kernel[1]), np.nan)
     u = u0.copy()
     h = 0.0
@@ -18,18 +20,21 @@ def _poincare(kernel, u0, p, opts, n_transient, n_samples):
     # step size makes one period's computation differ from the next. (The adaptive step
     # sequence still varies with the state across the contact kinks: settled samples jitter by
     # ~1e2-1e3 x rtol, see default_period_rtol.)
+    t = t0
     for _ in range(n_transient):
-        u, status, _, h = ig.flow(kernel, 0.0, 1.0, u, p, False, opts, h)
+        u, status, _, h = ig.flow(kernel, t, t + 1.0, u, p, False, opts, h)
         if status != ig.STATUS_OK:
             return out, status, u
+        t += clock
     h_fixed = h
     for i in range(n_samples):
         out[i] = u
         if i == n_samples - 1:
             break
-        u, status, _, _ = ig.flow(kernel, 0.0, 1.0, u, p, False, opts, h_fixed)
+        u, status, _, _ = ig.flow(kernel, t, t + 1.0, u, p, False, opts, h_fixed)
         if status != ig.STATUS_OK:
             return out, status, u
+        t += clock
     return out, ig.STATUS_OK, u
 
 

@@ -8,15 +8,16 @@ import rotorkernels.models.jeffcott_clearance as m0
 import rotorkernels.models.linear_oscillator as m1
 import rotorkernels.models.damped_mathieu as m2
 import rotorkernels.models.duffing as m3
+import rotorkernels.models.rigid_preloaded as m4
 
-IDS = (0, 1, 2, 3)
-STATE_SIZES = (2, 4)
+IDS = (0, 1, 2, 3, 4)
+STATE_SIZES = (2, 4, 10)
 
 
 @njit(cache=True, nogil=True, inline="always")
 def known(model):
     """True for a registered model id."""
-    return model == 0 or model == 1 or model == 2 or model == 3
+    return model == 0 or model == 1 or model == 2 or model == 3 or model == 4
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -44,6 +45,8 @@ def rhs(model, tau, u, p, du):
         m2.rhs(tau, u, p, du)
     elif model == 3:
         m3.rhs(tau, u, p, du)
+    elif model == 4:
+        m4.rhs(tau, u, p, du)
     else:
         _fill_nan(du)
 
@@ -59,6 +62,8 @@ def jac(model, tau, u, p, out):
         m2.jac(tau, u, p, out)
     elif model == 3:
         m3.jac(tau, u, p, out)
+    elif model == 4:
+        m4.jac(tau, u, p, out)
     else:
         _fill_nan_2d(out)
 
@@ -74,6 +79,8 @@ def rhs_jac(model, tau, u, p, du, out):
         m2.rhs_jac(tau, u, p, du, out)
     elif model == 3:
         m3.rhs_jac(tau, u, p, du, out)
+    elif model == 4:
+        m4.rhs_jac(tau, u, p, du, out)
     else:
         _fill_nan(du)
 
@@ -85,6 +92,8 @@ def tangent(velocity_form, z, n, jbuf, dz):
         stages.tangent_product(velocity_form, z, 2, jbuf, dz)
     elif n == 4:
         stages.tangent_product(velocity_form, z, 4, jbuf, dz)
+    elif n == 10:
+        stages.tangent_product(velocity_form, z, 10, jbuf, dz)
     else:
         stages.tangent_product(velocity_form, z, n, jbuf, dz)
 
@@ -96,5 +105,7 @@ def combine(K, coef, n_terms, z, step, out):
         stages.combine(K, coef, n_terms, z, step, out, 2)
     elif z.size == 4:
         stages.combine(K, coef, n_terms, z, step, out, 4)
+    elif z.size == 10:
+        stages.combine(K, coef, n_terms, z, step, out, 10)
     else:
         stages.combine(K, coef, n_terms, z, step, out, z.size)

@@ -51,6 +51,7 @@ class Built(NamedTuple):
     p: np.ndarray       # kernel parameter vector (scaled units)
     period: float       # the period [s] that scaled time tau = t / period refers to
     derived: dict       # extra per-point values for the cube, e.g. {"contact_angle_used": 15.2}
+    periodic: bool = True   # False: quasi-periodic forcing, no orbit to shoot (attractor only)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,522 @@
+"""Model `rigid_preloaded` (Filipkovsky 2016, SPEC 2.2): a rigid shaft with one disk on two
+axially preloaded angular-contact ball bearings, 5 DOF, forced by disk unbalance at the shaft
+frequency Omega and by vibration of both supports at a second frequency omega.
+
+Coordinates q = (x1, y1, x2, y2, z): journal displacements of bearing A (xi = 0) and B (xi = l)
+relative to their outer rings, and the axial displacement z. Equations (Lagrange's, from the
+kinetic energy T of SPEC 2.2 with Rayleigh damping C (x1'^2 + ... + z'^2) / 2):
+
+    M q'' + (C + Omega G) q' + P(q) = m0 a Omega^2 u_D(t) - M A_s sin(omega t) - f_g
+
+M and G are `mass_matrix` and `gyroscopic_matrix`; u_D = ((1 - s) cos, (1 - s) sin, s cos,
+s sin, 0)(Omega t) with s = xi_D / l; A_s the support acceleration amplitude along one axis, the
+same at both supports; f_g the weight (gravity in -y, 0 by default as in the paper).
+
+Bearing forces (paper eq. 1), fixed ball angles b_k = 2 pi k / N:
+
+    P_v = K sum_k [delta_k]_+^{3/2} (cos a cos b_k, cos a sin b_k, +-sin a)
+    delta_k = x_v cos a cos b_k + y_v cos a sin b_k + (z0 +- z) sin a
+
+Back-to-back convention: the upper sign for bearing A, the lower for B. The paper writes
+z1 = z2 = z; in a preloaded pair one bearing is compressed by an axial shift while the other
+is relieved, so +z loads A and unloads B, and P(q) = dPi/dq with the generalized axial force
+P_zA - P_zB (zero at q = 0: the preload balances). A ball with delta_k <= 0 carries nothing.
+
+Stiffness normalizations (`bearing.stiffness`):
+
+* "hertz": K from the bearing geometry by Hertz theory at the loaded angle, and the axial
+  approach z0 from N K (z0 sin a)^{3/2} sin a = P0 exactly: the force law carries the preload.
+* "paper": K = (3 P0 / (2 N)) z0^{-3/2} sin^{-5/2} a as printed (paper eq. 1), z0 from the same
+  preload equations (2010 papers, eqs. 7-10). With it each bearing's static axial force is
+  1.5 P0, not P0 (SPEC 1 note): K is 1.5x the Hertz value, stiffnesses 1.5x, linear
+  frequencies sqrt(1.5)x. Kept to compare with the paper.
+
+Contact angle: the loaded angle from the preload solve on the preset's geometry (the nominal
+angle of the paper's table is the free angle), or imposed by the scene (`bearing.contact_angle`;
+K then from Hertz theory at that angle and z0 from the equilibrium above). The cube's
+`contact_angle_used` and `contact_angle_imposed` say which.
+
+Forcing: unbalance (eccentricity a > 0) at Omega, support vibration (acceleration > 0) at omega.
+With both on, the forcing is periodic only when omega / Omega = p / q (coprime, q at most
+`forcing.max_denominator`, see `frequency_ratio`); the common period T = q / f_Omega = p / f_omega
+is then the shooting period. Otherwise the point is quasi-periodically forced (Built.periodic
+false): no periodic orbit is sought, and the attractor's Poincare samples are taken once per
+shaft revolution.
+
+Scaling: tau = t / T (T the common period, or the one active forcing's period), positions in
+units of L = 1 um; u = (q / L, dq/dtau / L).
+"""
+import math
+from fractions import Fraction
+from functools import lru_cache
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from rotorkernels import bearing
+from rotorkernels.contact import ring_force, ring_load
+from rotorkernels.models.spec import Built, ModelSpec, Observable, Parameter
+from rotorkernels.models.velocity import upper_rows, velocity_rows
+
+LENGTH_SCALE = 1e-6
+N_POS = 5
+# Kernel parameter vector: 5x5 blocks row-major, then 5-vectors, then scalars.
+P_GAIN = 0          # T^2 K sqrt(L) M^-1: ball sums (scaled) -> scaled acceleration
+P_DAMP = 25         # T M^-1 (C + Omega G)
+P_CONST = 50        # T^2 / L M^-1 (-f_g)
+P_UCOS = 55         # T^2 / L M^-1 m0 a Omega^2 u_D, cosine part
+P_USIN = 60         # sine part
+P_SUP = 65          # -T^2 / L A_s
+P_WU, P_WS, P_OFFSET, P_COS_A, P_SIN_A, P_NBALLS, P_COS_D, P_SIN_D = range(70, 78)
+N_PARAMS = 78
+
+# Rational detection: a ratio within RATIO_RTOL of p / q with q <= DETECTION_DENOMINATOR is
+# that fraction (typed frequencies are decimals; the golden mean's best such fraction is off by
+# 6e-9); p / q with q above the scene's max_denominator has a common period too long to shoot.
+RATIO_RTOL = 1e-9
+DETECTION_DENOMINATOR = 10_000
+RATIONAL, LONG_PERIOD, IRRATIONAL = "rational", "long_period", "irrational"
+
+
+# --- kernels ---------------------------------------------------------------------------------
+
+@njit(cache=True, nogil=True, inline="always")
+def _accelerations(tau, u, p, fxa, fya, fxb, fyb, fz, du):
+    """du[5:] = -gain F - damp q' + gravity + unbalance + support, F the ball-sum forces."""
+    cu = np.cos(p[P_WU] * tau)
+    su = np.sin(p[P_WU] * tau)
+    ss = np.sin(p[P_WS] * tau)
+    for i in range(N_POS):
+        g = P_GAIN + N_POS * i
+        d = P_DAMP + N_POS * i
+        acc = -(p[g] * fxa + p[g + 1] * fya + p[g + 2] * fxb + p[g + 3] * fyb + p[g + 4] * fz)
+        for j in range(N_POS):
+            acc -= p[d + j] * u[N_POS + j]
+        du[N_POS + i] = (acc + p[P_CONST + i] + p[P_UCOS + i] * cu + p[P_USIN + i] * su
+                         + p[P_SUP + i] * ss)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _stiffness_column(out, p, j, k0, k1, k2, k3, k4):
+    """Column j of the lower-left block: -gain . (column j of the bearing stiffness dP/dq)."""
+    for i in range(N_POS):
+        g = P_GAIN + N_POS * i
+        out[N_POS + i, j] = -(p[g] * k0 + p[g + 1] * k1 + p[g + 2] * k2 + p[g + 3] * k3 + p[g + 4] * k4)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _jacobian(out, p, a, b):
+    """[[0, I], [-gain dP/dq, -damp]] from the ring loads a (bearing A, shift +z) and b (B, -z):
+    z enters B as -z, so B's cross terms with z change sign and its kzz does not."""
+    upper_rows(out, N_POS)
+    _stiffness_column(out, p, 0, a[3], a[4], 0.0, 0.0, a[6])
+    _stiffness_column(out, p, 1, a[4], a[5], 0.0, 0.0, a[7])
+    _stiffness_column(out, p, 2, 0.0, 0.0, b[3], b[4], -b[6])
+    _stiffness_column(out, p, 3, 0.0, 0.0, b[4], b[5], -b[7])
+    _stiffness_column(out, p, 4, a[6], a[7], -b[6], -b[7], a[8] + b[8])
+    for i in range(N_POS):
+        for j in range(N_POS):
+            out[N_POS + i, N_POS + j] = -p[P_DAMP + N_POS * i + j]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _ring_a(u, p):
+    return ring_load(u[0], u[1], u[4], p[P_OFFSET], p[P_COS_A], p[P_SIN_A], int(p[P_NBALLS]),
+                     1.0, 0.0, p[P_COS_D], p[P_SIN_D])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _ring_b(u, p):
+    return ring_load(u[2], u[3], -u[4], p[P_OFFSET], p[P_COS_A], p[P_SIN_A], int(p[P_NBALLS]),
+                     1.0, 0.0, p[P_COS_D], p[P_SIN_D])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def rhs(tau, u, p, du):
+    velocity_rows(u, du, N_POS)
+    n = int(p[P_NBALLS])
+    fxa, fya, fza = ring_force(u[0], u[1], u[4], p[P_OFFSET], p[P_COS_A], p[P_SIN_A], n,
+                               1.0, 0.0, p[P_COS_D], p[P_SIN_D])
+    fxb, fyb, fzb = ring_force(u[2], u[3], -u[4], p[P_OFFSET], p[P_COS_A], p[P_SIN_A], n,
+                               1.0, 0.0, p[P_COS_D], p[P_SIN_D])
+    _accelerations(tau, u, p, fxa, fya, fxb, fyb, fza - fzb, du)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def jac(tau, u, p, out):
+    _jacobian(out, p, _ring_a(u, p), _ring_b(u, p))
+
+
+@njit(cache=True, nogil=True, inline="always")
+def rhs_jac(tau, u, p, du, out):
+    """rhs and jac from one ball sum per bearing."""
+    a = _ring_a(u, p)
+    b = _ring_b(u, p)
+    velocity_rows(u, du, N_POS)
+    _accelerations(tau, u, p, a[0], a[1], b[0], b[1], a[2] - b[2], du)
+    _jacobian(out, p, a, b)
+
+
+# --- rotor matrices (SI) -----------------------------------------------------------------------
+
+class Rotor(NamedTuple):
+    length: float               # l [m]
+    disk_position: float        # xi_D [m] from bearing A
+    shaft_mass: float           # m_B [kg]
+    shaft_diametral: float      # I_C1 [kg m^2]
+    shaft_polar: float          # I_C0
+    disk_mass: float            # m_0
+    disk_diametral: float       # I_1
+    disk_polar: float           # I_0
+    damping: float              # C [N s/m] on every coordinate
+    gravity: float              # g [m/s^2], acting in -y
+
+    @classmethod
+    def of(cls, v):
+        return cls(*(float(v[name]) for name in cls._fields))
+
+
+def _pair(a, b, c):
+    """The 5x5 matrix with the 2x2 block [[a, b], [b, c]] on (x1, x2) and on (y1, y2)."""
+    m = np.zeros((N_POS, N_POS))
+    for i, j in ((0, 2), (1, 3)):
+        m[i, i], m[i, j], m[j, i], m[j, j] = a, b, b, c
+    return m
+
+
+def mass_matrix(r):
+    """M from T: diametral inertia (I_C1 + I_1) of the tilt (q2 - q1) / l, shaft mass at
+    mid-span, disk mass at xi_D; axial mass m_B + m_0."""
+    s = r.disk_position / r.length
+    i_d = (r.shaft_diametral + r.disk_diametral) / r.length ** 2
+    m = _pair(i_d + r.shaft_mass / 4 + r.disk_mass * (1 - s) ** 2,
+              -i_d + r.shaft_mass / 4 + r.disk_mass * s * (1 - s),
+              i_d + r.shaft_mass / 4 + r.disk_mass * s ** 2)
+    m[4, 4] = r.shaft_mass + r.disk_mass
+    return m
+
+
+def gyroscopic_matrix(r):
+    """G per unit shaft speed [rad/s] from T's term I_p Omega (y1' - y2')(x2 - x1) / l^2:
+    skew-symmetric, g = (I_C0 + I_0) / l^2 (the gyroscopic force is Omega G q')."""
+    g = (r.shaft_polar + r.disk_polar) / r.length ** 2
+    m = np.zeros((N_POS, N_POS))
+    for (i, j), sign in (((0, 1), 1), ((0, 3), -1), ((2, 1), -1), ((2, 3), 1)):
+        m[i, j] = sign * g
+        m[j, i] = -sign * g
+    return m
+
+
+def unbalance_shape(r):
+    """u_D: the generalized unbalance force is m0 a Omega^2 (u_D cos Omega t, rotated by 90 deg
+    in (x, y) for the sine part); returns (cosine part, sine part)."""
+    s = r.disk_position / r.length
+    return np.array([1 - s, 0, s, 0, 0.0]), np.array([0, 1 - s, 0, s, 0.0])
+
+
+def weight(r):
+    """Generalized gravity force (in -y) on (x1, y1, x2, y2, z) [N]."""
+    s = r.disk_position / r.length
+    w = r.gravity
+    return np.array([0.0, -w * (r.shaft_mass / 2 + r.disk_mass * (1 - s)), 0.0,
+                     -w * (r.shaft_mass / 2 + r.disk_mass * s), 0.0])
+
+
+SUPPORT_AXES = {"x": (0, 2), "y": (1, 3), "z": (4,)}
+
+
+def support_vector(direction, acceleration):
+    """A_s [m/s^2]: both supports vibrate along one axis (a rigid-body motion of the frame)."""
+    a = np.zeros(N_POS)
+    a[list(SUPPORT_AXES[direction])] = acceleration
+    return a
+
+
+# --- bearings ----------------------------------------------------------------------------------
+
+GEOMETRY_PRESET = "angular_contact_medium"
+NOMINAL_ANGLES = (12, 15, 26, 36, 40)
+CONSTANTS = {"hertz": "consistent", "paper": "filipkovsky"}
+
+
+@lru_cache(maxsize=32)
+def geometry(nominal_angle, outer_race_radius=None):
+    """The paper's bearing (table row of `nominal_angle`), or with the outer groove radius R2
+    given: then the free contact angle follows from R1/R2 (2010 eq. 10 at zero load)."""
+    geom = bearing.preset(GEOMETRY_PRESET, int(nominal_angle))
+    if outer_race_radius is None:
+        return geom
+    from dataclasses import replace
+    geom = replace(geom, outer_race_radius=outer_race_radius,
+                   pitch_diameter=geom.inner_race_radius + outer_race_radius)
+    return replace(geom, nominal_contact_angle=bearing.groove_free_angle(geom))
+
+
+@lru_cache(maxsize=256)
+def preload_of(nominal_angle, preload, stiffness, contact_angle=None, outer_race_radius=None):
+    """bearing.PreloadState of each bearing: loaded angle from the preload solve, or the
+    contact angle [deg] imposed."""
+    geom = geometry(nominal_angle, outer_race_radius)
+    if contact_angle is None:
+        return bearing.preload_state(geom, preload, constant=CONSTANTS[stiffness])
+    return bearing.preload_at_angle(geom, preload, math.radians(contact_angle), CONSTANTS[stiffness])
+
+
+def bearing_load(q, state, n_balls, length_scale=LENGTH_SCALE):
+    """Generalized bearing force P(q) [N] and its stiffness dP/dq [N/m] at positions q [m]:
+    the kernel's ball sums (contact.ring_load) in SI, for static and linear analysis."""
+    el = length_scale
+    x = np.asarray(q, float) / el
+    alpha = state.contact_angle
+    geometry_args = (state.axial_approach * np.sin(alpha) / el, np.cos(alpha), np.sin(alpha), int(n_balls),
+                     1.0, 0.0, np.cos(2.0 * np.pi / n_balls), np.sin(2.0 * np.pi / n_balls))
+    a = ring_load(x[0], x[1], x[4], *geometry_args)
+    b = ring_load(x[2], x[3], -x[4], *geometry_args)
+    force = np.array([a[0], a[1], b[0], b[1], a[2] - b[2]])
+    unit_gain = np.zeros(N_PARAMS)       # gain -I, no damping: the lower-left block is dP/dq
+    unit_gain[P_GAIN:P_GAIN + 25] = -np.eye(N_POS).ravel()
+    jac = np.zeros((2 * N_POS, 2 * N_POS))
+    _jacobian(jac, unit_gain, a, b)
+    k = state.contact_constant
+    return k * el ** 1.5 * force, k * el ** 0.5 * jac[N_POS:, :N_POS]
+
+
+# --- forcing frequencies -----------------------------------------------------------------------
+
+class Ratio(NamedTuple):
+    kind: str       # RATIONAL, LONG_PERIOD, IRRATIONAL
+    p: int
+    q: int
+
+
+def frequency_ratio(ratio, max_denominator):
+    """omega / Omega as p / q: RATIONAL when q <= max_denominator, LONG_PERIOD when a fraction
+    with a larger denominator (up to DETECTION_DENOMINATOR) matches, else IRRATIONAL (p = q = 0)."""
+    frac = Fraction(ratio).limit_denominator(DETECTION_DENOMINATOR)
+    if abs(float(frac) - ratio) > RATIO_RTOL * ratio:
+        return Ratio(IRRATIONAL, 0, 0)
+    return Ratio(RATIONAL if frac.denominator <= max_denominator else LONG_PERIOD,
+                 frac.numerator, frac.denominator)
+
+
+class Forcing(NamedTuple):
+    period: float           # T [s], the unit of tau
+    shaft_turns: float      # Omega T / 2 pi: shaft revolutions per tau
+    support_turns: float    # omega T / 2 pi
+    periodic: bool
+    ratio: Ratio
+
+
+def forcing_of(speed, support_frequency, unbalance_on, support_on, max_denominator):
+    """The time unit and frequencies of a point (speed, support_frequency in Hz)."""
+    if not (unbalance_on and support_on):
+        if support_on:
+            return Forcing(1.0 / support_frequency, speed / support_frequency, 1.0, True, Ratio(RATIONAL, 1, 1))
+        return Forcing(1.0 / speed, 1.0, support_frequency / speed, True, Ratio(RATIONAL, 1, 1))
+    ratio = frequency_ratio(support_frequency / speed, max_denominator)
+    if ratio.kind == RATIONAL:
+        return Forcing(ratio.q / speed, float(ratio.q), float(ratio.p), True, ratio)
+    return Forcing(1.0 / speed, 1.0, support_frequency / speed, False, ratio)
+
+
+# --- build -------------------------------------------------------------------------------------
+
+def kernel_params(rotor, state, n_balls, forcing, speed, eccentricity, support, length_scale=LENGTH_SCALE):
+    """The kernel parameter vector from SI inputs (state: bearing.PreloadState, support: A_s)."""
+    t, el = forcing.period, length_scale
+    m_inv = np.linalg.inv(mass_matrix(rotor))
+    omega = 2.0 * np.pi * speed
+    damp = rotor.damping * np.eye(N_POS) + omega * gyroscopic_matrix(rotor)
+    cos_part, sin_part = unbalance_shape(rotor)
+    unbalance = t * t / el * rotor.disk_mass * eccentricity * omega ** 2
+    p = np.empty(N_PARAMS)
+    p[P_GAIN:P_GAIN + 25] = (t * t * state.contact_constant * np.sqrt(el) * m_inv).ravel()
+    p[P_DAMP:P_DAMP + 25] = (t * m_inv @ damp).ravel()
+    p[P_CONST:P_CONST + 5] = t * t / el * m_inv @ weight(rotor)
+    p[P_UCOS:P_UCOS + 5] = unbalance * m_inv @ cos_part
+    p[P_USIN:P_USIN + 5] = unbalance * m_inv @ sin_part
+    p[P_SUP:P_SUP + 5] = -t * t / el * support
+    p[P_WU] = 2.0 * np.pi * forcing.shaft_turns
+    p[P_WS] = 2.0 * np.pi * forcing.support_turns
+    alpha = state.contact_angle
+    p[P_OFFSET] = state.axial_approach * np.sin(alpha) / el
+    p[P_COS_A], p[P_SIN_A] = np.cos(alpha), np.sin(alpha)
+    p[P_NBALLS] = n_balls
+    p[P_COS_D], p[P_SIN_D] = np.cos(2.0 * np.pi / n_balls), np.sin(2.0 * np.pi / n_balls)
+    return p
+
+
+def _optional(v, name):
+    x = v.get(name)
+    return None if x is None or not np.isfinite(x) else float(x)
+
+
+def bearing_state(v):
+    return preload_of(v["nominal_angle"], v["preload"], v["stiffness"],
+                      _optional(v, "contact_angle"), _optional(v, "outer_race_radius"))
+
+
+def build(v):
+    """Kernel inputs at one point from the scene's values (SI; angles in degrees)."""
+    state = bearing_state(v)
+    rotor = Rotor.of(v)
+    forcing = forcing_of(v["speed"], v["support_frequency"], v["eccentricity"] > 0,
+                         v["support_acceleration"] > 0, v["max_denominator"])
+    support = support_vector(v["support_direction"], v["support_acceleration"])
+    n_balls = geometry(v["nominal_angle"]).n_balls
+    p = kernel_params(rotor, state, n_balls, forcing, v["speed"], v["eccentricity"], support)
+    derived = {
+        "contact_angle_used": math.degrees(state.contact_angle),
+        "contact_angle_imposed": float(_optional(v, "contact_angle") is not None),
+        "axial_approach": state.axial_approach,
+        "contact_constant": state.contact_constant,
+        "periodic_forcing": float(forcing.periodic),
+        "frequency_ratio_p": float(forcing.ratio.p),
+        "frequency_ratio_q": float(forcing.ratio.q),
+    }
+    return Built(p, forcing.period, derived, forcing.periodic)
+
+
+# --- config checks -----------------------------------------------------------------------------
+
+def _grid(data, axes, section, name):
+    """The values a key takes over the scene: swept, given, or its unset value."""
+    if name in axes:
+        return [float(x) for x in axes[name]]
+    given = data[section].get(name) if section else None
+    return [SPEC.parameter(name).unset if given is None else given]
+
+
+def _ratio_problems(data, axes):
+    """Frequency ratios whose common period exceeds forcing.max_denominator, when orbits are
+    requested (shooting over such a period would cost that many shaft revolutions per step)."""
+    f = data["forcing"]
+    if not data["analysis"]["floquet"]:
+        return []
+    if "speed" not in axes or max(_grid(data, axes, "forcing", "eccentricity")) <= 0 or \
+            max(_grid(data, axes, "forcing", "support_acceleration")) <= 0:
+        return []
+    bad = []
+    for speed in _grid(data, axes, None, "speed"):
+        for freq in _grid(data, axes, "forcing", "support_frequency"):
+            r = frequency_ratio(freq / speed, f["max_denominator"]) if freq > 0 else None
+            if r is not None and r.kind == LONG_PERIOD:
+                bad.append((freq, speed, r))
+    if not bad:
+        return []
+    freq, speed, r = bad[0]
+    where = "sweep.support_frequency" if "support_frequency" in axes else "forcing.support_frequency"
+    return [f"{where}: support_frequency / speed = {freq:g} / {speed:g} Hz = {r.p}/{r.q} has a common "
+            f"period of {r.q} shaft revolutions, above forcing.max_denominator = {f['max_denominator']} "
+            f"({len(bad)} grid point(s)); raise forcing.max_denominator, choose frequencies with a "
+            "smaller common period, or set analysis.floquet = false"]
+
+
+def check(data, axes):
+    """Config rules across keys: the paper's table angles, a solvable preload geometry, a
+    support frequency for a support vibration, and shootable frequency ratios."""
+    b = data["bearing"]
+    errors = []
+    angles = _grid(data, axes, "bearing", "nominal_angle")
+    odd = [a for a in angles if a not in NOMINAL_ANGLES]
+    if odd:
+        errors.append(f"{'sweep' if 'nominal_angle' in axes else 'bearing'}.nominal_angle: must be one of "
+                      f"{', '.join(map(str, NOMINAL_ANGLES))} deg (the paper's bearing table; got {odd[0]:g})")
+    elif b["outer_race_radius"] is not None:
+        try:
+            geometry(angles[0], b["outer_race_radius"])
+        except ValueError as exc:
+            errors.append(f"bearing.outer_race_radius: the preload equations (2010 papers, eq. 10) have "
+                          f"no solution for this geometry: {exc}")
+    freqs = _grid(data, axes, "forcing", "support_frequency")
+    if max(_grid(data, axes, "forcing", "support_acceleration")) > 0 and min(freqs) <= 0:
+        errors.append("forcing.support_frequency: must be > 0 when forcing.support_acceleration > 0")
+    return errors + _ratio_problems(data, axes)
+
+
+def static_guess(p):
+    """The unforced rotor centred in its bearings (the preload balances at q = 0)."""
+    return np.zeros(2 * N_POS)
+
+
+def _angle(name, long_name, help, unset=None):
+    return Parameter(name=name, section="bearing", unit="degree", long_name=long_name, axis=True,
+                     lo=0, hi=90, lo_open=True, hi_open=True, unset=unset, help=help)
+
+
+def _rotor(name, default, unit, help):
+    return Parameter(default=default, name=name, section="rotor", lo=0, lo_open=True, unit=unit, help=help)
+
+
+SPEC = ModelSpec(
+    name="rigid_preloaded",
+    id=4,
+    module=__name__,
+    n_position=N_POS,
+    description="Filipkovsky 2016: 5-DOF rigid rotor on two preloaded angular-contact ball bearings",
+    parameters=(
+        Parameter(name="speed", unit="Hz", long_name="shaft speed", axis=True, lo=0, hi=1e5,
+                  lo_open=True, help="shaft speed f_Omega [Hz] (paper: 250 Hz)"),
+        Parameter(name="support_frequency", section="forcing", unit="Hz", long_name="support vibration frequency",
+                  axis=True, lo=0, hi=1e5, unset=0.0,
+                  help="support vibration frequency f_omega [Hz] (needed when support_acceleration > 0)"),
+        Parameter(name="nominal_angle", section="bearing", unit="degree", long_name="nominal contact angle",
+                  axis=True, lo=0, hi=90, lo_open=True, hi_open=True, unset=15.0,
+                  help="row of the paper's bearing table: 12, 15, 26, 36 or 40 deg (free contact angle)"),
+        _angle("contact_angle", "imposed contact angle",
+               "contact angle [deg] imposed in the force law; unset: the loaded angle from the preload solve"),
+        Parameter(name="preload", section="bearing", unit="N", long_name="axial preload", axis=True,
+                  lo=0, hi=1e5, lo_open=True, unset=300.0,
+                  help="axial preload P0 [N] (not in the 2016 paper; default 300 N as in the 2010 papers)"),
+        Parameter(name="eccentricity", section="forcing", unit="m", long_name="disk unbalance eccentricity",
+                  axis=True, lo=0, hi=1e-3, unset=10e-6,
+                  help="disk eccentricity a [m] (not in the paper; default 10 um; 0: balanced rotor)"),
+        Parameter(name="support_acceleration", section="forcing", unit="m s-2",
+                  long_name="support vibration acceleration amplitude", axis=True, lo=0, hi=1e4, unset=0.0,
+                  help="acceleration amplitude A of both supports [m/s^2] (not in the paper; default 0: off)"),
+        Parameter("choice", "y", name="support_direction", section="forcing", choices=tuple(SUPPORT_AXES),
+                  help="axis the supports vibrate along"),
+        Parameter("int", 64, name="max_denominator", section="forcing", lo=1, hi=DETECTION_DENOMINATOR,
+                  help="largest q of omega / Omega = p / q shot as periodic (common period q shaft revolutions)"),
+        Parameter("choice", "hertz", name="stiffness", section="bearing", choices=tuple(CONSTANTS),
+                  help="hertz: K from Hertz theory, the preload balances exactly; paper: K as printed (1.5x)"),
+        Parameter(name="outer_race_radius", section="bearing", lo=0, lo_open=True, unit="m",
+                  help="outer groove-bottom radius R2 [m]; given: the free angle follows from R1/R2 "
+                       "instead of the table's nominal angle"),
+        _rotor("length", 0.5, "m", "shaft length l between the bearings"),
+        Parameter(default=0.125, name="disk_position", section="rotor", lo=0, unit="m",
+                  help="disk position xi_D from bearing A"),
+        _rotor("shaft_mass", 1.963, "kg", "shaft mass m_B"),
+        _rotor("shaft_diametral", 0.04098, "kg m2", "shaft diametral inertia I_C1"),
+        _rotor("shaft_polar", 0.00015, "kg m2", "shaft polar inertia I_C0"),
+        _rotor("disk_mass", 10.0, "kg", "disk mass m_0"),
+        _rotor("disk_diametral", 0.1, "kg m2", "disk diametral inertia I_1"),
+        _rotor("disk_polar", 0.2, "kg m2", "disk polar inertia I_0"),
+        Parameter(default=500.0, name="damping", section="rotor", lo=0, unit="N s m-1",
+                  help="viscous damping C on every coordinate (not in the paper; default 500 N s/m, "
+                       "about 1 % of critical in the radial modes at 15 deg, 300 N)"),
+        Parameter(default=0.0, name="gravity", section="rotor", lo=0, unit="m s-2",
+                  help="gravity in -y (0 as in the paper: the preload dominates the weight)"),
+    ),
+    continuation=("speed", "support_frequency"),
+    build=build,
+    cold_guess=static_guess,
+    length_scale=LENGTH_SCALE,
+    observables=tuple(
+        Observable(name, tuple(float(i == k) for i in range(N_POS)), "m", long_name)
+        for k, (name, long_name) in enumerate((
+            ("x_A", "journal A horizontal displacement"), ("y_A", "journal A vertical displacement"),
+            ("x_B", "journal B horizontal displacement"), ("y_B", "journal B vertical displacement"),
+            ("z", "axial displacement")))),
+    derived={
+        "contact_angle_used": ("degree", "contact angle in the force law (loaded, or imposed)"),
+        "contact_angle_imposed": ("1", "1: contact angle imposed by the scene; 0: from the preload solve"),
+        "axial_approach": ("m", "axial approach z0 of each bearing under the preload"),
+        "contact_constant": ("N m-1.5", "ball contact constant K"),
+        "periodic_forcing": ("1", "1: periodic forcing (orbit and Floquet); 0: quasi-periodic"),
+        "frequency_ratio_p": ("1", "p of support_frequency / speed = p / q (0: incommensurate)"),
+        "frequency_ratio_q": ("1", "q: shaft revolutions per common forcing period"),
+    },
+    check=check,
+)
