@@ -309,10 +309,7 @@ class Config:
 
     @property
     def continued_axis(self):
-        """The axis orbits are continued along: the model's first continuation parameter that
-        the scene sweeps over several values, else its first."""
-        along = self.model.continuation
-        return next((a for a in along if len(self.axes.get(a, ())) > 1), along[0])
+        return continued_axis(self.model, self.axes)
 
     @property
     def n_points(self):
@@ -322,6 +319,13 @@ class Config:
         """Identifies the scene (data, not formatting): changes with any value, not comments."""
         text = json.dumps(self.data, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()
+
+
+def continued_axis(spec, axes):
+    """The axis orbits are continued along: the model's first continuation parameter that the
+    scene sweeps over several values, else its first."""
+    along = spec.continuation
+    return next((a for a in along if len(axes.get(a, ())) > 1), along[0])
 
 
 def _unknown(key, known, where):

@@ -21,7 +21,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline import compute, cube, fileio, schema
-from pipeline.config import ConfigError
+from pipeline.config import ConfigError, continued_axis
 from rotorkernels.continuation import arclength as al, solve_orbit
 
 RESULT_KIND = "continuation"
@@ -49,7 +49,7 @@ def plan(data):
     cannot work (before any work starts)."""
     spec = compute.model_of(data)
     sec = data["continuation"]
-    name = sec["parameter"] or spec.continuation[0]
+    name = sec["parameter"] or continued_axis(spec, data["sweep"])
     floats = [p.name for p in spec.parameters if p.kind == "float"]
     if name not in floats:
         raise ConfigError(f"continuation.parameter: {name!r} is not a float parameter of model {spec.name} "

@@ -6,6 +6,9 @@ integrator holds the models), so editing one module would leave stale code in th
 The cache therefore lives in a directory named after a hash of all kernel sources, those of the
 user's models in $ROTORSWEEP_MODELS included:
 $ROTORSWEEP_CACHE (default ~/.cache/rotorsweep)/numba/<hash>. NUMBA_CACHE_DIR, if the user sets it, wins.
+The pure-Python orchestration (PYTHON_ONLY: no compiled function is defined there or reads
+anything from there, which a test checks) is left out of the hash, so editing it does not
+recompile the kernels.
 """
 import hashlib
 import importlib.util
@@ -28,8 +31,16 @@ def _plugin_sources():
     return [Path(spec.origin) for spec in found if spec is not None and spec.origin]
 
 
+PYTHON_ONLY = ("continuation", "orbits.py", "floquet.py")
+
+
+def kernel_sources(src=Path(__file__).parent):
+    """The sources compiled code may depend on: everything but PYTHON_ONLY."""
+    return [p for p in sorted(Path(src).rglob("*.py")) if p.relative_to(src).parts[0] not in PYTHON_ONLY]
+
+
 def _cache_dir(src=Path(__file__).parent):
-    sources = sorted(Path(src).rglob("*.py")) + _plugin_sources()
+    sources = kernel_sources(src) + _plugin_sources()
     digest = hashlib.sha256(b"".join(p.name.encode() + p.read_bytes() for p in sources)).hexdigest()
     base = os.environ.get("ROTORSWEEP_CACHE") or os.path.join(os.path.expanduser("~"), ".cache", "rotorsweep")
     return os.path.join(base, "numba", digest[:16])

@@ -177,3 +177,21 @@ def test_a_throwaway_model_runs_through_point_sweep_cube_query_and_report(chain_
     mods = [np.hypot(re, im) for re, im in point["multipliers"]]
     np.testing.assert_allclose(mods, np.exp(-2.0 / (2 * 4.0)), rtol=1e-8)
     assert point["status"] == "converged" and point["stable"]
+
+
+def test_python_only_modules_hold_no_compiled_code_and_no_kernel_reads_them():
+    """Why they may be left out of the Numba cache's hash (rotorkernels.PYTHON_ONLY)."""
+    import re
+    from pathlib import Path
+
+    import rotorkernels
+
+    root = Path(rotorkernels.__file__).parent
+    kernel = set(rotorkernels.kernel_sources(root))
+    python_only = [p for p in root.rglob("*.py") if p not in kernel]
+    assert python_only and all("numba" not in p.read_text() for p in python_only)
+    names = "|".join(re.escape(n.removesuffix(".py")) for n in rotorkernels.PYTHON_ONLY)
+    for path in kernel:
+        if "numba" in path.read_text():
+            assert not re.search(rf"^\s*(from|import) rotorkernels(\.| import ).*\b({names})\b",
+                                 path.read_text(), re.M), path
