@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions bench-continuation fig13 cascade clean
+.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions bench-continuation fig13 cascade fold clean
 
 # CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
 CONSTRAINTS ?= constraints.txt
@@ -30,6 +30,9 @@ fig13: $(STAMP)  ## the Bai 2006 Fig. 13 sweep (2401 speeds x 5 clearances)
 cascade: $(STAMP)  ## 19 um route to chaos, attractors swept up and down, with the 28 Hz point in detail
 	$(BIN)/rotorsweep run configs/bai2006_cascade.toml -o out/bai2006_cascade.nc --overwrite
 	$(BIN)/rotorsweep report out/bai2006_cascade.nc -o out/bai2006_cascade_report --point speed=28
+
+fold: $(STAMP)  ## Bai 2006 by continuation: the 7.6 um fold pair, the 19 um cascade's branches (~1 min)
+	$(BIN)/rotorsweep continue configs/bai2006_fold.toml -o out/bai2006_fold.nc --overwrite --report out/bai2006_fold_report
 
 bench: $(STAMP)  ## work-precision and baseline benchmarks -> docs/benchmarks/
 	$(BIN)/python -m workflows.bench.kernels

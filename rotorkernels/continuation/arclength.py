@@ -158,7 +158,7 @@ class Branch(NamedTuple):
     n_rhs: int
 
 
-class _Counter:
+class Counter:
     """Right-hand-side evaluations spent on one branch."""
     def __init__(self):
         self.n = 0
@@ -228,7 +228,7 @@ def start(family, lam0, guess, direction=1, settings=Settings(), counter=None):
     """The first point: Newton shooting at fixed lam0 from `guess` (a state near the orbit, e.g.
     from natural continuation or a settled transient), tangent pointing to increasing lambda
     for direction = +1, decreasing for -1. Returns a Point or None."""
-    counter = counter or _Counter()
+    counter = counter or Counter()
     X = np.append(np.asarray(guess, float), lam0 / family.scale)
     c = np.zeros(X.size)
     c[-1] = 1.0
@@ -241,6 +241,13 @@ def start(family, lam0, guess, direction=1, settings=Settings(), counter=None):
 
 def _angle(t1, t2):
     return float(np.arccos(np.clip(t1 @ t2, -1.0, 1.0)))
+
+
+def rejected(a, b, settings):
+    """A converged step a -> b is still refused when its corrector needed nearly all its
+    iterations or the tangent turned by more than max_angle: with both bounded, the corrector
+    stays on the branch it started from (the step is halved and retried)."""
+    return b.iterations > settings.max_newton - 2 or _angle(a.tangent, b.tangent) > settings.max_angle
 
 
 def _step(family, a, ds, settings, counter):
@@ -333,7 +340,7 @@ def follow_branch(family, first, lam_range, settings=Settings(), stop_at_branch_
     until lambda leaves lam_range = (lo, hi), the step budget is spent, or the corrector fails
     at the minimum step. Events are located as they are passed. A switched period-2k branch
     (stop_at_branch_point) ends where it meets its period-k parent (a branch point)."""
-    counter = counter or _Counter()
+    counter = counter or Counter()
     lo, hi = lam_range
     points, events = [first], []
     ds = settings.ds
@@ -341,7 +348,7 @@ def follow_branch(family, first, lam_range, settings=Settings(), stop_at_branch_
     while len(points) <= settings.max_steps:
         a = points[-1]
         b, failure = _step(family, a, ds, settings, counter)
-        if b is not None and (b.iterations > settings.max_newton - 2 or _angle(a.tangent, b.tangent) > settings.max_angle):
+        if b is not None and rejected(a, b, settings):
             b, failure = None, NEWTON_FAILED
         if b is None:
             if ds <= settings.ds_min * 1.000001:
@@ -401,8 +408,12 @@ def _edge(family, a, b, lam_edge, settings, counter):
 
 
 def continue_orbit(family, lam0, guess, lam_range, settings=Settings(), direction=1):
-    """Start at lam0 from `guess` and follow the branch in `direction` (+1: increasing lambda)."""
-    counter = _Counter()
+    """Start at lam0 from `guess` and follow the branch in `direction` (+1: increasing lambda).
+    Settings that cannot work raise ValueError before any work."""
+    problems = settings.problems()
+    if problems:
+        raise ValueError("continuation settings: " + "; ".join(problems))
+    counter = Counter()
     first = start(family, lam0, guess, direction, settings, counter)
     if first is None:
         return Branch([], [], START_FAILED, f"no periodic orbit converged at lambda = {lam0!r}",
@@ -418,7 +429,7 @@ def switch_period_doubling(family, event, lam_range, settings=Settings()):
     orthogonal to the period-k tangent, so the period-k branch (which meets that hyperplane only
     O(sqrt(ds)) away) is not where Newton lands. The period-2k problem is then continued from
     there, away from the event, until it meets its parent again or leaves the range."""
-    counter = _Counter()
+    counter = Counter()
     pd = event.point
     doubled = family.with_periods(2 * family.periods)
     lams, vecs = np.linalg.eig(pd.monodromy)

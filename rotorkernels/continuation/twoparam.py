@@ -336,7 +336,7 @@ def start(plane, event, nu0, direction=1, settings=Settings(), counter=None):
     located by arclength on the branch at nu = nu0) corrected on the augmented system at fixed
     nu0, its tangent pointing to increasing nu for direction +1. Returns (CurvePoint or None,
     detail)."""
-    counter = counter or al._Counter()
+    counter = counter or al.Counter()
     p = event.point
     Y0 = _initial_unknowns(plane, event, nu0)
     fixed = np.zeros(Y0.size)
@@ -446,7 +446,7 @@ def follow_curve(plane, kind, first, box, settings=Settings(), marks=(), counter
     `first` until it leaves box = ((lambda_lo, lambda_hi), (nu_lo, nu_hi)), closes, the step budget
     is spent, or the corrector fails at the minimum step. Curve points at the nu values `marks`
     are solved where the curve crosses them."""
-    counter = counter or al._Counter()
+    counter = counter or al.Counter()
     points, codim2 = [first], []
     marked = [first for m in marks if _same(m, first.nu)]
     ds = settings.ds
@@ -454,9 +454,8 @@ def follow_curve(plane, kind, first, box, settings=Settings(), marks=(), counter
     while len(points) <= settings.max_steps:
         a = points[-1]
         b, failure = _step(plane, kind, a, ds, settings, counter)
-        if b is not None and (b.iterations > settings.max_newton - 2
-                              or al._angle(a.tangent, b.tangent) > settings.max_angle):
-            b, failure = None, NEWTON_FAILED     # arclength.follow_branch's rule: stay on the curve
+        if b is not None and al.rejected(a, b, settings):
+            b, failure = None, NEWTON_FAILED
         if b is None:
             if ds <= settings.ds_min * 1.000001:
                 end = failure
@@ -515,7 +514,7 @@ def continue_bifurcation(plane, event, nu0, box, settings=Settings(), direction=
                         "neimark_sacker curves are continued")
     if problems:
         raise ValueError("; ".join(problems))
-    counter = al._Counter()
+    counter = al.Counter()
     first, detail = start(plane, event, nu0, direction, settings, counter)
     if first is None:
         return Curve(event.kind, [], [], [], START_FAILED, detail, plane.periods, counter.n)
