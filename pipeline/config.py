@@ -73,6 +73,8 @@ SCHEMA = {
         "periods": _num(1, 64, kind="int", default=1, help="forcing periods of the orbit continued (period-k orbits)"),
         "period_doubling_switches": _num(0, 6, kind="int", default=2,
                                          help="branch switching depth at period doublings (2: 1 -> 2 -> 4)"),
+        "curves_in": Key("str", default="", help="a second swept axis: continue every fold, period doubling and "
+                                                  "Neimark-Sacker point of the period-1 branches in it (boundary curves)"),
     },
     "numerics": {
         "integrator": Key("choice", default="dop853", choices=("dop853", "rk4")),

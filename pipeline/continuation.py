@@ -22,7 +22,7 @@ import xarray as xr
 
 from pipeline import compute, cube, fileio, schema
 from pipeline.config import ConfigError, continued_axis
-from rotorkernels.continuation import arclength as al, solve_orbit
+from rotorkernels.continuation import arclength as al, solve_orbit, twoparam
 
 RESULT_KIND = "continuation"
 # orbit samples per forcing period for the amplitudes (max |q| and half peak-to-peak)
@@ -38,6 +38,8 @@ class Plan:
     settings: al.Settings
     periods: int
     switches: int
+    second: str = ""        # boundary curves in this swept axis ("": none)
+    marks: tuple = ()       # its grid values (curve points are solved there)
 
     @property
     def range(self):
@@ -75,9 +77,15 @@ def plan(data):
     errors += [f"continuation.{p}" for p in settings.problems()]
     if errors:
         raise ConfigError("\n".join(errors))
+    second = sec["curves_in"]
+    if second and (second == name or len(sweep.get(second, ())) < 2):
+        raise ConfigError(f"continuation.curves_in: {second!r} must be another axis the sweep gives at least two "
+                          f"values (the box of the curves and the grid they are checked on); swept: "
+                          f"{', '.join(a for a in sweep if a != name and len(sweep[a]) > 1) or 'none'}")
     others = [a for a in sweep if a != name]
     lines = tuple(dict(zip(others, map(float, combo))) for combo in itertools.product(*(sweep[a] for a in others)))
-    return Plan(name, start, stop, lines, settings, sec["periods"], sec["period_doubling_switches"])
+    return Plan(name, start, stop, lines, settings, sec["periods"], sec["period_doubling_switches"], second,
+                tuple(float(v) for v in sweep.get(second, ())))
 
 
 def _within(value, par):
@@ -112,6 +120,8 @@ def continue_line(data, where):
     first = al.continue_orbit(family, pl.start, sol.state, pl.range, pl.settings,
                               direction=1 if pl.stop > pl.start else -1)
     records = [branch_record(family, built, first, -1)]
+    if pl.second:
+        records[0]["curves"] = line_curves(data, pl, where, first)
     queue = [(first, 0, 0)]
     while queue:
         branch, depth, index = queue.pop(0)
@@ -123,6 +133,37 @@ def continue_line(data, where):
             records.append(branch_record(family, built, child, index))
             queue.append((child, depth + 1, len(records) - 1))
     return records
+
+
+def line_curves(data, pl, where, branch):
+    """Boundary curves in (parameter, second axis) through the located fold / PD / NS points of
+    a line's period-1 branch: each followed both ways from the event (once if it closes), curve
+    points solved at the second axis's grid values."""
+    build = compute.builder(data)
+    values = {**compute.fixed_values(data), **where}
+    lo2, hi2 = min(pl.marks), max(pl.marks)
+    plane = twoparam.Plane(compute.model_of(data), lambda lam, nu: build({**values, pl.parameter: lam, pl.second: nu}).p,
+                           compute.integrator_settings(data), lam_scale=pl.range[1] - pl.range[0],
+                           nu_scale=hi2 - lo2, periods=float(pl.periods))
+    settings = twoparam.Settings(**{k: getattr(pl.settings, k) for k in ("ds", "ds_min", "ds_max", "max_steps",
+                                                                        "max_angle", "tol")})
+    out = []
+    for event in (e for e in branch.events if e.kind in twoparam.KINDS):
+        for direction in (1, -1):
+            curve = twoparam.continue_bifurcation(plane, event, where[pl.second], (pl.range, (lo2, hi2)), settings,
+                                                  direction, pl.marks)
+            out.append(curve_record(curve, event, where[pl.second]))
+            if curve.end == twoparam.END_REASONS.index("closed"):
+                break
+    return out
+
+
+def curve_record(curve, event, nu0):
+    return {"kind": int(curve.kind), "parameter": np.array([p.lam for p in curve.points]),
+            "second": np.array([p.nu for p in curve.points]),
+            "critical": np.array([p.critical for p in curve.points], complex),
+            "end": int(curve.end), "detail": curve.detail, "start": (float(event.point.lam), float(nu0)),
+            "marked": [(float(p.nu), float(p.lam)) for p in curve.marked]}
 
 
 def branch_record(family, built, branch, parent):
@@ -164,6 +205,52 @@ def _amplitudes(family, built, point):
 def _parameter_attrs(spec, name):
     par = spec.parameter(name)
     return {"units": par.unit, "long_name": par.long_name or par.help or name}
+
+
+# An event lies on a curve already found from another line when the curve's point at the event's
+# value of the second axis (equal up to round-off: nu = eta * scale) is within this (relative) of
+# the event's parameter: far above the
+# curves' and events' own accuracy (~1e-9), far below the distance between distinct curves.
+SAME_CURVE_RTOL = 1e-6
+
+
+def distinct_curves(curves):
+    """The curves, without those whose starting event lies on a curve kept from another event
+    (the same boundary found again from another line)."""
+    kept = []
+    for c in curves:
+        lam, nu = c["start"]
+        found_again = any(k["kind"] == c["kind"] and k["start"] != c["start"] and
+                          any(abs(m_nu - nu) <= 1e-12 * abs(nu) and abs(m_lam - lam) <= SAME_CURVE_RTOL * max(1.0, abs(lam))
+                              for m_nu, m_lam in k["marked"]) for k in kept)
+        if not found_again:
+            kept.append(c)
+    return kept
+
+
+def _curve_variables(spec, pl, curves, par_attrs):
+    """Variables of the boundary curves (dimensions curve x curve_point)."""
+    curves = distinct_curves(curves)
+    n = max([len(c["parameter"]) for c in curves] + [1])
+
+    def pad(key, dtype=float):
+        out = np.full((len(curves), n), np.nan, dtype)
+        for i, c in enumerate(curves):
+            out[i, :len(c[key])] = c[key]
+        return out
+    critical = pad("critical", complex)
+    second = spec.parameter(pl.second)
+    second_attrs = {"units": second.unit, "long_name": second.long_name or pl.second}
+    return {
+        "curve_parameter": (("curve", "curve_point"), pad("parameter"), {**par_attrs, "comment": f"{pl.parameter} along the boundary curve"}),
+        "curve_second": (("curve", "curve_point"), pad("second"), {**second_attrs, "comment": f"{pl.second} along the boundary curve"}),
+        "curve_critical_real": (("curve", "curve_point"), critical.real, {"units": "1", "long_name": "critical Floquet multiplier, real part"}),
+        "curve_critical_imag": (("curve", "curve_point"), critical.imag, {"units": "1", "long_name": "critical Floquet multiplier, imaginary part"}),
+        "curve_type": (("curve",), np.array([c["kind"] for c in curves], "int8"), {"long_name": "bifurcation continued", **_flags(al.EVENT_TYPES)}),
+        "curve_points": (("curve",), np.array([len(c["parameter"]) for c in curves], "int32"), {"units": "1", "long_name": "points on the curve"}),
+        "curve_end": (("curve",), np.array([c["end"] for c in curves], "int8"), {"long_name": "how the curve ended", **_flags(twoparam.END_REASONS)}),
+        "curve_detail": (("curve",), np.array([c["detail"] for c in curves], object), {"long_name": "how the curve ended, in words"}),
+    }
 
 
 def _global_parents(lines):
@@ -229,11 +316,13 @@ def to_dataset(data, pl, lines, provenance):
         "event_state": (("event", "state"), np.array([r["event_state"][k] for _, r, k in ev]).reshape(len(ev), n), dict(schema.VARIABLES["orbit_state"][2])),
         "event_amplitude_max": (("event", "observable"), np.array([r["event_amplitude_max"][k] for _, r, k in ev]).reshape(len(ev), n_obs), {"units": amp_unit, "long_name": "max |observable| over the orbit at the event"}),
     }
+    if pl.second:
+        v.update(_curve_variables(spec, pl, [c for _, r in records for c in r.get("curves", [])], par_attrs))
     coords = {"observable": ("observable", [o.name for o in spec.observables], {"long_name": "observable (units: " + ", ".join(obs_units) + ")"})}
     for axis in (pl.lines[0] if pl.lines else {}):
         attrs = spec.parameter(axis)
         coords[axis] = ("branch", np.array([w[axis] for w, _ in records]), {"units": attrs.unit, "long_name": attrs.long_name or axis})
-    attrs = {**provenance, "result_kind": RESULT_KIND, "parameter": pl.parameter,
+    attrs = {**provenance, "result_kind": RESULT_KIND, "parameter": pl.parameter, "curves_in": pl.second,
              "range": json.dumps(list(pl.range)), "Conventions": "CF-1.10"}
     return xr.Dataset(v, coords=coords, attrs=attrs)
 
