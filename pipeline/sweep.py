@@ -173,16 +173,21 @@ def _client(workers, scheduler):
 
 
 def _provenance(cfg):
+    model = compute.model_of(cfg.data)
+    created = datetime.now(timezone.utc).isoformat(timespec="seconds")
     return {
+        "history": f"{created} rotorsweep {VERSION}: run {cfg.path or 'scene ' + cfg.data['scene']['name']}",
+        "source": f"rotorsweep {VERSION}, model {model.name} version {model.version}: {model.description}",
+        "references": model.references or f"none given by model {model.name}",
         "config_toml": cfg.source,
         "config_hash": cfg.hash(),
         "scene": cfg.data["scene"]["name"],
         "model": cfg.data["scene"]["model"],
-        "model_version": compute.model_of(cfg.data).version,
+        "model_version": model.version,
         "continued_axis": cfg.continued_axis,
         "numerics": json.dumps(cfg.data["numerics"], sort_keys=True),
         "rotorsweep_version": VERSION,
-        "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "created": created,
         "title": f"rotorsweep result cube: {cfg.data['scene']['name']}",
     }
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import query, schema
+from pipeline import cube, query, schema
 from tests.synthetic import synthetic_cube
 
 # `from pipeline import report` can return the function of that name in pipeline/__init__.py
@@ -32,7 +32,8 @@ def cube_4d(angles=(15.0, 40.0), preloads=(0.0, 200.0), step=6.0):
     """synthetic_cube expanded over contact_angle and preload. Preloaded facets are stable; the
     largest clearance has no periodic orbit (NaN multipliers) at the top speeds."""
     ds = synthetic_cube(speed=np.arange(10.0, 250.01, step))
-    ds = ds.drop_vars(["contact_angle", "preload"])
+    ds = ds.drop_vars(["preload"])
+    del ds.attrs[cube.DERIVED_ATTR]             # contact_angle is swept here
     ds = ds.expand_dims(contact_angle=np.asarray(angles, float), preload=np.asarray(preloads, float))
     ds = ds.transpose(*schema.axes_of(schema.model_of({})), ...).copy(deep=True)
     for a in ("contact_angle", "preload"):
@@ -431,7 +432,6 @@ def _cli(args, capsys):
 
 
 def test_point_outside_the_grid_exits_2_before_drawing(tmp_path, capsys):
-    from pipeline import cube
     path = cube.write_cube(synthetic_cube(), tmp_path / "syn.nc")
     code, out, err = _cli(["report", path, "-o", tmp_path / "rep", "--point", "speed=500",
                            "clearance=3.8e-6"], capsys)
@@ -444,42 +444,7 @@ def test_point_outside_the_grid_exits_2_before_drawing(tmp_path, capsys):
     assert code == 2 and "config_toml" in err
 
 
-# A real sweep, small: 19 um, 62-66 Hz (period 2 after the period doubling, period 1 above the
-# refined boundary at ~64.9 Hz), both directions. Built in-process as sweep.run does it, without
-# starting a Dask cluster.
-TINY_SCENE = """
-[scene]
-name = "tiny_attractor"
-model = "jeffcott_clearance"
-[bearing]
-preset = "209"
-stiffness = "bai2006"
-[sweep]
-speed = {start = 62.0, stop = 66.0, step = 2.0}
-clearance = [19.0e-6]
-[analysis]
-attractor = true
-sweep_direction = "both"
-poincare_samples = 32
-max_period = 8
-lyapunov_max_periods = 300
-"""
-
-
-@pytest.fixture(scope="module")
-def tiny_cube(tmp_path_factory):
-    from pipeline import boundaries, config, cube, sweep
-    cfg = config.parse_config(TINY_SCENE)
-    segs = sweep.segments(cfg)
-    ids, index, results = sweep.compute_chunk(cfg.data, segs)
-    ds = cube.assemble(cfg.axes, sweep._fixed_coords(cfg), [(ids, index, results, None)],
-                       sweep._provenance(cfg), n_multipliers=4)
-    ds = boundaries.add_boundary_table(cfg.data, ds)
-    return cube.write_cube(ds, tmp_path_factory.mktemp("tiny") / "tiny.nc")
-
-
 def test_point_detail_on_a_real_attractor_cube(tiny_cube, tmp_path, capsys):
-    from pipeline import cube
     out = tmp_path / "rep"
     code, stdout, err = _cli(["report", tiny_cube, "-o", out, "--point", "speed=63.4",
                               "clearance=19e-6"], capsys)

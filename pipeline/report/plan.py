@@ -4,7 +4,7 @@ import itertools
 
 import numpy as np
 
-from pipeline import schema
+from pipeline import cube, schema
 from pipeline.report.cubeinfo import continued_axis, other_axes
 
 MAX_PANELS = 12        # facet panels per figure; the rest are listed as omitted
@@ -76,8 +76,10 @@ def axes_plan(ds):
     omitted."""
     x = continued_axis(ds)
     swept = [a for a in other_axes(ds) if ds.sizes[a] > 1]
-    fixed = {a: float(np.ravel(ds[a].values)[0]) for a in schema.axes_of(schema.model_of(ds))
-             if a != x and a not in swept and a in ds.coords}
+    derived = cube.derived_parameters(ds)     # NaN: fmt writes "from clearance"
+    fixed = {a: np.nan if a in derived else float(np.ravel(ds[a].values)[0])
+             for a in schema.axes_of(schema.model_of(ds))
+             if a != x and a not in swept and (a in ds.coords or a in derived)}
     facets = swept[1:]
     combos = [dict(zip(facets, vals)) for vals in itertools.product(*(ds[a].values for a in facets))]
     shown, omitted = _cap(combos)
