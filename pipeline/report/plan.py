@@ -22,12 +22,17 @@ TYPE_NAMES = {"fold": "fold", "period_doubling": "period doubling",
               "none": "unclassified"}
 
 
+def unit_display(units):
+    """(factor from cube units, display unit), e.g. "m" -> (1e6, "µm")."""
+    return _UNIT_DISPLAY.get(units, (1.0, units))
+
+
 def axis_display(ds, axis):
     """(factor from cube units, display unit, short label) of an axis, from the CF attributes
     (units, long_name) of its coordinate, the model's axis table where the cube has none."""
     units, long_name = schema.axes_of(schema.model_of(ds)).get(axis, ("1", axis))
     attrs = ds[axis].attrs if axis in ds.coords else {}
-    factor, unit = _UNIT_DISPLAY.get(attrs.get("units", units), (1.0, attrs.get("units", units)))
+    factor, unit = unit_display(attrs.get("units", units))
     return factor, unit, _SHORT_NAMES.get(axis, attrs.get("long_name", long_name))
 
 
