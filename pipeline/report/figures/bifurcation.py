@@ -1,5 +1,8 @@
 """Bifurcation diagram: the Poincare section's x along the continued axis, one panel per line,
-with the intervals where the period-1 orbit is unstable shaded behind the dots."""
+with the intervals where the period-1 orbit is unstable shaded behind the dots.
+
+Not hvplot: the Poincare samples are thinned per grid value (report/poincare.py) to stay
+drawable in matplotlib PNGs; hvplot would draw all of them or rasterize (bokeh only)."""
 import numpy as np
 
 from pipeline import schema

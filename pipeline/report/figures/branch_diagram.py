@@ -1,7 +1,11 @@
 """Branch diagram: the periodic orbit along the continued axis, one panel per line, as
 continuation tools draw it (stable solid, unstable dashed, the refined stability boundaries
 marked LP / PD / NS); where the cube has attractors and the observable is the orbit's Poincare
-coordinate, the brute-force attractor diagram (the Poincare samples) lies behind it."""
+coordinate, the brute-force attractor diagram (the Poincare samples) lies behind it.
+
+Not hvplot: a line dashed where unstable, joined to its solid part, with labelled special points
+(report/branches.py); hvplot draws one style per line (pipeline.explore.branches: gaps at the
+changes)."""
 import numpy as np
 
 from pipeline import schema

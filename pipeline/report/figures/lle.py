@@ -1,4 +1,6 @@
-"""Largest Lyapunov exponent along the continued axis, one panel per line."""
+"""Largest Lyapunov exponent along the continued axis, one panel per line.
+
+Not hvplot: markers by estimation method over a standard-error band (hv.Spread) in one panel."""
 import numpy as np
 
 from pipeline import schema

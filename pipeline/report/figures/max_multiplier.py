@@ -1,5 +1,7 @@
 """Largest Floquet multiplier modulus along the continued axis, one line per value of the first
-other swept axis, the stability limit |lambda| = 1 dashed."""
+other swept axis, the stability limit |lambda| = 1 dashed.
+
+Not hvplot: drawn in the branch style (report/branches.py), which hvplot has no kind for."""
 import numpy as np
 
 from pipeline.report import style

@@ -1,5 +1,8 @@
 """Floquet multipliers in the complex plane at the grid points around chosen stability
-boundaries, coloured by the continued axis, unit circle dashed; one panel per boundary."""
+boundaries, coloured by the continued axis, unit circle dashed; one panel per boundary.
+
+Not hvplot: a few grid points picked around each boundary, in square frames beside the unit
+circle; hv.Points takes the picked arrays directly."""
 import numpy as np
 
 from pipeline import query

@@ -1,6 +1,8 @@
 """Response curves: the periodic orbit's half peak-to-peak amplitude of each observable along the
 continued axis, one line per value of the first other swept axis (stable solid, unstable dashed),
-one panel per observable and facet combination."""
+one panel per observable and facet combination.
+
+Not hvplot: drawn in the branch style (report/branches.py), which hvplot has no kind for."""
 from pipeline import schema
 from pipeline.report import style
 from pipeline.report.branches import branch_elements

@@ -1,5 +1,8 @@
 """Stability-region map: runs of one stability class along the continued axis as rectangles,
-one band per value of the first other swept axis, one panel per facet combination."""
+one band per value of the first other swept axis, one panel per facet combination.
+
+Not hvplot: its rectangles have the refined boundaries as edges; hvplot's grid kinds (quadmesh,
+heatmap) put edges midway between grid values (pipeline.explore.stability_map draws that)."""
 import numpy as np
 
 from pipeline.report import style
