@@ -39,6 +39,8 @@ def cmd_run(args):
                         chunk_points=args.chunk_points, progress=not args.quiet)
     print(f"cube: {path}")
     if args.report:
+        from pipeline import sweep
+        sweep.phase_printer(None if args.quiet else sys.stderr)(f"writing the report into {args.report}")
         files = pipeline.make_report(path, args.report, overwrite=args.overwrite)
         print(f"report: {files['html']}")
     return 0
@@ -262,7 +264,7 @@ def build_parser():
     r.add_argument("--overwrite", action="store_true", help="replace an existing cube (and --report DIR)")
     r.add_argument("--yes", action="store_true", help="allow grids above numerics.max_points")
     r.add_argument("--report", metavar="DIR", help="also write the report into DIR")
-    r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    r.add_argument("-q", "--quiet", action="store_true", help="no phase lines and no progress bar")
     r.set_defaults(func=cmd_run)
 
     c = sub.add_parser("continue", help="pseudo-arclength branches (folds, period doublings, branch "
@@ -289,24 +291,29 @@ def build_parser():
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_point)
 
-    q = sub.add_parser("query", help="select points of a cube and print them")
-    q.add_argument("cube")
+    q = sub.add_parser("query", help="select points of a cube and print them",
+                       description="Select points of a cube and print them. Values are in the cube's "
+                                   "units (SI: speed in Hz, clearance in m, contact angle in degree, "
+                                   "preload in N), in --where as in the output; the report shows "
+                                   "clearances in um.")
+    q.add_argument("cube", help="result cube (.nc) written by rotorsweep run")
     q.add_argument("--where", action="append", metavar="AXIS=SEL",
-                   help="speed=80:120 (range), clearance=3.8e-6 (value), preload=0,100 (list); repeatable")
+                   help="speed=80:120 (range), clearance=3.8e-6 (value, m), preload=0,100 (list); repeatable")
     q.add_argument("--var", action="append", metavar="NAME", help="variable to print; repeatable")
     q.add_argument("--unstable", action="store_true", help="print the unstable speed intervals")
     q.add_argument("--attractors", nargs="?", const="up", choices=["up", "down"],
                    help="print the speed intervals of constant attractor class and period "
                         "(the up sweep, or the down sweep of a sweep_direction = \"both\" cube)")
-    q.add_argument("--format", choices=["table", "csv", "json"], default="table")
+    q.add_argument("--format", choices=["table", "csv", "json"], default="table",
+                   help="aligned text table (default), CSV, or JSON records (null for NaN)")
     q.set_defaults(func=cmd_query)
 
     rp = sub.add_parser("report", help="HTML + PNG stability-map report of a cube")
-    rp.add_argument("cube")
+    rp.add_argument("cube", help="result cube (.nc) written by rotorsweep run")
     rp.add_argument("-o", "--output", help="report directory (default <cube>_report)")
     rp.add_argument("--point", action="append", nargs="+", metavar="AXIS=VALUE",
                     help="a grid point to show in detail (orbit, Poincare section, spectrum): "
-                         "speed=36 clearance=19e-6 (nearest grid point); repeatable")
+                         "speed=36 clearance=19e-6 (cube units; nearest grid point); repeatable")
     rp.add_argument("--overwrite", action="store_true",
                     help="replace a report of another cube in the directory")
     rp.set_defaults(func=cmd_report)
@@ -319,7 +326,7 @@ def build_parser():
     m.set_defaults(func=cmd_modes)
 
     i = sub.add_parser("info", help="what a cube holds")
-    i.add_argument("cube")
+    i.add_argument("cube", help="result cube (.nc) written by rotorsweep run")
     i.set_defaults(func=cmd_info)
     return ap
 

@@ -15,8 +15,11 @@ from pipeline import fileio, schema
 
 CONVENTIONS = "CF-1.10"
 COMPRESSION = {"zlib": True, "complevel": 4}
-# A fixed parameter stored as NaN is not fixed at all; say where its per-point value comes from.
+# An axis parameter that is neither swept nor fixed (given as NaN) is derived per point: it gets no
+# coordinate (CF: no NaN coordinates) but a line in the global attribute DERIVED_ATTR saying where
+# its per-point value comes from.
 DERIVED = {"contact_angle": "derived from clearance per point, see contact_angle_used"}
+DERIVED_ATTR = "derived_parameters"
 _NETCDF_MAGIC = (b"CDF\x01", b"CDF\x02", b"CDF\x05", b"\x89HDF\r\n\x1a\n")
 
 
@@ -38,7 +41,9 @@ def build_dataset(axes, fixed, results, attrs, extra_attrs=None):
     dims = tuple(axes)
     shape = tuple(len(v) for v in axes.values())
     coords = {name: (name, np.asarray(values, float), _axis_attrs(axis_table[name])) for name, values in axes.items()}
-    coords.update({name: ((), float(value), _axis_attrs(axis_table[name], value, name)) for name, value in fixed.items()})
+    derived = [name for name, value in fixed.items() if np.isnan(value)]
+    coords.update({name: ((), float(value), _axis_attrs(axis_table[name]))
+                   for name, value in fixed.items() if name not in derived})
     ds = xr.Dataset(coords=coords)
     for name, data in results.items():
         data = np.asarray(data)
@@ -49,7 +54,15 @@ def build_dataset(axes, fixed, results, attrs, extra_attrs=None):
             ds.coords[dim] = (dim, np.arange(n), {"long_name": f"{dim} index", "units": "1"})
     ds.attrs = {"Conventions": CONVENTIONS, "title": "rotorsweep result cube", **attrs,
                 "rotorsweep_schema_version": schema.SCHEMA_VERSION}
+    if derived:
+        ds.attrs[DERIVED_ATTR] = "; ".join(f"{name}: {DERIVED.get(name, 'not fixed')}" for name in derived)
     return ds
+
+
+def derived_parameters(ds):
+    """{axis parameter: where its value comes from} for those the cube derives per point."""
+    items = (item.partition(":") for item in ds.attrs.get(DERIVED_ATTR, "").split(";"))
+    return {name.strip(): how.strip() for name, _, how in items if name.strip()}
 
 
 def _check_axes(axes, fixed, axis_table):
@@ -67,10 +80,8 @@ def _check_axes(axes, fixed, axis_table):
             raise CubeError(f"axis {name} must be a non-empty 1-D array")
 
 
-def _axis_attrs(entry, value=0.0, name=""):
+def _axis_attrs(entry):
     units, long_name = entry
-    if np.isnan(value):
-        long_name = f"{long_name} ({DERIVED.get(name, 'not fixed')})"
     return {"units": units, "long_name": long_name}
 
 
@@ -78,10 +89,7 @@ def _variable_spec(name, data, variables, extra_attrs):
     """(extra dims, dtype, attrs) of a variable: from the schema, else from extra_attrs."""
     if name in variables:
         extra, dtype, attrs = variables[name]
-        attrs = dict(attrs)
-        if "flag_values" in attrs:  # CF: flag_values has the variable's type
-            attrs["flag_values"] = np.asarray(attrs["flag_values"], dtype)
-        return tuple(extra), np.dtype(dtype), attrs
+        return tuple(extra), np.dtype(dtype), dict(attrs)
     if name in extra_attrs:
         return (), data.dtype, dict(extra_attrs[name])
     raise CubeError(f"variable {name!r} is not in the cube schema; pass its attrs in extra_attrs")
@@ -111,12 +119,11 @@ def write_cube(ds, path, overwrite=False):
 
 
 def _encoding(ds):
-    """Compressed data variables, INT_FILL as integer fill value, no fill value on coordinates."""
+    """Compressed data variables; no fill value on coordinates and integers (schema.INT_FILL_COMMENT),
+    NaN on floats."""
     enc = {name: {"_FillValue": None} for name in ds.coords}
     for name, var in ds.data_vars.items():
-        enc[name] = dict(COMPRESSION)
-        if var.dtype.kind in "iu":
-            enc[name]["_FillValue"] = schema.INT_FILL
+        enc[name] = {**COMPRESSION, **({"_FillValue": None} if var.dtype.kind in "iu" else {})}
     return enc
 
 
@@ -185,9 +192,11 @@ def describe(ds):
         lines.append(f"  {name:<14} {v.size:>5} values  {v.values.min():g} .. {v.values.max():g} "
                      f"{v.attrs.get('units', '')}  ({v.attrs.get('long_name', '')})")
     fixed = [name for name in schema.axes_of(schema.model_of(ds)) if name in ds.coords and ds[name].ndim == 0]
-    if fixed:
+    derived = derived_parameters(ds)
+    if fixed or derived:
         lines += ["", "fixed parameters:"]
         lines += [_describe_fixed(name, ds[name]) for name in fixed]
+        lines += [f"  {name:<14} {'-':<12} {how}" for name, how in derived.items()]
     axes = schema.point_axes(ds)
     lines += ["", "variables:"] + [_describe_variable(name, var, axes) for name, var in ds.data_vars.items()]
     if "orbit_status" in ds:

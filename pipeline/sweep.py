@@ -99,11 +99,15 @@ class Progress:
     """Points done, rate and ETA on stderr (one updating line on a terminal, else a line per
     ~5% of the work)."""
 
-    def __init__(self, total, done=0, stream=sys.stderr):
-        self.total, self.done, self.stream = total, done, stream
-        self.start_done, self.t0 = done, time.monotonic()
-        self.tty = stream.isatty()
+    def __init__(self, total, done=0, stream=None):
+        self.total, self.done, self.stream = total, done, stream or sys.stderr
+        self.tty = self.stream.isatty()
         self.last_reported = -1
+        self.restart()
+
+    def restart(self):
+        """Measure the rate from now (after the cluster start and the compilation)."""
+        self.start_done, self.t0 = self.done, time.monotonic()
 
     def update(self, n):
         self.done += n
@@ -159,30 +163,39 @@ def _prepare_output(output, cfg, resume, overwrite):
     return output, parts
 
 
+def _local_workers(workers):
+    """Worker processes of a local cluster: as asked, else one per core, at least 2."""
+    return workers or max(2, os.cpu_count() or 2)
+
+
 def _client(workers, scheduler):
     from dask.distributed import Client, LocalCluster
 
     if scheduler:
         return Client(scheduler, timeout=f"{4 * SCHEDULER_TIMEOUT_S}s"), None
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
-    n = workers or max(2, os.cpu_count() or 2)
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                           dashboard_address="127.0.0.1:0", env={"NUMBA_NUM_THREADS": "1"},
+    cluster = LocalCluster(n_workers=_local_workers(workers), threads_per_worker=1, processes=True,
+                           host="127.0.0.1", dashboard_address="127.0.0.1:0", env={"NUMBA_NUM_THREADS": "1"},
                            preload=["pipeline.workerinit"])
     return Client(cluster), cluster
 
 
 def _provenance(cfg):
+    model = compute.model_of(cfg.data)
+    created = datetime.now(timezone.utc).isoformat(timespec="seconds")
     return {
+        "history": f"{created} rotorsweep {VERSION}: run {cfg.path or 'scene ' + cfg.data['scene']['name']}",
+        "source": f"rotorsweep {VERSION}, model {model.name} version {model.version}: {model.description}",
+        "references": model.references or f"none given by model {model.name}",
         "config_toml": cfg.source,
         "config_hash": cfg.hash(),
         "scene": cfg.data["scene"]["name"],
         "model": cfg.data["scene"]["model"],
-        "model_version": compute.model_of(cfg.data).version,
+        "model_version": model.version,
         "continued_axis": cfg.continued_axis,
         "numerics": json.dumps(cfg.data["numerics"], sort_keys=True),
         "rotorsweep_version": VERSION,
-        "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "created": created,
         "title": f"rotorsweep result cube: {cfg.data['scene']['name']}",
     }
 
@@ -193,9 +206,10 @@ def _fixed_coords(cfg):
 
 
 def run(cfg, output, workers=None, scheduler=None, resume=False, overwrite=False, chunk_points=None,
-        progress=True, stream=sys.stderr):
+        progress=True, stream=None):
     """Run a sweep from a validated config into a netCDF cube at `output`; returns its path.
-    The output is locked for the whole run, so two runs never share part files."""
+    The output is locked for the whole run, so two runs never share part files. Phase and
+    progress lines go to `stream` (default: sys.stderr at the time of the call)."""
     output = os.path.abspath(output)
     with fileio.output_lock(output, cfg.path or "<default scene>"):
         if scheduler:
@@ -203,7 +217,7 @@ def run(cfg, output, workers=None, scheduler=None, resume=False, overwrite=False
         output, parts = _prepare_output(output, cfg, resume, overwrite)
         try:
             return _run_locked(cfg, output, parts, workers, scheduler, chunk_points,
-                               stream if progress else None)
+                               (stream or sys.stderr) if progress else None)
         except OSError as exc:
             raise SweepError(_write_failure(exc, output, parts)) from None
         finally:
@@ -211,22 +225,52 @@ def run(cfg, output, workers=None, scheduler=None, resume=False, overwrite=False
                 os.rmdir(parts)       # nothing finished: leave no empty parts directory behind
 
 
+PHASE = "== "     # the start of a phase line (a log reader can tell them from progress lines)
+
+
+def phase_printer(stream):
+    """say(text): one line per phase of a run on `stream` (None: silent), whole lines even where
+    the progress bar redraws one line, so a non-interactive log reads in order."""
+    def say(text):
+        if stream is not None:
+            stream.write(f"{PHASE}{text}\n")
+            stream.flush()
+    return say
+
+
 def _run_locked(cfg, output, parts, workers, scheduler, chunk_points, stream):
+    say = phase_printer(stream)
     config_hash = cfg.hash()
     segs = segments(cfg)
     done = _done_segments(parts, config_hash)
     todo = [s for s in segs if s.id not in done]
-    total = sum(len(s.points) for s in segs)
-    bar = Progress(total, total - sum(len(s.points) for s in todo), stream) if stream else None
     if todo:
-        _warm_up(cfg.data, todo[0])
-        _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points, bar)
+        total = sum(len(s.points) for s in segs)
+        bar = Progress(total, total - sum(len(s.points) for s in todo), stream) if stream else None
+        _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points, bar, say)
+    say("refining the stability boundaries and assembling the cube")
     ds = cube.assemble(cfg.axes, _fixed_coords(cfg), cube.read_parts(parts), _provenance(cfg),
                        n_multipliers=compute.model_of(cfg.data).n_state, config_hash=config_hash)
     ds = boundaries.add_boundary_table(cfg.data, ds)
+    say(f"writing the cube: {output}")
     path = cube.write_cube(ds, output, overwrite=True)
     _remove_parts(parts)
     return path
+
+
+def _count(n, noun):
+    return f"{n} {noun}{'' if n == 1 else 's'}"
+
+
+def _compile(data, segment, say):
+    """Compile (or load from Numba's cache) the kernels in the driver before the workers need them."""
+    import numba
+
+    say(f"compiling the kernels for this scene: about a minute the first time on a machine, then "
+        f"loaded from the cache ({numba.config.CACHE_DIR})")
+    start = time.monotonic()
+    _warm_up(data, segment)
+    say(f"kernels ready ({time.monotonic() - start:.1f} s)")
 
 
 def _write_failure(exc, output, parts):
@@ -260,16 +304,24 @@ def check_scheduler(address, timeout=SCHEDULER_TIMEOUT_S):
 RESUBMITS = 3
 
 
-def _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points, bar):
+def _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points, bar, say):
     from dask.distributed import KilledWorker, as_completed
 
+    say(f"connecting to the Dask scheduler at {scheduler}" if scheduler else
+        f"starting {_count(_local_workers(workers), 'local Dask worker')} (127.0.0.1)")
     client, cluster = _client(workers, scheduler)
     try:
         n_workers = max(1, len(client.scheduler_info()["workers"]))
+        say(f"{_count(n_workers, 'worker')}; Dask dashboard: {client.dashboard_link}")
+        _compile(cfg.data, todo[0], say)
+        chunks = plan_chunks(todo, n_workers, chunk_points)
+        say(f"sweeping {_count(sum(len(s.points) for s in todo), 'point')} in {_count(len(chunks), 'chunk')}")
+        if bar:
+            bar.restart()
         # The config goes with every task (a few kB), not scattered: a scattered copy lives only
         # on workers and is lost for good once every worker holding it has died.
         submit = functools.partial(client.submit, compute_chunk, cfg.data, pure=False)
-        futures = {submit(chunk): (chunk, 0) for chunk in plan_chunks(todo, n_workers, chunk_points)}
+        futures = {submit(chunk): (chunk, 0) for chunk in chunks}
         pending = as_completed(futures)
         for future in pending:
             chunk, resubmits = futures.pop(future)

@@ -9,7 +9,7 @@ boundary table (add_boundary_table)."""
 import numpy as np
 import xarray as xr
 
-from pipeline import schema
+from pipeline import cube, schema
 
 JEFFCOTT_VARIABLES = schema.variables_of(schema.model_of({}))
 
@@ -63,7 +63,6 @@ def synthetic_cube(speed=None, clearance=None, n_multipliers=4, attractor=False,
         "state": ("state", np.arange(4)),
         **({"sample": ("sample", np.arange(n_samples)), "exponent": ("exponent", np.arange(4))}
            if attractor else {}),
-        "contact_angle": ((), np.nan, {"units": "degree", "long_name": "bearing contact angle (from clearance)"}),
         "preload": ((), 0.0, {"units": "N", "long_name": "axial preload"}),
     })
     for name, values in data.items():
@@ -75,6 +74,7 @@ def synthetic_cube(speed=None, clearance=None, n_multipliers=4, attractor=False,
         "rotorsweep_schema_version": schema.SCHEMA_VERSION,
         "config_toml": "[scene]\nname = \"synthetic\"\n",
         "config_hash": "0" * 64,
+        cube.DERIVED_ATTR: f"contact_angle: {cube.DERIVED['contact_angle']}",
     })
     return add_boundary_table(ds) if boundaries else ds
 

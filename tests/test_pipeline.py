@@ -138,3 +138,46 @@ def test_boundary_table_refines_each_stability_change(small_cube):
     intervals = json.loads(rotorsweep("query", small_cube, "--unstable", "--format", "json").stdout)
     onsets = [iv["onset"] for iv in intervals if iv["onset"] is not None]
     assert any(abs(o - table[0]["speed"]) < 1e-12 for o in onsets)
+
+
+PHASES = ("starting 1 local Dask worker (127.0.0.1)", "1 worker; Dask dashboard: http://127.0.0.1:",
+          "compiling the kernels for this scene", "kernels ready", "sweeping 2 points in 1 chunk",
+          "refining the stability boundaries", "writing the cube", "writing the report into")
+
+
+def test_run_prints_its_phases_before_the_progress_lines(tmp_path, capsys):
+    """In a non-interactive log (captured stderr) each phase is a line of its own, in order, and
+    the progress lines come after the sweep starts."""
+    from pipeline import cli
+    cfg = tmp_path / "phases.toml"
+    cfg.write_text(SMALL.replace("stop = 100.0", "stop = 73.0").replace("7.6e-6, 19.0e-6", "19.0e-6"))
+    code = cli.main(["run", str(cfg), "-o", str(tmp_path / "p.nc"), "--workers", "1",
+                     "--report", str(tmp_path / "rep")])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    lines = err.splitlines()
+    phases = [line for line in lines if line.startswith(sweep.PHASE)]
+    assert len(phases) == len(PHASES) and all(p[len(sweep.PHASE):].startswith(w) for p, w in zip(phases, PHASES)), err
+    progress = [i for i, line in enumerate(lines) if " points " in line and line.startswith("[")]
+    assert progress and lines.index(phases[4]) < progress[0] < lines.index(phases[5])
+    assert "\r" not in err                         # not a terminal: whole lines only
+
+
+def test_every_cli_argument_has_help():
+    """Every argument of every subcommand says what it is (`rotorsweep CMD --help`)."""
+    import argparse
+
+    from pipeline import cli
+    parser = cli.build_parser()
+    (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    missing = [f"{name} {a.dest}" for name, p in sub.choices.items() for a in p._actions
+               if not a.help and not isinstance(a, argparse._HelpAction)]
+    assert missing == []
+
+
+def test_import_rotorsweep_gives_the_public_api():
+    import rotorsweep
+    assert rotorsweep.__version__ == sweep.VERSION
+    assert all(hasattr(rotorsweep, name) for name in rotorsweep.__all__)
+    assert all(callable(getattr(rotorsweep, name)) for name in ("run", "open_cube", "unstable_intervals",
+                                                                "make_report", "point", "load_config"))

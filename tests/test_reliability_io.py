@@ -8,7 +8,7 @@ import time
 import numpy as np
 import pytest
 
-from pipeline import cli, config, cube, fileio
+from pipeline import cli, config, cube, fileio, sweep
 from tests.test_cube import AXES4, PROVENANCE, random_results, _write_random_parts
 from tests.test_pipeline import CLI, SMALL, rotorsweep
 
@@ -296,5 +296,6 @@ def test_ctrl_c_prints_one_line_and_no_worker_traceback(tmp_path):
     os.killpg(proc.pid, signal.SIGINT)            # what a terminal's Ctrl-C does: the whole group
     err = proc.communicate(timeout=120)[1]
     assert proc.returncode == 130
-    lines = [line for line in err.splitlines() if " points " not in line]      # progress lines
+    lines = [line for line in err.splitlines()                 # not the phase and progress lines
+             if " points " not in line and not line.startswith(sweep.PHASE)]
     assert lines == ["rotorsweep: interrupted; finished chunks are kept, rerun with --resume"], err

@@ -9,13 +9,15 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import query, schema
+from pipeline import cube, query, schema
 from tests.synthetic import synthetic_cube
 
 # `from pipeline import report` can return the function of that name in pipeline/__init__.py
 report = importlib.import_module("pipeline.report")
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+BASE_PNGS = ("stability_map.png", "branches.png", "max_multiplier.png", "response.png", "campbell.png",
+             "multiplier_paths.png")
 
 
 def all_stable_cube():
@@ -32,7 +34,8 @@ def cube_4d(angles=(15.0, 40.0), preloads=(0.0, 200.0), step=6.0):
     """synthetic_cube expanded over contact_angle and preload. Preloaded facets are stable; the
     largest clearance has no periodic orbit (NaN multipliers) at the top speeds."""
     ds = synthetic_cube(speed=np.arange(10.0, 250.01, step))
-    ds = ds.drop_vars(["contact_angle", "preload"])
+    ds = ds.drop_vars(["preload"])
+    del ds.attrs[cube.DERIVED_ATTR]             # contact_angle is swept here
     ds = ds.expand_dims(contact_angle=np.asarray(angles, float), preload=np.asarray(preloads, float))
     ds = ds.transpose(*schema.axes_of(schema.model_of({})), ...).copy(deep=True)
     for a in ("contact_angle", "preload"):
@@ -79,8 +82,7 @@ def _colour_pixels(img, hex_colour, tol=0.02):
 def test_writes_all_files(made):
     for name, (ds, res) in made.items():
         assert res["html"].name == "report.html" and res["html"].stat().st_size > 100_000
-        pngs = ["stability_map.png", "max_multiplier.png", "multiplier_paths.png"]
-        pngs += ["bifurcation.png", "lle.png"] if name == "attractor" else []
+        pngs = list(BASE_PNGS) + (["bifurcation.png", "lle.png"] if name == "attractor" else [])
         assert [p.name for p in res["png"]] == pngs
         assert [f.filename for f in report.figures_for(ds)] == pngs
         assert res["csv"].name == "unstable_intervals.csv"
@@ -92,8 +94,7 @@ def test_cubes_without_attractor_variables_keep_the_old_figure_set(made):
     for name in ("base", "stable", "4d"):
         ds, res = made[name]
         assert not report.has_attractor(ds)
-        assert [p.name for p in res["png"]] == ["stability_map.png", "max_multiplier.png",
-                                                "multiplier_paths.png"]
+        assert [p.name for p in res["png"]] == list(BASE_PNGS)
         text = _read_html(res)
         assert "Bifurcation diagram" not in text and "Lyapunov" not in text
         assert "attractor (" not in text
@@ -178,11 +179,11 @@ def test_figures_run_along_the_cubes_continued_axis():
     fall back to the first swept dimension (speed)."""
     ds = synthetic_cube()
     assert "continued_axis" not in ds.attrs and report.continued_axis(ds) == "speed"
-    assert [f.caption(ds) for f in report.figures_for(ds)][1] == "Largest Floquet multiplier vs shaft speed"
+    assert [f.caption(ds) for f in report.figures_for(ds)][2] == "Largest Floquet multiplier vs shaft speed"
     ds.attrs["continued_axis"] = "clearance"
     plan = report.axes_plan(ds)
     assert (plan["x"], plan["y"]) == ("clearance", "speed")
-    assert report.figures_for(ds)[1].caption(ds) == "Largest Floquet multiplier vs radial clearance"
+    assert report.figures_for(ds)[2].caption(ds) == "Largest Floquet multiplier vs radial clearance"
     segments, _ = report.line_segments(ds, {"speed": 100.0})
     assert segments[0][0] < ds["clearance"].values[0] and segments[-1][1] > ds["clearance"].values[-1]
     assert segments[-1][1] < 1e-4       # clearance units, not speeds
@@ -311,7 +312,7 @@ def test_attractor_figures_are_nontrivial_pngs_in_the_html(made):
     text = _read_html(res)
     for caption in ("Bifurcation diagram", "Largest Lyapunov exponent vs shaft speed"):
         assert f"<h2>{caption}</h2>" in text
-    assert text.count('<div class="figure">') == 5
+    assert text.count('<div class="figure">') == len(BASE_PNGS) + 2
     # bifurcation dots: both sweep colours and the shading of the unstable intervals
     img = mpimg.imread(pngs["bifurcation.png"])
     for colour in report.SWEEP_COLOURS:
@@ -431,7 +432,6 @@ def _cli(args, capsys):
 
 
 def test_point_outside_the_grid_exits_2_before_drawing(tmp_path, capsys):
-    from pipeline import cube
     path = cube.write_cube(synthetic_cube(), tmp_path / "syn.nc")
     code, out, err = _cli(["report", path, "-o", tmp_path / "rep", "--point", "speed=500",
                            "clearance=3.8e-6"], capsys)
@@ -444,42 +444,7 @@ def test_point_outside_the_grid_exits_2_before_drawing(tmp_path, capsys):
     assert code == 2 and "config_toml" in err
 
 
-# A real sweep, small: 19 um, 62-66 Hz (period 2 after the period doubling, period 1 above the
-# refined boundary at ~64.9 Hz), both directions. Built in-process as sweep.run does it, without
-# starting a Dask cluster.
-TINY_SCENE = """
-[scene]
-name = "tiny_attractor"
-model = "jeffcott_clearance"
-[bearing]
-preset = "209"
-stiffness = "bai2006"
-[sweep]
-speed = {start = 62.0, stop = 66.0, step = 2.0}
-clearance = [19.0e-6]
-[analysis]
-attractor = true
-sweep_direction = "both"
-poincare_samples = 32
-max_period = 8
-lyapunov_max_periods = 300
-"""
-
-
-@pytest.fixture(scope="module")
-def tiny_cube(tmp_path_factory):
-    from pipeline import boundaries, config, cube, sweep
-    cfg = config.parse_config(TINY_SCENE)
-    segs = sweep.segments(cfg)
-    ids, index, results = sweep.compute_chunk(cfg.data, segs)
-    ds = cube.assemble(cfg.axes, sweep._fixed_coords(cfg), [(ids, index, results, None)],
-                       sweep._provenance(cfg), n_multipliers=4)
-    ds = boundaries.add_boundary_table(cfg.data, ds)
-    return cube.write_cube(ds, tmp_path_factory.mktemp("tiny") / "tiny.nc")
-
-
 def test_point_detail_on_a_real_attractor_cube(tiny_cube, tmp_path, capsys):
-    from pipeline import cube
     out = tmp_path / "rep"
     code, stdout, err = _cli(["report", tiny_cube, "-o", out, "--point", "speed=63.4",
                               "clearance=19e-6"], capsys)
@@ -497,7 +462,7 @@ def test_point_detail_on_a_real_attractor_cube(tiny_cube, tmp_path, capsys):
     assert "<tr><th>attractor (sweep up, cube)</th><td>periodic</td></tr>" in text
     assert "<tr><th>  period</th><td>2 forcing periods</td></tr>" in text
     assert "from the cube&#x27;s attractor_state" in text
-    assert text.count('<div class="figure">') == 6
+    assert text.count('<div class="figure">') == len(BASE_PNGS) + 3      # + bifurcation, lle, point
     # the real boundary table drives the map: its refined speed is a rectangle edge
     ds = cube.open_cube(tiny_cube)
     (speed,) = ds["boundary_speed"].values
@@ -518,3 +483,95 @@ def test_point_attractor_flag(capsys):
     assert code == 0
     assert "attractor         periodic" in out and "attractor period  2 forcing periods" in out
     assert "(derived)" in out and "periodic orbit    unstable (period_doubling)" in out
+
+
+# ----------------------------------------------------------------------------- bokeh models
+
+def _bokeh_plots(fig):
+    """The bokeh figures (plots) of a figure rendered for the HTML page."""
+    from bokeh.models import Plot
+    hv = report.holoviews()
+    with report.style.backend("bokeh"):
+        return list(hv.render(fig, backend="bokeh").select({"type": Plot}))
+
+
+def _tooltips(plot):
+    from bokeh.models import HoverTool
+    return [dict(h.tooltips) for h in plot.select({"type": HoverTool})]
+
+
+def test_multiplier_panels_are_square_with_units_on_the_colour_bar():
+    """Round unit circles: bokeh keeps data_aspect=1 only with frame_width == frame_height."""
+    from bokeh.models import ColorBar
+    plots = _bokeh_plots(report.fig_multiplier_paths(synthetic_cube(), "bokeh"))
+    assert plots
+    for plot in plots:
+        assert plot.frame_width == plot.frame_height and plot.width is None and plot.height is None
+        (bar,) = plot.select({"type": ColorBar})
+        assert bar.title == "shaft speed [Hz]"
+        (tips,) = _tooltips(plot)
+        assert set(tips) == {"Re λ", "Im λ", "shaft speed [Hz]"}
+
+
+def test_every_line_plot_has_a_hover_with_the_parameter_and_the_value():
+    ds = attractor_cube()
+    from pipeline.report.figures import branch_diagram, campbell, response
+    values = {report.fig_max_multiplier: "max |multiplier|", report.fig_bifurcation: "Poincaré x [µm]",
+              report.fig_lle: "largest Lyapunov exp. [1/s]", campbell.fig_campbell: "frequency [Hz]",
+              response.fig_response: "amplitude of",
+              branch_diagram.fig_branches: "Poincaré x of the orbit [µm]"}
+    for make, value in values.items():
+        plots = _bokeh_plots(make(ds, "bokeh"))
+        assert plots, make.__name__
+        for plot in plots:
+            tips = _tooltips(plot)
+            assert any("shaft speed [Hz]" in t and any(k.startswith(value) for k in t) for t in tips), \
+                (make.__name__, tips)
+
+
+def test_stability_map_hover_reads_interval_line_and_class():
+    (plot,) = _bokeh_plots(report.fig_stability_map(synthetic_cube(boundaries=True), "bokeh"))
+    tips = _tooltips(plot)
+    assert tips and all(t == {"shaft speed [Hz] interval": "@{start}{0.[0000]} to @{end}{0.[0000]}",
+                              "radial clearance": "@{line}", "orbit": "@{class}"} for t in tips)
+    from bokeh.models import ColumnDataSource
+    lines = {v for s in plot.select({"type": ColumnDataSource}) for v in s.data.get("line", [])}
+    assert {"3.8 µm", "19 µm"} <= lines
+
+
+def _glyphs(plot, kind):
+    """The plot's own glyph renderers of a kind (select() would also reach the other panels')."""
+    return [r for r in plot.renderers if type(r.glyph).__name__ == kind]
+
+
+def test_branch_diagram_draws_stable_solid_unstable_dashed_and_labels_special_points():
+    from pipeline.report.figures import branch_diagram
+    ds = attractor_cube()
+    plots = _bokeh_plots(branch_diagram.fig_branches(ds, "bokeh", observable="amplitude_x"))
+    assert len(plots) == ds.sizes["clearance"]
+    titles = {report.where_label(ds, {"clearance": c}): c for c in ds["clearance"].values}
+    for plot in plots:
+        c = titles[plot.title.text]
+        dashes = {r.name: list(r.glyph.line_dash) for r in _glyphs(plot, "Line")}
+        assert dashes == {"periodic orbit, stable": [], "periodic orbit, unstable": [6]}
+        (text,) = _glyphs(plot, "Text")
+        rows = [b for b in range(ds.sizes["boundary"]) if ds["boundary_clearance"].values[b] == c]
+        names = {1: "LP", 2: "PD", 3: "NS"}
+        want = sorted((float(ds["boundary_speed"].values[b]), names[int(ds["boundary_type"].values[b])])
+                      for b in rows)
+        data = text.data_source.data
+        assert sorted(zip(data["speed"], data["label"])) == want
+
+
+def test_branch_segments_follow_the_branch_order_through_a_fold():
+    """A branch that turns back (x not monotonic): runs are cut along the branch, not by x."""
+    x = np.array([0.0, 1.0, 2.0, 1.5, 1.0, 0.5])
+    stable = np.array([True, True, True, False, False, False])
+    solid, dashed, marks, text = report.branch_elements(x, x ** 2, stable, [(2.0, 4.0, "LP")],
+                                                           "matplotlib", dims=("p", "a"))
+    np.testing.assert_array_equal(solid.dimension_values("p"), [0.0, 1.0, 2.0, 1.5])
+    np.testing.assert_array_equal(dashed.dimension_values("p"), [1.5, 1.0, 0.5])
+    assert solid.opts.get("style", "matplotlib").kwargs["linestyle"] == "-"
+    assert dashed.opts.get("style", "matplotlib").kwargs["linestyle"] == "--"
+    assert list(text.dimension_values("label")) == ["LP"]
+    assert report.stability_runs([True, False, False, True]) == [(0, 2, True), (1, 4, False), (3, 4, True)]

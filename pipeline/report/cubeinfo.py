@@ -92,3 +92,42 @@ def attractor_counts(ds, suffix=""):
     if missing:
         out["not computed"] = missing
     return out
+
+
+# What a branch can show per observable o of the model: (name pattern, label pattern)
+BRANCH_KINDS = {"section": ("section_{o}", "Poincaré {o} of the orbit"),
+                "amplitude": ("amplitude_{o}", "amplitude of {o}"),
+                "mean": ("{o}_mean", "mean {o}")}
+
+
+def branch_observables(ds):
+    """{name: (label, units)} of the observables a branch diagram can show: per observable o of
+    the model its orbit's Poincare coordinate section_o, amplitude_o and o_mean."""
+    out = {}
+    for o in schema.model_of(ds).observables:
+        for name, label in BRANCH_KINDS.values():
+            out[name.format(o=o.name)] = (label.format(o=o.name), o.unit)
+    return out
+
+
+def default_observable(ds):
+    """The first observable's Poincare coordinate where the attractor diagram can lie behind it,
+    else its amplitude."""
+    o = schema.model_of(ds).observables[0].name
+    return f"section_{o}" if has_attractor(ds) else f"amplitude_{o}"
+
+
+def branch_values(line, observable):
+    """The observable at every point of (a line of) the cube, an array over its point dims (SI
+    units; NaN where no orbit was found). A section_o value is the periodic orbit's state at
+    t = 0 (orbit_state) seen through o."""
+    spec = schema.model_of(line)
+    if observable.startswith("section_"):
+        k = [o.name for o in spec.observables].index(observable[len("section_"):])
+        states = line["orbit_state"].transpose(..., "state").values
+        periods = line["forcing_period"].values
+        flat = [spec.observe(u, T)[k] for u, T in zip(states.reshape(-1, states.shape[-1]), periods.ravel())]
+        values = np.reshape(flat, periods.shape)
+    else:
+        values = line[observable].values.astype(float)
+    return np.where(line["orbit_status"].values == 0, values, np.nan)

@@ -13,7 +13,7 @@ from pipeline.report.registry import figures_for
 from pipeline.report.tables import interval_rows, write_csv
 
 _VARS = ("orbit_status", "stable", "bifurcation", "max_abs_multiplier", "multiplier_real",
-         "multiplier_imag")
+         "multiplier_imag", "forcing_period", "orbit_state")
 # attractor variables the report's figures and header read (with their _down twins)
 _ATTRACTOR_VARS = ("attractor", "period", "lle", "lle_stderr", "lle_method", "poincare_x")
 
@@ -22,6 +22,7 @@ def _load(ds):
     """The variables the figures, tables and header need, in memory (not the Poincare y or the
     Lyapunov spectrum: a Fig. 13 cube holds 1.5 M Poincare samples per variable)."""
     names = [v for v in _VARS if v in ds.variables]
+    names += [v for v in schema.observable_variables(schema.model_of(ds)) if v in ds.variables]
     names += [v + sfx for v in _ATTRACTOR_VARS for sfx in ("", schema.DOWN_SUFFIX) if v + sfx in ds.variables]
     names += [v for v in ("hysteresis",) if v in ds.variables]
     names += [v for v in ds.data_vars if ds[v].dims == ("boundary",)]     # the boundary table

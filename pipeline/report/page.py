@@ -86,10 +86,15 @@ def save_html(path, title, header, figs, intervals, config_toml, points=()):
     pairs, then the points' (title, figure, table HTML)) as bokeh components, with bokeh's
     JavaScript inlined (no network). Panel's own save() would link its theme CSS from a CDN
     even with inline resources."""
+    from bokeh.core.validation import silence
+    from bokeh.core.validation.warnings import FIXED_SIZING_MODE
     from bokeh.embed import components
     from bokeh.embed.bundle import bundle_for_objs_and_resources
     from bokeh.resources import INLINE
 
+    # the multiplier panels are sized by their frame (square, for round unit circles), which
+    # bokeh's check of fixed sizing does not know
+    silence(FIXED_SIZING_MODE, True)
     hv = holoviews()
     models = [hv.render(fig, backend="bokeh") for _, fig in figs]
     models += [hv.render(fig, backend="bokeh") for _, fig, _ in points]

@@ -4,7 +4,7 @@ import itertools
 
 import numpy as np
 
-from pipeline import schema
+from pipeline import cube, schema
 from pipeline.report.cubeinfo import continued_axis, other_axes
 
 MAX_PANELS = 12        # facet panels per figure; the rest are listed as omitted
@@ -22,12 +22,17 @@ TYPE_NAMES = {"fold": "fold", "period_doubling": "period doubling",
               "none": "unclassified"}
 
 
+def unit_display(units):
+    """(factor from cube units, display unit), e.g. "m" -> (1e6, "µm")."""
+    return _UNIT_DISPLAY.get(units, (1.0, units))
+
+
 def axis_display(ds, axis):
     """(factor from cube units, display unit, short label) of an axis, from the CF attributes
     (units, long_name) of its coordinate, the model's axis table where the cube has none."""
     units, long_name = schema.axes_of(schema.model_of(ds)).get(axis, ("1", axis))
     attrs = ds[axis].attrs if axis in ds.coords else {}
-    factor, unit = _UNIT_DISPLAY.get(attrs.get("units", units), (1.0, attrs.get("units", units)))
+    factor, unit = unit_display(attrs.get("units", units))
     return factor, unit, _SHORT_NAMES.get(axis, attrs.get("long_name", long_name))
 
 
@@ -76,8 +81,10 @@ def axes_plan(ds):
     omitted."""
     x = continued_axis(ds)
     swept = [a for a in other_axes(ds) if ds.sizes[a] > 1]
-    fixed = {a: float(np.ravel(ds[a].values)[0]) for a in schema.axes_of(schema.model_of(ds))
-             if a != x and a not in swept and a in ds.coords}
+    derived = cube.derived_parameters(ds)     # NaN: fmt writes "from clearance"
+    fixed = {a: np.nan if a in derived else float(np.ravel(ds[a].values)[0])
+             for a in schema.axes_of(schema.model_of(ds))
+             if a != x and a not in swept and (a in ds.coords or a in derived)}
     facets = swept[1:]
     combos = [dict(zip(facets, vals)) for vals in itertools.product(*(ds[a].values for a in facets))]
     shown, omitted = _cap(combos)

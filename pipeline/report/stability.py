@@ -57,11 +57,11 @@ def counts(ds):
     return by_status, by_class
 
 
-def refined_edges(ds, where):
+def refined_boundaries(ds, where):
     """The refined boundaries of the line `where` (values of the other swept axes; axes left out
     must have one value) from the cube's boundary table (boundary_<continued axis>, ...):
-    [(grid_low, grid_high, refined value)], only entries that were refined and lie inside their
-    grid bracket."""
+    [(grid_low, grid_high, refined value, type name)], only entries that were refined and lie
+    inside their grid bracket."""
     name = f"boundary_{continued_axis(ds)}"
     if name not in ds or not ds.sizes.get("boundary", 0):
         return []
@@ -71,7 +71,13 @@ def refined_edges(ds, where):
     for axis, v in where.items():
         if f"boundary_{axis}" in ds:
             ok &= np.isclose(ds[f"boundary_{axis}"].values.astype(float), v, rtol=1e-9, atol=0.0)
-    return [(float(a), float(b), float(c)) for a, b, c in zip(low[ok], high[ok], value[ok])]
+    kinds = [schema.BIFURCATION[int(k)] for k in ds["boundary_type"].values[ok]]
+    return [(float(a), float(b), float(c), k) for a, b, c, k in zip(low[ok], high[ok], value[ok], kinds)]
+
+
+def refined_edges(ds, where):
+    """refined_boundaries without the type: [(grid_low, grid_high, refined value)]."""
+    return [row[:3] for row in refined_boundaries(ds, where)]
 
 
 def line_segments(ds, where):

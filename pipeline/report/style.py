@@ -2,9 +2,14 @@
 layout of several panels into one figure. Nothing here knows about cubes."""
 import contextlib
 
+import numpy as np
+
 DPI = 120
 
 SWEEP_COLOURS = ("#111111", "#D55E00")       # up (the plain variables), down (_down)
+# Line colours for the values of the first other axis (Okabe-Ito, then Tol's muted).
+LINE_COLOURS = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#D55E00", "#56B4E9", "#000000",
+                "#882255", "#117733", "#999933", "#44AA99", "#AA4499")
 
 _MARKERS = {"o": "circle", "^": "triangle", "s": "square", "v": "inverted_triangle", "D": "diamond"}
 
@@ -68,6 +73,15 @@ def legend_markers(plot, element):
         if hasattr(handle, "set_sizes"):
             handle.set_sizes([30.0])
         handle.set_alpha(1.0)
+
+
+def legend_points(hv, x, y, kdims, label):
+    """hv.Points that keeps its legend entry when empty (one NaN point, drawn nowhere): the
+    matplotlib grids show one legend for all panels, on a panel that may lack the group."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    if not x.size:
+        x, y = np.array([np.nan]), np.array([np.nan])
+    return hv.Points((x, y), kdims, label=label)
 
 
 def ncols(n):

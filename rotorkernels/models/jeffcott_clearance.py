@@ -271,4 +271,10 @@ SPEC = ModelSpec(
     derived={"contact_angle_used": ("degree", "contact angle used in the force law")},
     check=check,
     fill_defaults=fill_defaults,
+    references=("Bai C., Xu Q., Zhang X.: Nonlinear stability of balanced rotor due to the effect of "
+                "ball bearing internal clearance, Applied Mathematics and Mechanics 27(2), 159-169 "
+                "(2006) (clearance law, 209 bearing); Filipkovsky S. V.: nonlinear normal modes of "
+                "rotor vibrations on rolling bearings (2010) and stability and bifurcations of "
+                "vibrations of a rotor on ball bearings with axial preload (2016) (preloaded law, "
+                "angular-contact geometry)"),
 )

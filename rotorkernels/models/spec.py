@@ -74,6 +74,7 @@ class ModelSpec:
     derived: dict = field(default_factory=dict)   # name -> (unit, long_name) of Built.derived
     check: Callable = None          # check(data, axes) -> list of error strings (config level)
     fill_defaults: Callable = None  # fill_defaults(data): defaults that depend on other keys
+    references: str = ""            # the model's sources (the cube's CF `references` attribute)
 
     @property
     def n_state(self):

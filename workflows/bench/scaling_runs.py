@@ -21,8 +21,9 @@ def driver_max_rss_kib():
 
 # --- instrumentation ----------------------------------------------------------------------------
 
-# (phase, module, function). The first five follow one another in pipeline.sweep.run; the last
-# two run inside the compute phase (in the driver, while the workers compute).
+# (phase, module, function). The first five follow one another in pipeline.sweep.run, except that
+# driver_warmup runs inside compute (after the cluster has started); the last two run inside the
+# compute phase (in the driver, while the workers compute).
 PHASES = (("driver_warmup", "pipeline.sweep", "_warm_up"),
           ("compute", "pipeline.sweep", "_run_chunks"),
           ("assemble", "pipeline.cube", "assemble"),

@@ -1,18 +1,23 @@
-"""Largest Lyapunov exponent along the continued axis, one panel per line."""
+"""Largest Lyapunov exponent along the continued axis, one panel per line.
+
+Not hvplot: markers by estimation method over a standard-error band (hv.Spread) in one panel."""
 import numpy as np
 
 from pipeline import schema
 from pipeline.report import style
+from pipeline.report.branches import hover
 from pipeline.report.cubeinfo import continued_axis, has_attractor, has_down, select, sweep_labels
-from pipeline.report.figures.panels import legend_points, line_figure, panel_opts
-from pipeline.report.plan import axis_display
+from pipeline.report.figures.panels import line_figure, panel_opts
+from pipeline.report.plan import axis_display, axis_label
 from pipeline.report.registry import Figure, register
 
+LLE_LABEL = "largest Lyapunov exp. [1/s]"
 LLE_COLOURS = {"integrated": "#0072B2", "derived": "#999999", "chaotic": "#CC0000", "band": "#56B4E9"}
 
 
-def _estimates(hv, x, grid, lle, line, backend):
-    """Integrated and derived estimates as different markers, chaotic points ringed."""
+def _estimates(hv, x, grid, lle, line, backend, tooltips):
+    """Integrated and derived estimates as different markers, chaotic points ringed; in bokeh
+    with a hover (`tooltips`)."""
     if backend == "bokeh":
         size = float(np.clip(260.0 / max(grid.size, 1), 3.0, 7.0))
     else:
@@ -26,7 +31,9 @@ def _estimates(hv, x, grid, lle, line, backend):
     for key, mask, marker, hollow, label in groups:
         m = mask & ok
         look = style.marker_style(backend, LLE_COLOURS[key], size * (1.9 if hollow else 1.0), marker, hollow)
-        elements.append(legend_points(hv, grid[m], lle[m], [x, "lle"], label).opts(**look, backend=backend))
+        if backend == "bokeh":
+            look = {**look, "tools": ["hover"], "hover_tooltips": tooltips + [("estimate", label)]}
+        elements.append(style.legend_points(hv, grid[m], lle[m], [x, "lle"], label).opts(**look, backend=backend))
     return elements
 
 
@@ -50,9 +57,9 @@ def _lle_panel(hv, ds, where, backend, slot):
         elements.append(hv.Curve((grid, down), x, "lle", label=labels[1])
                         .opts(color=style.SWEEP_COLOURS[1], **style.line_style(backend, 1.2, dash=True),
                               backend=backend))
-    elements += _estimates(hv, x, grid, lle, line, backend)
-    return hv.Overlay(elements).opts(show_grid=True,
-                                     **panel_opts(ds, slot, backend, "largest Lyapunov exp. [1/s]", grid))
+    tooltips = hover((x, "lle"), (axis_label(ds, x), LLE_LABEL))
+    elements += _estimates(hv, x, grid, lle, line, backend, tooltips)
+    return hv.Overlay(elements).opts(show_grid=True, **panel_opts(ds, slot, backend, LLE_LABEL, grid))
 
 
 def fig_lle(ds, backend="bokeh"):

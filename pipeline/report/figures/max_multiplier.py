@@ -1,15 +1,17 @@
 """Largest Floquet multiplier modulus along the continued axis, one line per value of the first
-other swept axis, the stability limit |lambda| = 1 dashed."""
+other swept axis, the stability limit |lambda| = 1 dashed.
+
+Not hvplot: drawn in the branch style (report/branches.py), which hvplot has no kind for."""
 import numpy as np
 
+from pipeline.report import style
+from pipeline.report.branches import SPECIAL_LABELS, branch_elements
 from pipeline.report.cubeinfo import continued_axis, select
 from pipeline.report.figures.panels import Sizes, facet_figure, panel_opts
-from pipeline.report.plan import axes_plan, axis_display, where_label
+from pipeline.report.plan import axes_plan, axis_display, axis_label, where_label
 from pipeline.report.registry import Figure, register
+from pipeline.report.stability import refined_boundaries
 
-# Line colours for the values of the first other axis (Okabe-Ito, then Tol's muted).
-LINE_COLOURS = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#D55E00", "#56B4E9", "#000000",
-                "#882255", "#117733", "#999933", "#44AA99", "#AA4499")
 
 
 def _mu_range(ds):
@@ -25,26 +27,27 @@ def _mu_range(ds):
 
 
 def _mu_panel(hv, ds, where, backend, slot, y):
-    """Curves of max |multiplier| along the continued axis, one per value of y, plus the
-    |lambda| = 1 line."""
+    """max |multiplier| along the continued axis, one branch per value of y (stable solid,
+    unstable dashed, the refined boundaries marked where |lambda| = 1), plus the |lambda| = 1
+    line."""
     sub = select(ds, where)
     x = continued_axis(ds)
     grid = sub[x].values
-    # no explicit alpha (style.line_style): bokeh would then draw unselected lines opaque
-    width = {"line_width": 2} if backend == "bokeh" else {"linewidth": 1.8}
-    curves = []
+    labels = (axis_label(ds, x), "max |multiplier|")
+    elements = []
     for i, v in enumerate(sub[y].values if y else [None]):
+        line_where = {**where, y: float(v)} if y else where
         line = sub.sel({y: v}) if y else sub
-        c = hv.Curve((grid, line["max_abs_multiplier"].values), x, "max_abs_multiplier",
-                     label=where_label(ds, {y: v}) if y else "max |λ|")
-        curves.append(c.opts(color=LINE_COLOURS[i % len(LINE_COLOURS)], backend=backend, **width))
+        specials = [(value, 1.0, SPECIAL_LABELS[kind]) for _, _, value, kind in refined_boundaries(ds, line_where)
+                    if kind in SPECIAL_LABELS]
+        elements += branch_elements(grid, line["max_abs_multiplier"].values, line["stable"].values == 1,
+                                    specials, backend, dims=(x, "max_abs_multiplier"), labels=labels,
+                                    colour=style.LINE_COLOURS[i % len(style.LINE_COLOURS)],
+                                    name=where_label(ds, {y: v}) if y else "max |λ|", legend_unstable=False)
     ref = hv.Curve(([grid.min(), grid.max()], [1.0, 1.0]), x, "max_abs_multiplier",
                    label="|λ| = 1 (stability limit)")
-    if backend == "bokeh":
-        ref = ref.opts(color="#C00000", line_dash="dashed", line_width=2, backend=backend)
-    else:
-        ref = ref.opts(color="#C00000", linestyle="--", linewidth=1.5, backend=backend)
-    return hv.Overlay(curves + [ref]).opts(show_grid=True, **panel_opts(ds, slot, backend, "max |multiplier|"))
+    elements.append(ref.opts(color="#C00000", **style.line_style(backend, 1.5, dash=True), backend=backend))
+    return hv.Overlay(elements).opts(show_grid=True, **panel_opts(ds, slot, backend, labels[1]))
 
 
 def fig_max_multiplier(ds, backend="bokeh"):
@@ -59,7 +62,8 @@ def fig_max_multiplier(ds, backend="bokeh"):
     # a numeric aspect is a data aspect in holoviews-mpl, wrong on a log axis
     sizes = Sizes(bokeh_one=(1150, 440), bokeh_grid=(560, 300), aspect_one="auto" if logy else 2.4,
                   aspect_grid="auto" if logy else 1.5, inches_one=(11, 4.6), grid_width=9.6)
-    head = f"Largest Floquet multiplier modulus vs {axis_display(ds, continued_axis(ds))[2]}"
+    head = (f"Largest Floquet multiplier modulus vs {axis_display(ds, continued_axis(ds))[2]} "
+            "(solid: stable, dashed: unstable)")
     return facet_figure(ds, backend, head, panel, sizes)
 
 

@@ -1,16 +1,21 @@
 """Floquet multipliers in the complex plane at the grid points around chosen stability
-boundaries, coloured by the continued axis, unit circle dashed; one panel per boundary."""
+boundaries, coloured by the continued axis, unit circle dashed; one panel per boundary.
+
+Not hvplot: a few grid points picked around each boundary, in square frames beside the unit
+circle; hv.Points takes the picked arrays directly."""
 import numpy as np
 
 from pipeline import query
 from pipeline.report import style
+from pipeline.report.branches import hover
 from pipeline.report.cubeinfo import continued_axis, other_axes, select
-from pipeline.report.plan import TYPE_NAMES, axis_display, where_label
+from pipeline.report.plan import TYPE_NAMES, axis_display, axis_label, where_label
 from pipeline.report.registry import Figure, register
 
 MAX_BOUNDARIES = 6     # stability boundaries in the multiplier figure
 BOUNDARY_POINTS = 5    # grid points drawn on each side of a boundary
 HEAD = "Floquet multipliers around stability boundaries (unit circle dashed)"
+FRAME = 260            # bokeh frame (plot area) side in pixels
 
 
 def stability_boundaries(ds, intervals=None):
@@ -84,12 +89,14 @@ def _boundary_panel(hv, ds, b, backend):
     r = max(1.15, float(np.nanmax(np.hypot(re[ok], im[ok]))) * 1.1 if ok.any() else 1.15)
     colour = {"color": x, "cmap": "viridis", "clim": (float(line[x].min()), float(line[x].max())),
               "colorbar": True}
-    clabel = f"{x} [{axis_display(ds, x)[1]}]"
+    clabel = axis_label(ds, x)
     common = {"title": _boundary_title(ds, b), "xlim": (-r, r), "ylim": (-r, r), "xlabel": "Re λ",
               "ylabel": "Im λ"}
     if backend == "bokeh":
-        pts = pts.opts(**colour, size=7, colorbar_opts={"title": clabel}, tools=["hover"], backend=backend)
-        return (_unit_circle(hv, backend) * pts).opts(width=400, height=340, data_aspect=1,
+        tips = hover(("Re", "Im", x), ("Re λ", "Im λ", clabel))
+        pts = pts.opts(**colour, size=7, clabel=clabel, tools=["hover"], hover_tooltips=tips, backend=backend)
+        # a round unit circle: data_aspect=1 holds only with a square frame, not width/height
+        return (_unit_circle(hv, backend) * pts).opts(frame_width=FRAME, frame_height=FRAME, data_aspect=1,
                                                       fontsize=style.fonts(backend), **common, backend=backend)
     pts = pts.opts(**colour, s=28, clabel=clabel, backend=backend)
     return (_unit_circle(hv, backend) * pts).opts(aspect="equal", fontsize={**style.fonts(backend), "title": 10},
@@ -103,7 +110,7 @@ def _no_boundary(hv, ds, backend):
                   ylabel="Im λ", fontsize=style.fonts(backend), backend=backend)
     if backend == "bokeh":
         return (_unit_circle(hv, backend) * empty.opts(text_align="center", backend=backend)).opts(
-            width=600, height=560, data_aspect=1, **common)
+            frame_width=2 * FRAME, frame_height=2 * FRAME, data_aspect=1, **common)
     return (_unit_circle(hv, backend) * empty.opts(fontsize=12, backend=backend)).opts(
         aspect="equal", fig_inches=(7, 7), **common)
 

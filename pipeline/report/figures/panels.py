@@ -2,8 +2,6 @@
 placement, shared by the figures; each figure supplies the function that draws one panel."""
 from typing import NamedTuple
 
-import numpy as np
-
 from pipeline.report import style
 from pipeline.report.cubeinfo import axis_edges, continued_axis
 from pipeline.report.plan import axes_plan, axis_label, figure_title, line_plan, where_label
@@ -25,15 +23,6 @@ class Sizes(NamedTuple):
     aspect_grid: object
     inches_one: tuple       # matplotlib figure size
     grid_width: float       # matplotlib figure width of a grid; 2.7 inches per row
-
-
-def legend_points(hv, x, y, kdims, label):
-    """hv.Points that keeps its legend entry when empty (one NaN point, drawn nowhere): the
-    matplotlib grids show one legend for all panels, on a panel that may lack the group."""
-    x, y = np.asarray(x, float), np.asarray(y, float)
-    if not x.size:
-        x, y = np.array([np.nan]), np.array([np.nan])
-    return hv.Points((x, y), kdims, label=label)
 
 
 def panel_opts(ds, slot, backend, ylabel, grid=None):

@@ -1,10 +1,13 @@
 """Stability-region map: runs of one stability class along the continued axis as rectangles,
-one band per value of the first other swept axis, one panel per facet combination."""
+one band per value of the first other swept axis, one panel per facet combination.
+
+Not hvplot: its rectangles have the refined boundaries as edges; hvplot's grid kinds (quadmesh,
+heatmap) put edges midway between grid values (pipeline.explore.stability_map draws that)."""
 import numpy as np
 
 from pipeline.report import style
 from pipeline.report.figures.panels import Sizes, facet_figure, panel_opts
-from pipeline.report.plan import axes_plan, axis_display, axis_label
+from pipeline.report.plan import axes_plan, axis_display, axis_label, fmt, where_label
 from pipeline.report.registry import Figure, register
 from pipeline.report.stability import (class_colour, class_keys, class_name, line_segments,
                                        refined_edges)
@@ -28,13 +31,18 @@ def map_rectangles(ds, plan, where):
     return rects, edges
 
 
-def _class_rectangles(hv, rows, c, x0, unit, backend):
+def _class_rectangles(hv, rows, c, x0, bands, labels, backend):
     """The rectangles of one class; an empty class still gets its legend entry (a zero-size
-    rectangle)."""
-    data = [(*r, class_name(c), r[0], r[2]) for r in rows] or [(x0, 0, x0, 0, class_name(c), x0, x0)]
-    el = hv.Rectangles(data, vdims=["class", f"from [{unit}]", f"to [{unit}]"], label=class_name(c))
-    hover = {"tools": ["hover"]} if backend == "bokeh" else {}
-    return el.opts(**style.fill_style(backend, class_colour(c)), **hover, backend=backend)
+    rectangle). bands: the line's value per band as text; labels: the x and band axis labels,
+    for a hover that reads the interval, the line and the class (not the rectangle corners)."""
+    data = ([(*r, class_name(c), r[0], r[2], bands[round(r[1] + RECT_HALF)]) for r in rows]
+            or [(x0, 0, x0, 0, class_name(c), x0, x0, "")])
+    el = hv.Rectangles(data, vdims=["class", "start", "end", "line"], label=class_name(c))
+    if backend == "bokeh":
+        tips = [(f"{labels[0]} interval", "@{start}{0.[0000]} to @{end}{0.[0000]}"),
+                (labels[1], "@{line}"), ("orbit", "@{class}")]
+        el = el.opts(tools=["hover"], hover_tooltips=tips, backend=backend)
+    return el.opts(**style.fill_style(backend, class_colour(c)), backend=backend)
 
 
 def _map_panel(hv, ds, where, backend, slot, plan, keys):
@@ -44,8 +52,11 @@ def _map_panel(hv, ds, where, backend, slot, plan, keys):
     x, y = plan["x"], plan["y"]
     grid = ds[x].values
     x0 = float(grid[0])
-    unit = axis_display(ds, x)[1]
-    elements = [_class_rectangles(hv, rects.get(-1.0 if np.isnan(c) else c, []), c, x0, unit, backend)
+    if y is None:
+        bands, labels = [where_label(ds, where) or "-"], (axis_label(ds, x), "line")
+    else:
+        bands, labels = [fmt(ds, y, v) for v in ds[y].values], (axis_label(ds, x), axis_display(ds, y)[2])
+    elements = [_class_rectangles(hv, rects.get(-1.0 if np.isnan(c) else c, []), c, x0, bands, labels, backend)
                 for c in keys]
     if refined_edges(ds, {}) or edges:
         segs = [(e, i - RECT_HALF, e, i + RECT_HALF) for e, i in edges] or [(x0, 0, x0, 0)]

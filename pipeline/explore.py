@@ -1,0 +1,144 @@
+"""A cube explored the hvplot way, in a notebook: one function per figure kind of the report,
+each returning an hvplot (HoloViews) object, also reachable as methods of the `rotorsweep`
+accessor that importing this module (or `rotorsweep`) registers on xarray Datasets:
+
+    import rotorsweep
+    ds = rotorsweep.open_cube("out/demo.nc")
+    ds.max_abs_multiplier.hvplot(x="speed", by="clearance")   # plain hvplot works on a cube
+    ds.rotorsweep.max_multiplier()                            # the same with the |lambda| = 1 line
+    ds.rotorsweep.branches("amplitude_y")                     # stable solid, unstable dashed
+
+Swept axes beyond x and `by` become hvplot's widgets. The report draws with HoloViews elements
+where hvplot has no such kind (see pipeline/report/figures/*); its Campbell figure is built on
+campbell() here.
+"""
+import hvplot.pandas  # noqa: F401  (registers .hvplot on pandas and xarray objects)
+import hvplot.xarray  # noqa: F401
+import numpy as np
+import xarray as xr
+
+from pipeline import schema
+from pipeline.report.cubeinfo import (branch_observables, branch_values, continued_axis,
+                                      default_observable, has_attractor, other_axes)
+from pipeline.report.figures.campbell import campbell_points
+from pipeline.report.stability import CLASSES, PALETTE, stability_class
+from pipeline.report.style import holoviews
+
+
+def _by(ds):
+    """The first other swept axis with several values (one line per value), else None."""
+    return next((a for a in other_axes(ds) if ds.sizes[a] > 1), None)
+
+
+def _point_array(ds, values, name, attrs):
+    dims = schema.point_axes(ds)
+    return xr.DataArray(values, coords={d: ds[d] for d in dims}, dims=dims, name=name, attrs=attrs)
+
+
+def _limit(y, **style):
+    return holoviews().HLine(y).opts(color="#C00000", line_dash="dashed", **style)
+
+
+def max_multiplier(ds, **kwargs):
+    """max |multiplier| along the continued axis, one line per value of the first other axis,
+    and the |lambda| = 1 line."""
+    return ds["max_abs_multiplier"].hvplot.line(x=continued_axis(ds), by=_by(ds), **kwargs) * _limit(1.0)
+
+
+def stability_map(ds, **kwargs):
+    """The stability class of every grid point (colours of the report's map) over the continued
+    axis and the first other axis (grid cells, not the refined edges of the report's map)."""
+    cls = _point_array(ds, stability_class(ds), "stability_class",
+                       {"long_name": "stability class: " + ", ".join(f"{i} {c}" for i, c in enumerate(CLASSES))})
+    x, y = continued_axis(ds), _by(ds)
+    if y is None:
+        return cls.hvplot.scatter(x=x, color="stability_class", cmap=list(PALETTE), **kwargs)
+    return cls.hvplot.quadmesh(x=x, y=y, cmap=list(PALETTE), clim=(-0.5, len(CLASSES) - 0.5), **kwargs)
+
+
+def branches(ds, observable=None, **kwargs):
+    """The periodic orbit's `observable` (see report.branch_observables; default: Poincare
+    coordinate with attractors, else amplitude) along the continued axis, stable solid and
+    unstable dashed, one colour per value of the first other axis."""
+    observable = observable or default_observable(ds)
+    label, units = branch_observables(ds)[observable]
+    da = _point_array(ds, branch_values(ds, observable), observable, {"long_name": label, "units": units})
+    stable = ds["stable"] == 1
+    x, by = continued_axis(ds), _by(ds)
+    return (da.where(stable).hvplot.line(x=x, by=by, **kwargs)
+            * da.where(~stable).hvplot.line(x=x, by=by, line_dash="dashed", **kwargs))
+
+
+def response(ds, observable=None, **kwargs):
+    """Half peak-to-peak amplitude of an observable (default: the first) along the continued
+    axis, one line per value of the first other axis."""
+    observable = observable or schema.model_of(ds).observables[0].name
+    return ds[f"amplitude_{observable}"].hvplot.line(x=continued_axis(ds), by=_by(ds), **kwargs)
+
+
+def campbell(ds, **kwargs):
+    """Frequency of the critical multiplier (arg(lambda) / 2 pi / T) vs shaft speed, one series
+    per value of the first other axis, with the 1x line."""
+    speed = ds[continued_axis(ds)].values
+    one_x = holoviews().Curve((speed, speed), continued_axis(ds), "frequency", label="1x").opts(line_dash="dashed")
+    return campbell_points(ds, _by(ds)).opts(**kwargs) * one_x
+
+
+def bifurcation(ds, variable="poincare_x", **kwargs):
+    """The attractors' Poincare samples along the continued axis (all samples of a point in one
+    column; pass rasterize=True for large cubes)."""
+    if not has_attractor(ds):
+        raise ValueError("the cube has no attractor diagnostics ([analysis] attractor = true)")
+    return ds[variable].hvplot.scatter(x=continued_axis(ds), y=variable, by=_by(ds), groupby=[], size=2, **kwargs)
+
+
+def lle(ds, **kwargs):
+    """Largest Lyapunov exponent along the continued axis, one line per value of the first
+    other axis, and the zero line."""
+    return ds["lle"].hvplot.line(x=continued_axis(ds), by=_by(ds), **kwargs) * _limit(0.0)
+
+
+def multipliers(ds, where=None, **kwargs):
+    """The Floquet multipliers in the complex plane along a line (`where`: the other axes'
+    values), coloured by the continued axis, in a square frame with the unit circle."""
+    line = ds.sel(where) if where else ds
+    t = np.linspace(0, 2 * np.pi, 361)
+    circle = holoviews().Curve((np.cos(t), np.sin(t)), "multiplier_real", "multiplier_imag").opts(
+        color="#555555", line_dash="dashed")
+    table = line[["multiplier_real", "multiplier_imag"]].to_dataframe().reset_index()
+    pts = table.hvplot.scatter(x="multiplier_real", y="multiplier_imag", c=continued_axis(ds), cmap="viridis",
+                               hover_cols=[continued_axis(ds)], frame_width=320, frame_height=320,
+                               data_aspect=1, **kwargs)
+    return circle * pts
+
+
+@xr.register_dataset_accessor("rotorsweep")
+class CubeAccessor:
+    """ds.rotorsweep.<figure>(...): the functions of pipeline.explore on this cube."""
+
+    def __init__(self, ds):
+        self._ds = ds
+
+    def max_multiplier(self, **kwargs):
+        return max_multiplier(self._ds, **kwargs)
+
+    def stability_map(self, **kwargs):
+        return stability_map(self._ds, **kwargs)
+
+    def branches(self, observable=None, **kwargs):
+        return branches(self._ds, observable, **kwargs)
+
+    def response(self, observable=None, **kwargs):
+        return response(self._ds, observable, **kwargs)
+
+    def campbell(self, **kwargs):
+        return campbell(self._ds, **kwargs)
+
+    def bifurcation(self, variable="poincare_x", **kwargs):
+        return bifurcation(self._ds, variable, **kwargs)
+
+    def lle(self, **kwargs):
+        return lle(self._ds, **kwargs)
+
+    def multipliers(self, where=None, **kwargs):
+        return multipliers(self._ds, where, **kwargs)

@@ -1,0 +1,58 @@
+"""Response curves: the periodic orbit's half peak-to-peak amplitude of each observable along the
+continued axis, one line per value of the first other swept axis (stable solid, unstable dashed),
+one panel per observable and facet combination.
+
+Not hvplot: drawn in the branch style (report/branches.py), which hvplot has no kind for."""
+from pipeline import schema
+from pipeline.report import style
+from pipeline.report.branches import branch_elements
+from pipeline.report.cubeinfo import branch_values, continued_axis, select
+from pipeline.report.figures.panels import Slot, panel_opts
+from pipeline.report.plan import (MAX_PANELS, axes_plan, axis_display, axis_label, figure_title,
+                                  unit_display, where_label)
+from pipeline.report.registry import Figure, register
+
+
+def _response_panel(hv, ds, where, backend, slot, observable, y):
+    sub = select(ds, where)
+    x = continued_axis(ds)
+    o = next(o for o in schema.model_of(ds).observables if o.name == observable)
+    factor, unit = unit_display(o.unit)
+    labels = (axis_label(ds, x), f"amplitude of {o.name} [{unit}]")
+    elements = []
+    for i, v in enumerate(sub[y].values if y else [None]):
+        line = sub.sel({y: v}) if y else sub
+        elements += branch_elements(line[x].values, branch_values(line, f"amplitude_{o.name}") * factor,
+                                    line["stable"].values == 1, (), backend, dims=(x, f"amplitude_{o.name}"),
+                                    labels=labels, colour=style.LINE_COLOURS[i % len(style.LINE_COLOURS)],
+                                    name=where_label(ds, {y: v}) if y else o.name, legend_unstable=False)
+    return hv.Overlay(elements).opts(show_grid=True, **panel_opts(ds, slot, backend, labels[1]))
+
+
+def fig_response(ds, backend="bokeh"):
+    """Half peak-to-peak amplitude of each observable along the continued axis, one line per value
+    of the first other swept axis; one panel per observable (and facet combination, at most
+    MAX_PANELS in all)."""
+    hv = style.holoviews()
+    plan = axes_plan(ds)
+    head = (f"Response curves: amplitude (half peak-to-peak) vs {axis_display(ds, plan['x'])[2]} "
+            "(solid: stable, dashed: unstable)")
+    title = figure_title(ds, head, plan)
+    observables = [o.name for o in schema.model_of(ds).observables]
+    cells = [(o, where) for where in plan["shown"] for o in observables][:MAX_PANELS]
+    columns = 1 if len(cells) == 1 else 2
+    panels = []
+    for k, (o, where) in enumerate(cells):
+        show_x, _ = style.grid_opts(k, len(cells), backend, columns)
+        long_name = next(ob.long_name for ob in schema.model_of(ds).observables if ob.name == o)
+        title = f"{o}: {long_name}" + (f" ({where_label(ds, where)})" if where else "")
+        slot = Slot(title, backend == "bokeh" or k == columns - 1, show_x, True)
+        panel = _response_panel(hv, ds, where, backend, slot, o, plan["y"])
+        size = {"width": 1150 if columns == 1 else 570, "height": 380} if backend == "bokeh" else {"aspect": 1.6}
+        panels.append(panel.opts(**size, backend=backend))
+    return style.layout(hv, panels, backend, columns, title, fig_inches=(11, 4.2 * -(-len(cells) // columns) + 0.6))
+
+
+register(Figure(name="response", filename="response.png", title="Response curves (amplitude vs {axis})",
+                applies=lambda ds: bool((ds["orbit_status"].values == 0).any()),
+                build=lambda ds, backend, intervals: fig_response(ds, backend)))

@@ -1,0 +1,40 @@
+"""Fixtures shared by test modules."""
+import pytest
+
+# A real sweep, small: 19 um, 62-66 Hz (period 2 after the period doubling, period 1 above the
+# refined boundary at ~64.9 Hz), both directions. Built in-process as sweep.run does it, without
+# starting a Dask cluster.
+TINY_SCENE = """
+[scene]
+name = "tiny_attractor"
+model = "jeffcott_clearance"
+[bearing]
+preset = "209"
+stiffness = "bai2006"
+[sweep]
+speed = {start = 62.0, stop = 66.0, step = 2.0}
+clearance = [19.0e-6]
+[analysis]
+attractor = true
+sweep_direction = "both"
+poincare_samples = 32
+max_period = 8
+lyapunov_max_periods = 300
+"""
+
+
+@pytest.fixture(scope="session")
+def tiny_run(tmp_path_factory):
+    """(cube path, the chunk's results as the workers return them) of the TINY_SCENE sweep."""
+    from pipeline import boundaries, config, cube, sweep
+    cfg = config.parse_config(TINY_SCENE)
+    ids, index, results = sweep.compute_chunk(cfg.data, sweep.segments(cfg))
+    ds = cube.assemble(cfg.axes, sweep._fixed_coords(cfg), [(ids, index, results, None)],
+                       sweep._provenance(cfg), n_multipliers=4)
+    ds = boundaries.add_boundary_table(cfg.data, ds)
+    return cube.write_cube(ds, tmp_path_factory.mktemp("tiny") / "tiny.nc"), results
+
+
+@pytest.fixture(scope="session")
+def tiny_cube(tiny_run):
+    return tiny_run[0]
