@@ -246,9 +246,9 @@ def _curve_variables(spec, pl, curves, par_attrs):
         "curve_second": (("curve", "curve_point"), pad("second"), {**second_attrs, "comment": f"{pl.second} along the boundary curve"}),
         "curve_critical_real": (("curve", "curve_point"), critical.real, {"units": "1", "long_name": "critical Floquet multiplier, real part"}),
         "curve_critical_imag": (("curve", "curve_point"), critical.imag, {"units": "1", "long_name": "critical Floquet multiplier, imaginary part"}),
-        "curve_type": (("curve",), np.array([c["kind"] for c in curves], "int8"), {"long_name": "bifurcation continued", **_flags(al.EVENT_TYPES)}),
+        "curve_type": (("curve",), np.array([c["kind"] for c in curves], "int8"), {"long_name": "bifurcation continued", **schema._flag(al.EVENT_TYPES)}),
         "curve_points": (("curve",), np.array([len(c["parameter"]) for c in curves], "int32"), {"units": "1", "long_name": "points on the curve"}),
-        "curve_end": (("curve",), np.array([c["end"] for c in curves], "int8"), {"long_name": "how the curve ended", **_flags(twoparam.END_REASONS)}),
+        "curve_end": (("curve",), np.array([c["end"] for c in curves], "int8"), {"long_name": "how the curve ended", **schema._flag(twoparam.END_REASONS)}),
         "curve_detail": (("curve",), np.array([c["detail"] for c in curves], object), {"long_name": "how the curve ended, in words"}),
     }
 
@@ -260,11 +260,6 @@ def _global_parents(lines):
         out += [r["parent"] + offset if r["parent"] >= 0 else -1 for r in recs]
         offset += len(recs)
     return np.array(out, "int32")
-
-
-def _flags(meanings, first=0):
-    """CF flag attributes of an int8 variable (flag_values of the variable's own type)."""
-    return {"flag_values": np.arange(first, first + len(meanings), dtype="int8"), "flag_meanings": " ".join(meanings)}
 
 
 def to_dataset(data, pl, lines, provenance):
@@ -301,13 +296,14 @@ def to_dataset(data, pl, lines, provenance):
         "multiplier_imag": (("branch", "point", "multiplier"), mult.imag, {"units": "1", "long_name": "Floquet multiplier, imaginary part"}),
         "max_abs_multiplier": (("branch", "point"), absmax, {"units": "1", "long_name": "largest Floquet multiplier modulus"}),
         "stable": (("branch", "point"), stable, {"long_name": "orbit is stable (max |multiplier| < 1)",
-                                                 **_flags(("no_point", "unstable", "stable"), first=-1)}),
+                                                 "flag_values": np.array([-1, 0, 1], "int8"),
+                                                 "flag_meanings": "no_point unstable stable"}),
         "branch_points": (("branch",), np.array([len(r["parameter"]) for _, r in records], "int32"), {"units": "1", "long_name": "points on the branch"}),
         "branch_periods": (("branch",), np.array([r["periods"] for _, r in records], "int32"), {"units": "1", "long_name": "forcing periods per orbit (k of period-k)"}),
         "branch_parent": (("branch",), _global_parents(lines), {"units": "1", "long_name": "branch index of the branch this one was switched from (-1: none)"}),
-        "branch_end": (("branch",), np.array([r["end"] for _, r in records], "int8"), {"long_name": "how the branch ended", **_flags(al.END_REASONS)}),
+        "branch_end": (("branch",), np.array([r["end"] for _, r in records], "int8"), {"long_name": "how the branch ended", **schema._flag(al.END_REASONS)}),
         "branch_detail": (("branch",), np.array([r["detail"] for _, r in records], object), {"long_name": "how the branch ended, in words"}),
-        "event_type": (("event",), np.array([r["event_type"][k] for _, r, k in ev], "int8"), {"long_name": "located bifurcation point", **_flags(al.EVENT_TYPES)}),
+        "event_type": (("event",), np.array([r["event_type"][k] for _, r, k in ev], "int8"), {"long_name": "located bifurcation point", **schema._flag(al.EVENT_TYPES)}),
         "event_branch": (("event",), np.array([b for b, _, _ in ev], "int32"), {"units": "1", "long_name": "branch index of the event"}),
         "event_point": (("event",), np.array([r["event_index"][k] for _, r, k in ev], "int32"), {"units": "1", "long_name": "branch point just before the event"}),
         "event_parameter": (("event",), np.array([r["event_parameter"][k] for _, r, k in ev], float), {**par_attrs, "comment": "located on the branch to the arclength tolerance"}),

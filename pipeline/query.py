@@ -175,7 +175,7 @@ def _run_type(line, i0):
 
 
 def _refined_crossings(ds, others):
-    """(other axes' values..., unstable grid value next to the crossing) -> refined value."""
+    """(other axes' values..., unstable grid value next to the crossing) -> (refined value, type)."""
     name = f"boundary_{schema.continued_axis(ds)}"
     if name not in ds:
         return {}
@@ -184,7 +184,8 @@ def _refined_crossings(ds, others):
         key = tuple(ds[f"boundary_{a}"].values[k] for a in others)
         losing = int(ds["boundary_direction"].values[k]) == 0
         unstable_side = ds["boundary_grid_high" if losing else "boundary_grid_low"].values[k]
-        out[(*key, float(unstable_side))] = float(ds[name].values[k])
+        out[(*key, float(unstable_side))] = (float(ds[name].values[k]),
+                                             schema.BIFURCATION[int(ds["boundary_type"].values[k])])
     return out
 
 
@@ -196,8 +197,11 @@ def unstable_intervals(ds):
     Each entry: the other axes' values, `start`/`end` (the first and last grid value of the
     run), `onset`/`offset` (the refined crossings of the cube's boundary table just below
     `start` and just above `end`; NaN where there is none, e.g. at a grid edge or next to a point
-    without orbit), `n_points`, `type` (fold / period_doubling / neimark_sacker / no_orbit: the
-    state at the run's first point) and the run's largest `max_abs_multiplier`."""
+    without orbit), `n_points`, `type` (fold / period_doubling / neimark_sacker / no_orbit: how
+    the stable orbit before the run lost stability, from the boundary table where the onset is
+    refined -- a fold there although the run's first grid orbit, on another branch, may be
+    period-doubled -- else the state at the run's first point) and the run's largest
+    `max_abs_multiplier`."""
     others = _other_axes(ds)
     speed = ds[schema.continued_axis(ds)].values
     refined = _refined_crossings(ds, others)
@@ -212,10 +216,10 @@ def unstable_intervals(ds):
                 **{a: float(v) for a, v in where.items()},
                 "start": float(speed[i0]),
                 "end": float(speed[i1]),
-                "onset": refined.get((*values, float(speed[i0])), float("nan")),
-                "offset": refined.get((*values, float(speed[i1])), float("nan")),
+                "onset": refined.get((*values, float(speed[i0])), (float("nan"),))[0],
+                "offset": refined.get((*values, float(speed[i1])), (float("nan"),))[0],
                 "n_points": int(i1 - i0 + 1),
-                "type": _run_type(line, i0),
+                "type": refined.get((*values, float(speed[i0])), (None, _run_type(line, i0)))[1],
                 "max_abs_multiplier": float(np.nanmax(mu)) if np.isfinite(mu).any() else float("nan"),
             })
     return out

@@ -4,30 +4,16 @@ solid, unstable dashed, located folds LP, period doublings PD and Neimark-Sacker
 marked and labelled), max |multiplier| along the branches, and the table of located points.
 
 A branch that turns back at a fold is not a function of the parameter: it is drawn in its own
-order (runs of one stability along the branch), never sorted by the parameter."""
+order (runs of one stability along the branch, pipeline.report.branches), never sorted by the
+parameter."""
 import html
 from pathlib import Path
 
 import numpy as np
 
 from pipeline import continuation, query
-from pipeline.report import page, style
-from pipeline.report.figures.max_multiplier import LINE_COLOURS
+from pipeline.report import branches, page, style
 from rotorkernels.continuation import arclength as al
-
-EVENT_MARKERS = {"LP": ("s", "#C00000"), "PD": ("^", "#0060C0"), "NS": ("D", "#008040"), "BP": ("o", "#666666")}
-
-
-def stability_runs(x, y, stable):
-    """[(x, y, stable)] pieces of one branch where stability is constant, in branch order; each
-    piece shares its first point with the previous one so the drawn line is unbroken."""
-    keep = np.isfinite(x) & np.isfinite(y)
-    x, y, stable = x[keep], y[keep], stable[keep]
-    if not x.size:
-        return []
-    cuts = [0] + [i for i in range(1, x.size) if stable[i] != stable[i - 1]] + [x.size]
-    return [(x[max(a - 1, 0):b], y[max(a - 1, 0):b], bool(stable[a])) for a, b in zip(cuts[:-1], cuts[1:])]
-
 
 def _shown(value, units):
     """(value, units) as the report shows them: lengths in um (clearances, amplitudes)."""
@@ -42,27 +28,24 @@ def _branch_label(ds, b):
 
 
 def _panel(hv, ds, yname, ylabel, backend, ref_one=False):
-    """All branches: y against the parameter, solid where stable, dashed where not, events on top."""
+    """All branches: y against the parameter, solid where stable, dashed where not, each with its
+    located events (branches.branch_elements, shared with the sweep report's branch diagrams)."""
     par = ds.attrs["parameter"]
-    xunit = ds["parameter"].attrs.get("units", "")
-    xdim = hv.Dimension(par, label=f"{par} [{xunit}]")
-    ydim = hv.Dimension(yname, label=ylabel)
+    xlabel = f"{par} [{ds['parameter'].attrs.get('units', '')}]"
+    dims = (hv.Dimension(par, label=xlabel), hv.Dimension(yname, label=ylabel))
+    ys, event_ys = _values(ds, yname), _event_values(ds, yname)
     elements = []
     for b in range(ds.sizes["branch"]):
-        x = ds["parameter"].values[b]
-        y = _values(ds, yname)[b]
-        colour = LINE_COLOURS[b % len(LINE_COLOURS)]
-        for i, (xs, ys, stable) in enumerate(stability_runs(x, y, ds["stable"].values[b] == 1)):
-            label = _branch_label(ds, b) if i == 0 else ""
-            curve = hv.Curve((xs, ys), xdim, ydim, label=label)
-            opts = style.line_style(backend, 2.0 if stable else 1.6, dash=not stable)
-            hover = {"tools": ["hover"]} if backend == "bokeh" else {}
-            elements.append(curve.opts(color=colour, **opts, **hover, backend=backend))
+        mine = ds["event_branch"].values == b
+        special = [(x, y, al.EVENT_LABELS[int(k)]) for x, y, k in
+                   zip(ds["event_parameter"].values[mine], event_ys[mine], ds["event_type"].values[mine])]
+        elements += branches.branch_elements(ds["parameter"].values[b], ys[b], ds["stable"].values[b] == 1, special,
+                                             backend, dims, (xlabel, ylabel), style.LINE_COLOURS[b % len(style.LINE_COLOURS)],
+                                             _branch_label(ds, b), legend_unstable=False)
     if ref_one:
         x = ds["parameter"].values
-        ref = hv.Curve(([np.nanmin(x), np.nanmax(x)], [1.0, 1.0]), xdim, ydim, label="|λ| = 1")
+        ref = hv.Curve(([np.nanmin(x), np.nanmax(x)], [1.0, 1.0]), *dims, label="|λ| = 1")
         elements.append(ref.opts(color="#C00000", **style.line_style(backend, 1.2, dash=True), backend=backend))
-    elements += _event_markers(hv, ds, yname, xdim, ydim, backend)
     size = {"width": 1100, "height": 460} if backend == "bokeh" else {"fig_inches": (12, 4.8), "aspect": 1.9}
     return hv.Overlay(elements).opts(show_grid=True, legend_position="right", **size, backend=backend)
 
@@ -81,27 +64,6 @@ def _event_values(ds, yname):
         return np.ones(ds.sizes.get("event", 0))
     j = list(ds["observable"].values).index(yname)
     return _shown(ds["event_amplitude_max"].values[:, j], ds["amplitude_max"].attrs.get("units"))[0]
-
-
-def _event_markers(hv, ds, yname, xdim, ydim, backend):
-    """One marker layer and one label layer per event type present."""
-    if not ds.sizes.get("event", 0):
-        return []
-    labels = np.array([al.EVENT_LABELS[int(k)] for k in ds["event_type"].values])
-    x, y = ds["event_parameter"].values, _event_values(ds, yname)
-    out = []
-    for kind in dict.fromkeys(labels):
-        sel = labels == kind
-        marker, colour = EVENT_MARKERS[kind]
-        pts = hv.Scatter((x[sel], y[sel]), xdim, ydim, label=kind)
-        hover = {"tools": ["hover"]} if backend == "bokeh" else {}
-        out.append(pts.opts(**style.marker_style(backend, colour, 10 if backend == "bokeh" else 7, marker), **hover,
-                            backend=backend))
-        text = hv.Labels((x[sel], y[sel], [kind] * int(sel.sum())), [xdim, ydim], "label")
-        offset = {"yoffset": 0} if backend == "bokeh" else {}
-        out.append(text.opts(text_color=colour, text_align="left", **offset, backend=backend)
-                   if backend == "bokeh" else text.opts(color=colour, backend=backend))
-    return out
 
 
 CLASS_COLOURS = {0: ("no stable orbit on the branches", "#D55E00"), 1: ("stable", "#56B4E9"),
