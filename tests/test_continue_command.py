@@ -134,3 +134,39 @@ def test_branch_switching_through_the_pipeline():
     pd1 = records[0]["event_parameter"][records[0]["event_type"] == al.PERIOD_DOUBLING]
     pd2 = records[1]["event_parameter"][records[1]["event_type"] == al.PERIOD_DOUBLING]
     assert pd1.size == 1 and pd2.size >= 1 and pd2[0] > pd1[0]
+
+
+def test_a_boundary_curve_found_again_from_another_line_is_kept_once():
+    """Two lines (nu = 1, 2) each locate a point of the same curve; the curve from the first line
+    passes the second line's event, so the second line's curves are dropped; the two halves of
+    one event's curve are both kept, and a curve through no kept mark stays."""
+    def curve(start, marked, kind=al.PERIOD_DOUBLING):
+        return {"kind": kind, "start": start, "marked": marked}
+    first_up = curve((93.0, 1.0), [(1.0, 93.0), (2.0, 80.0), (2.0, 101.0), (1.0, 113.0)])
+    first_down = curve((93.0, 1.0), [(1.0, 93.0)])
+    again = curve((80.0 * (1 + 1e-9), 2.0 * (1 + 1e-15)), [(2.0, 80.0)])
+    other_kind = curve((80.0, 2.0), [(2.0, 80.0)], kind=al.FOLD)
+    elsewhere = curve((130.0, 2.0), [(2.0, 130.0)])
+    kept = continuation.distinct_curves([first_up, first_down, again, other_kind, elsewhere])
+    assert kept == [first_up, first_down, other_kind, elsewhere]
+
+
+@pytest.mark.slow
+def test_boundary_curves_through_the_pipeline_match_the_sweep_boundaries():
+    """Bai 2006, PD boundary from 3.8 um near 93 Hz continued in clearance through the pipeline:
+    one curve (found from both lines, kept once) whose crossings of 7.6 um are the period
+    doublings the 7.6 um line locates itself (1e-6 relative: both solve to ~1e-9)."""
+    text = Path("configs/bai2006_fig13.toml").read_text()
+    text = text.replace("speed = {start = 10.0, stop = 250.0, step = 0.1}", "speed = {start = 70.0, stop = 120.0, step = 1.0}")
+    text = text.replace("clearance = [3.8e-6, 7.6e-6, 11.4e-6, 15.2e-6, 19.0e-6]", "clearance = [3.8e-6, 7.6e-6]")
+    cfg = config.parse_config(text + '\n[continuation]\ncurves_in = "clearance"\nperiod_doubling_switches = 0\n')
+    pl = continuation.plan(cfg.data)
+    lines = [(where, continuation.continue_line(cfg.data, where)) for where in pl.lines]
+    ds = continuation.to_dataset(cfg.data, pl, lines, {})
+    pds = ds["curve_type"].values == al.PERIOD_DOUBLING
+    assert pds.any()
+    events_76 = sorted(ds["event_parameter"].values[ds["event_branch"].values == 1])
+    for target in events_76:
+        c, p = np.nonzero(np.isclose(ds["curve_second"].values, 7.6e-6, rtol=1e-12, atol=0))
+        crossings = ds["curve_parameter"].values[c, p]
+        assert np.min(np.abs(crossings - target)) <= 1e-6 * target

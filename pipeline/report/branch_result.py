@@ -95,6 +95,40 @@ def _stability_map(hv, ds, backend):
                                      ylabel=", ".join(keys) or "", legend_position="right", **size, backend=backend)
 
 
+CURVE_COLOURS = {"fold": "#C00000", "period_doubling": "#0060C0", "neimark_sacker": "#008040"}
+
+
+def _curves_map(hv, ds, backend):
+    """Boundary curves in (parameter, second axis) over the lines' stability bands (none /
+    stable / bistable) drawn at their values of the second axis: a Fig. 13-type map whose
+    boundaries are curves."""
+    par, second = ds.attrs["parameter"], ds.attrs["curves_in"]
+    factor, unit = _shown(1.0, ds["curve_second"].attrs.get("units", ""))
+    xdim = hv.Dimension(par, label=f"{par} [{ds['parameter'].attrs.get('units', '')}]")
+    ydim = hv.Dimension(second, label=f"{second} [{unit}]")
+    keys, lines = continuation.stability_classes(ds)
+    elements = []
+    if keys == [second]:
+        values = np.array(sorted(w[0] for w in lines)) * factor
+        half = 0.3 * (np.diff(values).min() if values.size > 1 else 1.0)
+        rects = {c: [] for c in CLASS_COLOURS}
+        for (v,), pieces in lines.items():
+            for lo, hi, n in pieces:
+                rects[min(n, 2)].append((lo, v * factor - half, hi, v * factor + half))
+        for c, (name, colour) in CLASS_COLOURS.items():
+            empty = [(lines and min(p[0] for ps in lines.values() for p in ps), values[0]) * 2]
+            el = hv.Rectangles(rects[c] or empty, kdims=[xdim, ydim, "x1", "y1"], label=name)
+            elements.append(el.opts(**style.fill_style(backend, colour, alpha=0.45), backend=backend))
+    kinds = [al.EVENT_TYPES[int(k)] for k in ds["curve_type"].values]
+    for i, kind in enumerate(kinds):
+        label = f"{branches.SPECIAL_LABELS[kind]} curve" if kind not in kinds[:i] else ""
+        curve = hv.Curve((ds["curve_parameter"].values[i], ds["curve_second"].values[i] * factor), xdim, ydim, label=label)
+        hover = {"tools": ["hover"]} if backend == "bokeh" else {}
+        elements.append(curve.opts(color=CURVE_COLOURS[kind], **style.line_style(backend, 2.2), **hover, backend=backend))
+    size = {"width": 1100, "height": 460} if backend == "bokeh" else {"fig_inches": (12, 4.8), "aspect": 1.9}
+    return hv.Overlay(elements).opts(show_grid=True, legend_position="right", **size, backend=backend)
+
+
 def figures(ds, backend):
     """(caption, filename, figure) of each figure."""
     hv = style.holoviews()
@@ -104,6 +138,9 @@ def figures(ds, backend):
             _panel(hv, ds, o, f"max |{o}| [{units}]", backend)) for o in obs[:2]]
     out.insert(0, ("Stability along the parameter: stable, none stable, bistable", "branch_stability_map.png",
                    _stability_map(hv, ds, backend)))
+    if "curve" in ds.dims and ds.sizes["curve"]:
+        out.insert(1, (f"Stability boundary curves in ({ds.attrs['parameter']}, {ds.attrs['curves_in']})",
+                       "boundary_curves.png", _curves_map(hv, ds, backend)))
     out.append(("Largest Floquet multiplier modulus along the branches", "branch_max_multiplier.png",
                 _panel(hv, ds, "max_abs_multiplier", "max |multiplier|", backend, ref_one=True)))
     return out
