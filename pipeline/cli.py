@@ -319,7 +319,7 @@ def build_parser():
     rp.set_defaults(func=cmd_report)
 
     m = sub.add_parser("modes", help="static equilibrium, natural frequencies, whirl, Campbell table (rigid_preloaded)")
-    m.add_argument("config")
+    m.add_argument("config", help="scene TOML of a model with linear analysis (rigid_preloaded)")
     m.add_argument("--at", action="append", metavar="AXIS=VALUE", help="axis value (default: the first grid value)")
     m.add_argument("--campbell", metavar="START:STOP:NUM", help="shaft speeds [Hz] of the Campbell table")
     m.add_argument("-o", "--output", help="Campbell table CSV (speed_hz, mode, frequency_hz, damping_ratio, whirl, label)")

@@ -39,10 +39,12 @@ def branch_events(plane, nu, lo, hi):
 
 
 def grid_boundary(data, point):
-    """The sweep's refined boundary next to a curve point, exactly as pipeline.boundaries computes
-    it: the bracketing grid speeds, their orbits by solve_orbit from a neighbour, Brent on
-    max|multiplier| - 1 with natural continuation (events.locate_boundary)."""
-    solve = boundaries._solver(data, {**compute.fixed_values(data), "clearance": point.nu}, "speed")
+    """The grid's refined boundary next to a curve point by Brent's method, the boundary table's
+    fallback (pipeline.boundaries; the table itself now refines on the branch by arclength, so
+    this is a second, independent method): the bracketing grid speeds, their orbits by
+    solve_orbit from a neighbour, Brent on max|multiplier| - 1 with natural continuation
+    (events.locate_boundary)."""
+    solve, _ = boundaries._solver(data, {**compute.fixed_values(data), "clearance": point.nu}, "speed")
     low = GRID_START + GRID_STEP * math.floor((point.lam - GRID_START) / GRID_STEP)
     a, b = solve(low, point.state), solve(low + GRID_STEP, point.state)
     assert a.status == b.status == 0 and a.stable != b.stable     # the grid sees this boundary
