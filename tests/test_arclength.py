@@ -121,11 +121,18 @@ def bai():
 BAI_SETTINGS = al.Settings(ds=0.02, ds_max=0.5, max_steps=2000)
 
 
-def test_bai_7p6um_jump_is_a_fold_pair_with_two_stable_orbits(bai):
-    model, opts, family_at, start = bai
-    family = family_at(7.6e-6, 20.0)
-    branch = al.continue_orbit(family, 30.0, start(family, 30.0), (30.0, 50.0), BAI_SETTINGS)
+def bai_branch(bai, clearance, lo, hi):
+    """(family, the period-1 branch from a cold start at lo over [lo, hi]), which reaches hi."""
+    _, _, family_at, start = bai
+    family = family_at(clearance, 20.0)
+    branch = al.continue_orbit(family, lo, start(family, lo), (lo, hi), BAI_SETTINGS)
     assert branch.end == al.LEFT_RANGE, branch.detail
+    return family, branch
+
+
+def test_bai_7p6um_jump_is_a_fold_pair_with_two_stable_orbits(bai):
+    model, opts, _, _ = bai
+    family, branch = bai_branch(bai, 7.6e-6, 30.0, 50.0)
     folds = [e for e in branch.events if e.kind == al.FOLD]
     assert len(folds) == 2
     upper, lower = folds[0].point.lam, folds[1].point.lam
@@ -154,10 +161,8 @@ def test_bai_7p6um_jump_is_a_fold_pair_with_two_stable_orbits(bai):
 
 
 def test_bai_19um_period_doublings_and_branch_switching(bai):
-    model, opts, family_at, start = bai
-    family = family_at(19e-6, 20.0)
-    branch = al.continue_orbit(family, 20.0, start(family, 20.0), (20.0, 40.0), BAI_SETTINGS)
-    assert branch.end == al.LEFT_RANGE, branch.detail
+    model, opts, _, _ = bai
+    family, branch = bai_branch(bai, 19e-6, 20.0, 40.0)
     pds = [e for e in branch.events if e.kind == al.PERIOD_DOUBLING]
     assert len(pds) >= 1
     # the cascade's first doubling: the PD on the period-1 branch inside 27-28 Hz
@@ -220,7 +225,6 @@ def test_sweep_boundary_table_locates_the_fold_on_the_branch(bai):
 
     from pipeline import boundaries, schema
 
-    model, opts, family_at, start = bai
     cfg = config.load_config("configs/bai2006_fig13.toml")
     fixed = {k: v for k, v in compute.fixed_values(cfg.data).items() if v is not None}
     speeds = [26.0, 26.5, 27.0, 27.5, 28.0, 28.3, 28.5]   # natural continuation from 26 Hz
@@ -233,8 +237,7 @@ def test_sweep_boundary_table_locates_the_fold_on_the_branch(bai):
     assert ds["stable"].values[0, -2:].tolist() == [1, 0]
     ds.attrs["continued_axis"] = "speed"
     row = next(r for r in boundaries.boundary_rows(cfg.data, ds) if r["boundary_grid_low"] == 28.3)
-    family = family_at(19e-6, 20.0)
-    branch = al.continue_orbit(family, 26.0, start(family, 26.0), (26.0, 29.0), BAI_SETTINGS)
+    _, branch = bai_branch(bai, 19e-6, 26.0, 29.0)
     fold = next(e for e in branch.events if e.kind == al.FOLD)
     assert row["boundary_type"] == schema.BIFURCATION.index("fold")
     assert row["boundary_speed"] == pytest.approx(fold.point.lam, rel=1e-8)

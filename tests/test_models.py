@@ -152,6 +152,8 @@ def _cli(env, *args):
     return proc.stdout
 
 
+# slow: the plugin's dispatch is a second compilation of every kernel (about 2 minutes on 2 cores)
+@pytest.mark.slow
 def test_a_throwaway_model_runs_through_point_sweep_cube_query_and_report(chain_env):
     d, env = chain_env
     cube_path, report_dir = d / "chain.nc", d / "report"

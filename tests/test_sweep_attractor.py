@@ -129,6 +129,7 @@ def test_sweep_writes_the_attractor_variables(tmp_path, capsys):
     assert "no attractor diagnostics for the down sweep" in capsys.readouterr().err
 
 
+@pytest.mark.slow    # a 441-speed up-and-down attractor sweep (~45 s on 2 cores)
 def test_cascade_scene_period_doubling_to_chaos_and_coexistence(tmp_path):
     """The shipped configs/bai2006_cascade.toml (19 um, 26-70 Hz, up and down): sweeping down
     from 70 Hz the attractor has periods 1, 2, 4, 8 in this order, then chaos with a positive

@@ -11,7 +11,7 @@ import rotorkernels.models.duffing as m3
 import rotorkernels.models.rigid_preloaded as m4
 
 IDS = (0, 1, 2, 3, 4)
-STATE_SIZES = (2, 4, 10)
+STATE_SIZES = (2, 4)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -87,25 +87,21 @@ def rhs_jac(model, tau, u, p, du, out):
 
 @njit(cache=True, nogil=True, inline="always")
 def tangent(velocity_form, z, n, jbuf, dz):
-    """dz[n:] = J Phi; the registered state sizes get copies with a constant size."""
+    """dz[n:] = J Phi; the small registered state sizes get copies with a constant size."""
     if n == 2:
         stages.tangent_product(velocity_form, z, 2, jbuf, dz)
     elif n == 4:
         stages.tangent_product(velocity_form, z, 4, jbuf, dz)
-    elif n == 10:
-        stages.tangent_product(velocity_form, z, 10, jbuf, dz)
     else:
         stages.tangent_product(velocity_form, z, n, jbuf, dz)
 
 
 @njit(cache=True, nogil=True, inline="always")
 def combine(K, coef, n_terms, z, step, out):
-    """out = z + step sum coef[j] K[j]; registered state sizes get constant-size copies."""
+    """out = z + step sum coef[j] K[j]; small registered state sizes get constant-size copies."""
     if z.size == 2:
         stages.combine(K, coef, n_terms, z, step, out, 2)
     elif z.size == 4:
         stages.combine(K, coef, n_terms, z, step, out, 4)
-    elif z.size == 10:
-        stages.combine(K, coef, n_terms, z, step, out, 10)
     else:
         stages.combine(K, coef, n_terms, z, step, out, z.size)

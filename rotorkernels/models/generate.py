@@ -43,10 +43,16 @@ def _sized(name, args, doc, sizes, call, size_arg):
     return lines
 
 
+# Constant-size copies of the stage arithmetic only up to this state size: LLVM unrolls them
+# fully, which pays for the small models (Jeffcott: n = 4) but for n = 10 unrolls the n^3
+# products of J Phi and multiplies the compile time, for little gain beside a ball sum.
+FAST_PATH_MAX_STATE = 4
+
+
 def dispatch_source(specs):
     """Source text of the dispatch module for the given model specs."""
     specs = sorted(specs, key=lambda s: s.id)
-    sizes = sorted({s.n_state for s in specs})
+    sizes = sorted({s.n_state for s in specs if s.n_state <= FAST_PATH_MAX_STATE})
     lines = [HEADER.rstrip("\n"), "from numba import njit", "", "from rotorkernels import stages"]
     lines += [f"import {s.module} as m{s.id}" for s in specs]
     lines += ["", f"IDS = {tuple(s.id for s in specs)!r}", f"STATE_SIZES = {tuple(sizes)!r}",
@@ -68,10 +74,10 @@ def dispatch_source(specs):
                          "du = f and out = df/du from one evaluation (one ball sum for the bearing models).",
                          specs, "rhs_jac(tau, u, p, du, out)", "_fill_nan(du)")
     lines += _sized("tangent", "velocity_form, z, n, jbuf, dz",
-                    "dz[n:] = J Phi; the registered state sizes get copies with a constant size.",
+                    "dz[n:] = J Phi; the small registered state sizes get copies with a constant size.",
                     sizes, "tangent_product(velocity_form, z, {size}, jbuf, dz)", "n")
     lines += _sized("combine", "K, coef, n_terms, z, step, out",
-                    "out = z + step sum coef[j] K[j]; registered state sizes get constant-size copies.",
+                    "out = z + step sum coef[j] K[j]; small registered state sizes get constant-size copies.",
                     sizes, "combine(K, coef, n_terms, z, step, out, {size})", "z.size")
     return "\n".join(lines) + "\n"
 

@@ -132,7 +132,7 @@ def _ring_b(u, p):
                      1.0, 0.0, p[P_COS_D], p[P_SIN_D])
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def rhs(tau, u, p, du):
     velocity_rows(u, du, N_POS)
     n = int(p[P_NBALLS])
@@ -143,12 +143,12 @@ def rhs(tau, u, p, du):
     _accelerations(tau, u, p, fxa, fya, fxb, fyb, fza - fzb, du)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def jac(tau, u, p, out):
     _jacobian(out, p, _ring_a(u, p), _ring_b(u, p))
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def rhs_jac(tau, u, p, du, out):
     """rhs and jac from one ball sum per bearing."""
     a = _ring_a(u, p)
