@@ -60,7 +60,7 @@ def plan(data):
     sweep = data["sweep"]
     errors = []
     start, stop = sec["start"], sec["stop"]
-    for key, value, pick in (("start", start, min), ("stop", stop, max)):
+    for key, value in (("start", start), ("stop", stop)):
         if value is None and name not in sweep:
             errors.append(f"continuation.{key}: required ({name} is not swept, so the sweep gives no range)")
     if errors:
