@@ -151,7 +151,6 @@ def test_a_boundary_curve_found_again_from_another_line_is_kept_once():
     assert kept == [first_up, first_down, other_kind, elsewhere]
 
 
-@pytest.mark.slow
 def test_boundary_curves_through_the_pipeline_match_the_sweep_boundaries():
     """Bai 2006, PD boundary from 3.8 um near 93 Hz continued in clearance through the pipeline:
     one curve (found from both lines, kept once) whose crossings of 7.6 um are the period
