@@ -97,3 +97,11 @@ def machine_info():
     return dict(cpu=_cpu_model(), cores=os.cpu_count(), usable_cores=usable,
                 platform=platform.platform(), python=platform.python_version(),
                 numpy=np.__version__, scipy=scipy.__version__, numba=numba.__version__)
+
+
+def provenance(load_before, module, argv):
+    """What every benchmark result records beside its numbers: date, machine, load before and
+    after, and the command that reproduces it."""
+    return {"date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), "machine": machine_info(),
+            "load": f"{load_before} before, {loadavg()} after",
+            "command": f"python -m {module} " + " ".join(argv or sys.argv[1:])}

@@ -14,7 +14,6 @@ physical time + fsolve on [phi(u) - u, det(M - I)]), whose own error is estimate
 at rtol 3e-14."""
 import argparse
 import json
-import sys
 import time
 from pathlib import Path
 
@@ -23,7 +22,7 @@ import numpy as np
 from rotorkernels import integrators as ig, models
 from rotorkernels.continuation import arclength as al, solve_orbit
 from workflows.bench import render
-from workflows.bench.common import DOCS, loadavg, log, machine_info
+from workflows.bench.common import DOCS, loadavg, log, provenance
 from workflows.bench.peers.duffing_scipy import Duffing, ScipyContinuation, fold_reference
 
 DUFFING = Duffing(zeta=0.05, gamma=1.0, force=0.1)
@@ -153,9 +152,7 @@ def main(argv=None):
     load = loadavg()
     runs = measure(args.rtols, args.repeats)
     result = {"problem": {**DUFFING._asdict(), "omega": list(OMEGA), "settings": SETTINGS}, "runs": runs,
-              "repeats": args.repeats, "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
-              "machine": machine_info(), "load": f"{load} before, {loadavg()} after",
-              "command": "python -m workflows.bench.continuation " + " ".join(argv or sys.argv[1:])}
+              "repeats": args.repeats, **provenance(load, "workflows.bench.continuation", argv)}
     args.out.mkdir(parents=True, exist_ok=True)
     write(result, args.out)
     log(f"wrote {args.out / 'continuation.md'}")

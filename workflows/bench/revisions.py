@@ -13,11 +13,10 @@ import json
 import os
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 from workflows.bench import render
-from workflows.bench.common import DOCS, ROOT, loadavg, log, machine_info
+from workflows.bench.common import DOCS, ROOT, loadavg, log, provenance
 
 CHILD = """
 import json, sys, time
@@ -97,9 +96,7 @@ def main(argv=None):
     load = loadavg()
     seconds = measure(revs, args.rounds, args.repeats)
     result = {"revisions": revs, "labels": {r: _label(r) for r in revs}, "seconds_per_point": seconds,
-              "rounds": args.rounds, "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
-              "machine": machine_info(), "load": f"{load} before, {loadavg()} after",
-              "command": "python -m workflows.bench.revisions " + " ".join(argv or sys.argv[1:])}
+              "rounds": args.rounds, **provenance(load, "workflows.bench.revisions", argv)}
     args.out.mkdir(parents=True, exist_ok=True)
     write(result, args.out)
     log(f"wrote {args.out / 'revisions.md'}")
