@@ -46,6 +46,18 @@ class Observable:
     long_name: str
 
 
+class PolynomialSystem(NamedTuple):
+    """M q'' + G q' + K q + f2(q) + f3(q) = 0 in SI units; f2_i = sum_jk Q2[i,j,k] q_j q_k,
+    f3_i = sum_jkl Q3[i,j,k,l] q_j q_k q_l (G already multiplied by the shaft speed; G skew)."""
+    M: np.ndarray
+    G: np.ndarray
+    K: np.ndarray
+    Q2: np.ndarray
+    Q3: np.ndarray
+    coordinates: tuple     # names, e.g. ("x1", "y1", "x2", "y2"); units m or rad as the model uses
+    units: tuple
+
+
 class Built(NamedTuple):
     """A model's kernel inputs at one parameter point."""
     p: np.ndarray       # kernel parameter vector (scaled units)
@@ -75,6 +87,7 @@ class ModelSpec:
     check: Callable = None          # check(data, axes) -> list of error strings (config level)
     fill_defaults: Callable = None  # fill_defaults(data): defaults that depend on other keys
     references: str = ""            # the model's sources (the cube's CF `references` attribute)
+    polynomial: Callable = None     # polynomial(values) -> PolynomialSystem (conservative models)
 
     @property
     def n_state(self):
