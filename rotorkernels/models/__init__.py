@@ -13,10 +13,11 @@ import os
 import sys
 
 from rotorkernels import plugin_modules
-from rotorkernels.models import damped_mathieu, duffing, jeffcott_clearance, linear_oscillator, rigid_preloaded
+from rotorkernels.models import (asymmetric5, damped_mathieu, duffing, jeffcott_clearance, linear_oscillator,
+                                 rigid_preloaded, symmetric4)
 from rotorkernels.models.spec import Built, ModelSpec, Observable, Parameter  # noqa: F401 (API)
 
-BUILTIN = (jeffcott_clearance, linear_oscillator, damped_mathieu, duffing, rigid_preloaded)
+BUILTIN = (jeffcott_clearance, linear_oscillator, damped_mathieu, duffing, rigid_preloaded, symmetric4, asymmetric5)
 BUILTIN_NAMES = tuple(m.SPEC.name for m in BUILTIN)
 
 REGISTRY = {}

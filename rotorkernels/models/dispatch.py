@@ -9,15 +9,17 @@ import rotorkernels.models.linear_oscillator as m1
 import rotorkernels.models.damped_mathieu as m2
 import rotorkernels.models.duffing as m3
 import rotorkernels.models.rigid_preloaded as m4
+import rotorkernels.models.symmetric4 as m5
+import rotorkernels.models.asymmetric5 as m6
 
-IDS = (0, 1, 2, 3, 4)
+IDS = (0, 1, 2, 3, 4, 5, 6)
 STATE_SIZES = (2, 4)
 
 
 @njit(cache=True, nogil=True, inline="always")
 def known(model):
     """True for a registered model id."""
-    return model == 0 or model == 1 or model == 2 or model == 3 or model == 4
+    return model == 0 or model == 1 or model == 2 or model == 3 or model == 4 or model == 5 or model == 6
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -47,6 +49,10 @@ def rhs(model, tau, u, p, du):
         m3.rhs(tau, u, p, du)
     elif model == 4:
         m4.rhs(tau, u, p, du)
+    elif model == 5:
+        m5.rhs(tau, u, p, du)
+    elif model == 6:
+        m6.rhs(tau, u, p, du)
     else:
         _fill_nan(du)
 
@@ -64,6 +70,10 @@ def jac(model, tau, u, p, out):
         m3.jac(tau, u, p, out)
     elif model == 4:
         m4.jac(tau, u, p, out)
+    elif model == 5:
+        m5.jac(tau, u, p, out)
+    elif model == 6:
+        m6.jac(tau, u, p, out)
     else:
         _fill_nan_2d(out)
 
@@ -81,6 +91,10 @@ def rhs_jac(model, tau, u, p, du, out):
         m3.rhs_jac(tau, u, p, du, out)
     elif model == 4:
         m4.rhs_jac(tau, u, p, du, out)
+    elif model == 5:
+        m5.rhs_jac(tau, u, p, du, out)
+    elif model == 6:
+        m6.rhs_jac(tau, u, p, du, out)
     else:
         _fill_nan(du)
 

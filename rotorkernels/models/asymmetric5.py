@@ -1,0 +1,56 @@
+"""Model `asymmetric5` (Filipkovsky 2010, coupled transverse-axial vibration, SPEC 2.3): a rigid
+shaft with distributed mass and a disk at l1 (default 0.125 m) from bearing A on two preloaded
+angular-contact ball bearings with the cubic series law; 5 DOF q = (x1, y1, x2, y2, z) with the
+series' quadratic transverse-axial couplings, no damping, no forcing. Conventions, choices and
+scaling: `series_rotor`.
+
+The lowest mode is axial (the axial stiffness 2 c_a is below the radial one at the papers'
+angles); `polynomial(values)` gives the PolynomialSystem for the invariant-manifold code.
+"""
+import numpy as np
+from numba import njit
+
+from rotorkernels.models import series_rotor as sr
+from rotorkernels.models.spec import ModelSpec, Parameter
+
+N_POS = 5
+
+
+@njit(cache=True, nogil=True)
+def rhs(tau, u, p, du):
+    a, b = sr.bearing_loads(u, p, N_POS)
+    sr.accelerations(u, p, N_POS, a, b, du)
+
+
+@njit(cache=True, nogil=True)
+def jac(tau, u, p, out):
+    a, b = sr.bearing_loads(u, p, N_POS)
+    sr.jacobian(out, p, N_POS, a, b)
+
+
+@njit(cache=True, nogil=True)
+def rhs_jac(tau, u, p, du, out):
+    a, b = sr.bearing_loads(u, p, N_POS)
+    sr.accelerations(u, p, N_POS, a, b, du)
+    sr.jacobian(out, p, N_POS, a, b)
+
+
+def disk_position(v):
+    return v["disk_position"]
+
+
+def polynomial(v):
+    return sr.polynomial_system(v, N_POS, disk_position(v))
+
+
+SPEC = ModelSpec(
+    name="asymmetric5", id=6, module=__name__, n_position=N_POS, forced=False,
+    description="Filipkovsky 2010: asymmetric 5-DOF rotor (transverse-axial coupling) on preloaded ball "
+                "bearings, cubic series law, conservative",
+    parameters=sr.ROTOR_PARAMETERS + (
+        Parameter(default=0.125, name="disk_position", section="rotor", lo=0, unit="m",
+                  help="disk position l1 from bearing A (paper: 0.125 m)"),) + sr.BEARING_PARAMETERS,
+    build=sr.build_for(N_POS, disk_position), cold_guess=lambda p: np.zeros(2 * N_POS),
+    length_scale=sr.LENGTH_SCALE, observables=sr.observables(N_POS), derived=sr.DERIVED, check=sr.check,
+    references=sr.REFERENCES, polynomial=polynomial,
+)

@@ -1,0 +1,233 @@
+"""What `symmetric4` and `asymmetric5` (Filipkovsky 2010) share: a rigid shaft with distributed
+mass and one disk on two preloaded angular-contact bearings with the cubic series law
+(`rotorkernels.cubic_law`), conservative (no damping, no forcing).
+
+Coordinates q = (x1, y1, x2, y2[, z]) [m]: journal displacements of bearing A (at xi = 0) and B
+(xi = l), and for the 5-DOF model the axial displacement z. Lagrange's equations
+
+    M q'' + Omega G q' + P(q) = 0
+
+with the papers' kinetic energy (shaft: rho I / 2 int (theta1'^2 + theta2'^2) - 2 rho I Omega
+int theta2' theta1 + rho S / 2 int (u_x'^2 + u_y'^2); disk: I1 / 2 (theta1'^2 + theta2'^2) -
+I0 Omega theta2' theta1 + m0 / 2 (u_x'^2 + u_y'^2) at the disk), theta1 = -(y2 - y1) / l,
+theta2 = (x2 - x1) / l, I = pi d^4 / 64, S = pi d^2 / 4. It is the kinetic energy of
+`rigid_preloaded` with shaft mass rho S l, diametral inertia rho S l^3 / 12 + rho I l and polar
+inertia 2 rho I l, so its `mass_matrix` and `gyroscopic_matrix` are reused (a sympy test derives
+them from the 2010 integrals).
+
+Choices where the papers are ambiguous or inconsistent:
+* The papers print u_x = x1 z / l + x2 (l - z) / l, which puts x1 at z = l although the origin is
+  at support A and the supports are numbered from it. We put x1 at A (u_x = x1 (l - z) / l +
+  x2 z / l), the disk of asymmetric5 at l1 from A: a mirror relabelling, no frequency changes.
+* The symmetric paper's M_13 = rho S l / 3 - ... is a misprint of rho S l / 6 (its own T).
+* The axial kinetic energy (rho S l + m0) z'^2 / 2 is not written in the axial paper; it is
+  the rigid rotor's (a rigid shaft moves axially as a whole).
+* The shaft is rigid (the papers: "the rotor is a rigid body", the potential energy is the
+  bearings' only); "flexible shaft" in the issue refers to its distributed mass.
+* Bearings: back-to-back, as in `rigid_preloaded`: +z compresses A and relieves B (the papers
+  write one z; with equal signs the two static preload forces would add instead of cancel).
+* Bearing geometry and normalization as `rigid_preloaded` (its preset's E = 2.1e11 Pa; the 2010
+  papers print E = 2e11 Pa, which gives a 3.3 % softer c_r, 1.6 % lower frequencies).
+  The 2010 papers' R2 = 27.53 mm is available as bearing.outer_race_radius (configs do so).
+
+Kernel: tau = t / T with T = 2 pi / (the lowest linear natural frequency at the point), positions
+in units of L = 1 um; u = (q / L, dq/dtau / L). The right-hand side does not depend on tau.
+"""
+import math
+
+import numpy as np
+from numba import njit
+
+from rotorkernels.cubic_law import cubic_coefficients, cubic_load, derivative_tensor, potential_monomials
+from rotorkernels.models import rigid_preloaded as rp
+from rotorkernels.models.spec import Built, Observable, Parameter, PolynomialSystem
+from rotorkernels.models.velocity import upper_rows, velocity_rows
+
+LENGTH_SCALE = 1e-6
+STEEL_DENSITY = 7800.0      # kg/m^3 (not in the papers)
+SHAFT_DIAMETER = 0.025      # m (papers)
+COORDINATES = ("x1", "y1", "x2", "y2", "z")
+
+
+def p_layout(n):
+    """Offsets in the kernel vector of an n-position model: gain T^2 M^-1 (n x n), gyroscopic
+    T M^-1 Omega G (n x n), then c_r, c_a [N/m], z0 / L, tan^2 a."""
+    return 0, n * n, 2 * n * n
+
+
+def n_params(n):
+    return 2 * n * n + 4
+
+
+# --- kernels -----------------------------------------------------------------------------------
+
+@njit(cache=True, nogil=True, inline="always")
+def bearing_loads(u, p, n):
+    """The series loads of bearings A (shift +z) and B (-z), scaled units (z = 0 when n = 4)."""
+    law = 2 * n * n
+    z = u[4] if n == 5 else 0.0
+    a = cubic_load(u[0], u[1], z, p[law], p[law + 1], p[law + 2], p[law + 3])
+    b = cubic_load(u[2], u[3], -z, p[law], p[law + 1], p[law + 2], p[law + 3])
+    return a, b
+
+
+@njit(cache=True, nogil=True, inline="always")
+def accelerations(u, p, n, a, b, du):
+    """du[n:] = -gain P(q) - gyro q', P = (P_xA, P_yA, P_xB, P_yB[, P_zA - P_zB])."""
+    velocity_rows(u, du, n)
+    fz = a[2] - b[2]
+    gyro = n * n
+    for i in range(n):
+        g = n * i
+        acc = -(p[g] * a[0] + p[g + 1] * a[1] + p[g + 2] * b[0] + p[g + 3] * b[1])
+        if n == 5:
+            acc -= p[g + 4] * fz
+        for j in range(n):
+            acc -= p[gyro + g + j] * u[n + j]
+        du[n + i] = acc
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _stiffness_column(out, p, n, j, k0, k1, k2, k3, k4):
+    """Column j of the lower-left block: -gain . (column j of dP/dq)."""
+    for i in range(n):
+        g = n * i
+        v = p[g] * k0 + p[g + 1] * k1 + p[g + 2] * k2 + p[g + 3] * k3
+        if n == 5:
+            v += p[g + 4] * k4
+        out[n + i, j] = -v
+
+
+@njit(cache=True, nogil=True, inline="always")
+def jacobian(out, p, n, a, b):
+    """[[0, I], [-gain dP/dq, -gyro]]; z enters B as -z (its cross terms with z change sign)."""
+    upper_rows(out, n)
+    _stiffness_column(out, p, n, 0, a[3], a[4], 0.0, 0.0, a[6])
+    _stiffness_column(out, p, n, 1, a[4], a[5], 0.0, 0.0, a[7])
+    _stiffness_column(out, p, n, 2, 0.0, 0.0, b[3], b[4], -b[6])
+    _stiffness_column(out, p, n, 3, 0.0, 0.0, b[4], b[5], -b[7])
+    if n == 5:
+        _stiffness_column(out, p, n, 4, a[6], a[7], -b[6], -b[7], a[8] + b[8])
+    gyro = n * n
+    for i in range(n):
+        for j in range(n):
+            out[n + i, n + j] = -p[gyro + n * i + j]
+
+
+# --- SI model ----------------------------------------------------------------------------------
+
+def rotor_of(v, disk_position):
+    """rigid_preloaded.Rotor of the 2010 rotor: a steel shaft of diameter d (distributed mass)."""
+    length, d = v["length"], v["shaft_diameter"]
+    area, second_moment = math.pi * d * d / 4, math.pi * d ** 4 / 64
+    rho = v["shaft_density"]
+    return rp.Rotor(length=length, disk_position=disk_position, shaft_mass=rho * area * length,
+                    shaft_diametral=rho * area * length ** 3 / 12 + rho * second_moment * length,
+                    shaft_polar=2 * rho * second_moment * length, disk_mass=v["disk_mass"],
+                    disk_diametral=v["disk_diametral"], disk_polar=v["disk_polar"], damping=0.0, gravity=0.0)
+
+
+def coefficients(v):
+    """The series coefficients (SI) at the point's preload state."""
+    state = rp.bearing_state(v)
+    n_balls = rp.geometry(v["nominal_angle"]).n_balls
+    return cubic_coefficients(state.contact_constant, state.axial_approach, state.contact_angle, n_balls), state
+
+
+def _bearing_maps(n):
+    """Local (x, y, z) of bearings A and B as linear maps of q: A = (x1, y1, +z), B = (x2, y2, -z)."""
+    maps = np.zeros((2, 3, n))
+    maps[0, 0, 0] = maps[0, 1, 1] = maps[1, 0, 2] = maps[1, 1, 3] = 1.0
+    if n == 5:
+        maps[0, 2, 4], maps[1, 2, 4] = 1.0, -1.0
+    return maps
+
+
+def polynomial_system(v, n, disk_position):
+    """PolynomialSystem (SI) of the n-position model: the potential of both bearings pulled back
+    to q, K = d2V, Q2 = d3V / 2, Q3 = d4V / 6 (fully symmetric: f = dV/dq)."""
+    rotor = rotor_of(v, disk_position)
+    coef, _ = coefficients(v)
+    monomials = potential_monomials(coef)
+    local = [derivative_tensor(monomials, m) for m in (1, 2, 3, 4)]
+    tensors = [np.zeros((n,) * m) for m in (1, 2, 3, 4)]
+    for a in _bearing_maps(n):
+        for m, t in enumerate(local, start=1):
+            tensors[m - 1] += np.einsum(t, list(range(m)), *[x for k in range(m) for x in (a, [k, m + k])],
+                                        list(range(m, 2 * m)))
+    if np.abs(tensors[0]).max() > 1e-12 * coef.static_force:
+        raise AssertionError("the static preload forces of the bearing pair do not cancel")
+    omega = 2 * math.pi * v["speed"]
+    return PolynomialSystem(M=rp.mass_matrix(rotor)[:n, :n], G=omega * rp.gyroscopic_matrix(rotor)[:n, :n],
+                            K=tensors[1], Q2=tensors[2] / 2, Q3=tensors[3] / 6,
+                            coordinates=COORDINATES[:n], units=("m",) * n)
+
+
+def linear_frequencies(system):
+    """Natural frequencies [rad/s] of M q'' + G q' + K q = 0, ascending, each pair once."""
+    n = system.M.shape[0]
+    m_inv = np.linalg.inv(system.M)
+    a = np.block([[np.zeros((n, n)), np.eye(n)], [-m_inv @ system.K, -m_inv @ system.G]])
+    w = np.linalg.eigvals(a).imag
+    return np.sort(w[w > 0])
+
+
+def build_for(n, disk_position):
+    def build(v):
+        system = polynomial_system(v, n, disk_position(v))
+        coef, state = coefficients(v)
+        period = 2 * math.pi / linear_frequencies(system)[0]
+        m_inv = np.linalg.inv(system.M)
+        gain, gyro, law = p_layout(n)
+        p = np.empty(n_params(n))
+        p[gain:gyro] = (period ** 2 * m_inv).ravel()
+        p[gyro:law] = (period * m_inv @ system.G).ravel()
+        p[law:] = coef.radial, coef.axial, coef.approach / LENGTH_SCALE, coef.tan2
+        return Built(p, period, {"contact_angle_used": math.degrees(state.contact_angle),
+                                 "axial_approach": state.axial_approach,
+                                 "contact_constant": state.contact_constant})
+    return build
+
+
+# --- spec pieces -------------------------------------------------------------------------------
+
+def check(data, axes):
+    """The bearing table's nominal angles (as rigid_preloaded)."""
+    angles = axes.get("nominal_angle") or [data["bearing"].get("nominal_angle") or 15.0]
+    odd = [a for a in angles if a not in rp.NOMINAL_ANGLES]
+    if odd:
+        return [f"{'sweep' if 'nominal_angle' in axes else 'bearing'}.nominal_angle: must be one of "
+                f"{', '.join(map(str, rp.NOMINAL_ANGLES))} deg (the paper's bearing table; got {odd[0]:g})"]
+    return []
+
+
+def _rotor(name, default, unit, help):
+    return Parameter(default=default, name=name, section="rotor", lo=0, lo_open=True, unit=unit, help=help)
+
+
+BEARING_PARAMETERS = tuple(rp.SPEC.parameter(k) for k in
+                           ("nominal_angle", "contact_angle", "preload", "stiffness", "outer_race_radius"))
+ROTOR_PARAMETERS = (
+    Parameter(name="speed", section="rotor", unit="Hz", long_name="shaft speed", axis=True, lo=0, hi=1e5,
+              unset=628.3 / (2 * math.pi), help="shaft speed [Hz] (papers: 628.3 rad/s = 100.0 Hz)"),
+    _rotor("length", 0.5, "m", "shaft length l between the bearings"),
+    _rotor("shaft_diameter", SHAFT_DIAMETER, "m", "shaft diameter d (distributed mass)"),
+    _rotor("shaft_density", STEEL_DENSITY, "kg m-3", "shaft density (steel; not in the papers)"),
+    _rotor("disk_mass", 10.0, "kg", "disk mass m_0"),
+    _rotor("disk_diametral", 0.1, "kg m2", "disk diametral inertia I_1"),
+    _rotor("disk_polar", 0.2, "kg m2", "disk polar inertia I_0"),
+)
+DERIVED = {
+    "contact_angle_used": ("degree", "contact angle in the force law (loaded, or imposed)"),
+    "axial_approach": ("m", "axial approach z0 of each bearing under the preload"),
+    "contact_constant": ("N m-1.5", "ball contact constant K"),
+}
+REFERENCES = "Filipkovsky S.V. (2010), nonlinear normal modes of a rotor on ball bearings (symmetric, axial)"
+
+
+def observables(n):
+    names = (("x_A", "journal A horizontal displacement"), ("y_A", "journal A vertical displacement"),
+             ("x_B", "journal B horizontal displacement"), ("y_B", "journal B vertical displacement"),
+             ("z", "axial displacement"))[:n]
+    return tuple(Observable(name, tuple(float(i == k) for i in range(n)), "m", long_name)
+                 for k, (name, long_name) in enumerate(names))

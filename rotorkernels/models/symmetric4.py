@@ -1,0 +1,53 @@
+"""Model `symmetric4` (Filipkovsky 2010, symmetric rotor, SPEC 2.3): a rigid shaft with
+distributed mass and a disk at mid-span on two preloaded angular-contact ball bearings with the
+cubic series law; 4 DOF q = (x1, y1, x2, y2), no axial motion (z = 0 by the symmetry), no damping,
+no forcing. Conventions, choices and scaling: `series_rotor`.
+
+The first linear frequency is double (the cylindrical modes in the x and y planes, which the
+gyroscopic coupling leaves untouched); the conical modes split into backward and forward whirl.
+`polynomial(values)` gives the PolynomialSystem for the invariant-manifold code.
+"""
+import numpy as np
+from numba import njit
+
+from rotorkernels.models import series_rotor as sr
+from rotorkernels.models.spec import ModelSpec
+
+N_POS = 4
+
+
+@njit(cache=True, nogil=True)
+def rhs(tau, u, p, du):
+    a, b = sr.bearing_loads(u, p, N_POS)
+    sr.accelerations(u, p, N_POS, a, b, du)
+
+
+@njit(cache=True, nogil=True)
+def jac(tau, u, p, out):
+    a, b = sr.bearing_loads(u, p, N_POS)
+    sr.jacobian(out, p, N_POS, a, b)
+
+
+@njit(cache=True, nogil=True)
+def rhs_jac(tau, u, p, du, out):
+    a, b = sr.bearing_loads(u, p, N_POS)
+    sr.accelerations(u, p, N_POS, a, b, du)
+    sr.jacobian(out, p, N_POS, a, b)
+
+
+def disk_position(v):
+    return v["length"] / 2
+
+
+def polynomial(v):
+    return sr.polynomial_system(v, N_POS, disk_position(v))
+
+
+SPEC = ModelSpec(
+    name="symmetric4", id=5, module=__name__, n_position=N_POS, forced=False,
+    description="Filipkovsky 2010: symmetric 4-DOF rotor on preloaded ball bearings, cubic series law, conservative",
+    parameters=sr.ROTOR_PARAMETERS + sr.BEARING_PARAMETERS,
+    build=sr.build_for(N_POS, disk_position), cold_guess=lambda p: np.zeros(2 * N_POS),
+    length_scale=sr.LENGTH_SCALE, observables=sr.observables(N_POS), derived=sr.DERIVED, check=sr.check,
+    references=sr.REFERENCES, polynomial=polynomial,
+)
