@@ -56,15 +56,15 @@ class AutonomousOrbitProblem(NamedTuple):
     coordinate: int = 0     # j of the phase and amplitude conditions
 
     def residual(self, s, period):
-        """(phi(T; s) - s, monodromy M, f(phi(T; s)), integration ok)."""
+        """(phi(T; s) - s, monodromy M, f(phi(T; s)), integration ok, right-hand sides evaluated)."""
         kernel = self.model.kernel
         n = kernel[1]
-        z, status, _, _ = ig.flow(kernel, 0.0, period, ig.initial_state(s, n, True), self.p, True, self.opts, 0.0)
+        z, status, n_rhs, _ = ig.flow(kernel, 0.0, period, ig.initial_state(s, n, True), self.p, True, self.opts, 0.0)
         end = z[:n]
         mono = z[n:].reshape((n, n))
         f_end = np.empty(n)
         ig.derivative(kernel, period, end.copy(), self.p, False, f_end, np.empty((n, n)))
-        return end - s, mono, f_end, status == ig.STATUS_OK
+        return end - s, mono, f_end, status == ig.STATUS_OK, n_rhs
 
     def solve(self, amplitude, guess, period_guess, tol=1e-10, max_iter=30):
         """The orbit with q_j(0) = amplitude and dq_j/dtau(0) = 0 from a guess of state and period
@@ -78,7 +78,7 @@ class AutonomousOrbitProblem(NamedTuple):
         period = float(period_guess)
         res = np.inf
         for it in range(max_iter + 1):
-            r, mono, f_end, ok = self.residual(s, period)
+            r, mono, f_end, ok, _ = self.residual(s, period)
             if not ok:
                 break
             res = np.abs(r).max() / np.abs(s).max()

@@ -44,7 +44,7 @@ def polynomial(v):
 
 
 SPEC = ModelSpec(
-    name="asymmetric5", id=6, module=__name__, n_position=N_POS, forced=False,
+    name="asymmetric5", id=6, module=__name__, n_position=N_POS, forced=False, continuation=("speed",),
     description="Filipkovsky 2010: asymmetric 5-DOF rotor (transverse-axial coupling) on preloaded ball "
                 "bearings, cubic series law, conservative",
     parameters=sr.ROTOR_PARAMETERS + (

@@ -208,8 +208,8 @@ def _rotor(name, default, unit, help):
 BEARING_PARAMETERS = tuple(rp.SPEC.parameter(k) for k in
                            ("nominal_angle", "contact_angle", "preload", "stiffness", "outer_race_radius"))
 ROTOR_PARAMETERS = (
-    Parameter(name="speed", section="rotor", unit="Hz", long_name="shaft speed", axis=True, lo=0, hi=1e5,
-              unset=628.3 / (2 * math.pi), help="shaft speed [Hz] (papers: 628.3 rad/s = 100.0 Hz)"),
+    Parameter(name="speed", unit="Hz", long_name="shaft speed", axis=True, lo=0, hi=1e5,
+              unset=628.3 / (2 * math.pi), help="shaft speed [Hz] (papers: 628.3 rad/s = 100.0 Hz); a sweep axis"),
     _rotor("length", 0.5, "m", "shaft length l between the bearings"),
     _rotor("shaft_diameter", SHAFT_DIAMETER, "m", "shaft diameter d (distributed mass)"),
     _rotor("shaft_density", STEEL_DENSITY, "kg m-3", "shaft density (steel; not in the papers)"),

@@ -35,6 +35,19 @@ def rhs_jac(tau, u, p, du, out):
     sr.jacobian(out, p, N_POS, a, b)
 
 
+def _planar(position):
+    """Orthonormal basis (8 x 2) of the invariant subspace q = (w, 0, w, 0) or (0, w, 0, w): both
+    journals in phase in one plane. Invariant: the mid-span mirror (swapping the bearings) and,
+    within the cylindrical motion, which the gyroscopic forces do not reach, y -> -y are symmetries."""
+    b = np.zeros((2 * N_POS, 2))
+    b[[position, position + 2], 0] = b[[N_POS + position, N_POS + position + 2], 1] = np.sqrt(0.5)
+    return b
+
+
+# The double linear frequency's planar modes, where its backbone is well-posed (backbone.py).
+PLANAR_SUBSPACES = {"cylindrical_x": _planar(0), "cylindrical_y": _planar(1)}
+
+
 def disk_position(v):
     return v["length"] / 2
 
@@ -44,7 +57,7 @@ def polynomial(v):
 
 
 SPEC = ModelSpec(
-    name="symmetric4", id=5, module=__name__, n_position=N_POS, forced=False,
+    name="symmetric4", id=5, module=__name__, n_position=N_POS, forced=False, continuation=("speed",),
     description="Filipkovsky 2010: symmetric 4-DOF rotor on preloaded ball bearings, cubic series law, conservative",
     parameters=sr.ROTOR_PARAMETERS + sr.BEARING_PARAMETERS,
     build=sr.build_for(N_POS, disk_position), cold_guess=lambda p: np.zeros(2 * N_POS),
