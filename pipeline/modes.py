@@ -58,7 +58,7 @@ def static_equilibrium(values, max_iter=50):
     q = np.zeros(rp.N_POS)
     scale = float(values["preload"])
     for it in range(max_iter + 1):
-        force, stiffness = rp.bearing_load(q, state, n_balls)
+        force, stiffness = rp.bearing_load(q, state, n_balls, values["law"])
         residual = np.abs(force - load).max() / scale
         if residual <= EQUILIBRIUM_RTOL or it == max_iter:
             break

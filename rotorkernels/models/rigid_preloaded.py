@@ -56,6 +56,7 @@ from numba import njit
 
 from rotorkernels import bearing
 from rotorkernels.contact import ring_force, ring_load
+from rotorkernels.cubic_law import cubic_coefficients, cubic_load
 from rotorkernels.models.spec import Built, ModelSpec, Observable, Parameter
 from rotorkernels.models.velocity import upper_rows, velocity_rows
 
@@ -69,7 +70,9 @@ P_UCOS = 55         # T^2 / L M^-1 m0 a Omega^2 u_D, cosine part
 P_USIN = 60         # sine part
 P_SUP = 65          # -T^2 / L A_s
 P_WU, P_WS, P_OFFSET, P_COS_A, P_SIN_A, P_NBALLS, P_COS_D, P_SIN_D = range(70, 78)
-N_PARAMS = 78
+P_LAW, P_CR, P_CA, P_Z0, P_TAN2 = range(78, 83)   # law 1: cubic series, its scaled coefficients
+N_PARAMS = 83
+LAWS = {"ball_sum": 0.0, "cubic": 1.0}
 
 # Rational detection: a ratio within RATIO_RTOL of p / q with q <= DETECTION_DENOMINATOR is
 # that fraction (typed frequencies are decimals; the golden mean's best such fraction is off by
@@ -121,38 +124,42 @@ def _jacobian(out, p, a, b):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _ring_a(u, p):
-    return ring_load(u[0], u[1], u[4], p[P_OFFSET], p[P_COS_A], p[P_SIN_A], int(p[P_NBALLS]),
+def _load(x, y, z, p):
+    """One bearing's forces and stiffness (`ring_load` layout): the ball sum, or the cubic series."""
+    if p[P_LAW] > 0.0:
+        return cubic_load(x, y, z, p[P_CR], p[P_CA], p[P_Z0], p[P_TAN2])
+    return ring_load(x, y, z, p[P_OFFSET], p[P_COS_A], p[P_SIN_A], int(p[P_NBALLS]),
                      1.0, 0.0, p[P_COS_D], p[P_SIN_D])
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _ring_b(u, p):
-    return ring_load(u[2], u[3], -u[4], p[P_OFFSET], p[P_COS_A], p[P_SIN_A], int(p[P_NBALLS]),
-                     1.0, 0.0, p[P_COS_D], p[P_SIN_D])
+def _force(x, y, z, p):
+    """One bearing's forces only (the ball sum skips its stiffness)."""
+    if p[P_LAW] > 0.0:
+        c = cubic_load(x, y, z, p[P_CR], p[P_CA], p[P_Z0], p[P_TAN2])
+        return c[0], c[1], c[2]
+    return ring_force(x, y, z, p[P_OFFSET], p[P_COS_A], p[P_SIN_A], int(p[P_NBALLS]),
+                      1.0, 0.0, p[P_COS_D], p[P_SIN_D])
 
 
 @njit(cache=True, nogil=True)
 def rhs(tau, u, p, du):
     velocity_rows(u, du, N_POS)
-    n = int(p[P_NBALLS])
-    fxa, fya, fza = ring_force(u[0], u[1], u[4], p[P_OFFSET], p[P_COS_A], p[P_SIN_A], n,
-                               1.0, 0.0, p[P_COS_D], p[P_SIN_D])
-    fxb, fyb, fzb = ring_force(u[2], u[3], -u[4], p[P_OFFSET], p[P_COS_A], p[P_SIN_A], n,
-                               1.0, 0.0, p[P_COS_D], p[P_SIN_D])
+    fxa, fya, fza = _force(u[0], u[1], u[4], p)
+    fxb, fyb, fzb = _force(u[2], u[3], -u[4], p)
     _accelerations(tau, u, p, fxa, fya, fxb, fyb, fza - fzb, du)
 
 
 @njit(cache=True, nogil=True)
 def jac(tau, u, p, out):
-    _jacobian(out, p, _ring_a(u, p), _ring_b(u, p))
+    _jacobian(out, p, _load(u[0], u[1], u[4], p), _load(u[2], u[3], -u[4], p))
 
 
 @njit(cache=True, nogil=True)
 def rhs_jac(tau, u, p, du, out):
     """rhs and jac from one ball sum per bearing."""
-    a = _ring_a(u, p)
-    b = _ring_b(u, p)
+    a = _load(u[0], u[1], u[4], p)
+    b = _load(u[2], u[3], -u[4], p)
     velocity_rows(u, du, N_POS)
     _accelerations(tau, u, p, a[0], a[1], b[0], b[1], a[2] - b[2], du)
     _jacobian(out, p, a, b)
@@ -263,23 +270,34 @@ def preload_of(nominal_angle, preload, stiffness, contact_angle=None, outer_race
     return bearing.preload_at_angle(geom, preload, math.radians(contact_angle), CONSTANTS[stiffness])
 
 
-def bearing_load(q, state, n_balls, length_scale=LENGTH_SCALE):
+def bearing_load(q, state, n_balls, law="ball_sum", length_scale=LENGTH_SCALE):
     """Generalized bearing force P(q) [N] and its stiffness dP/dq [N/m] at positions q [m]:
-    the kernel's ball sums (contact.ring_load) in SI, for static and linear analysis."""
+    the kernel's bearing loads (`_load`) in SI, for static and linear analysis."""
     el = length_scale
     x = np.asarray(q, float) / el
-    alpha = state.contact_angle
-    geometry_args = (state.axial_approach * np.sin(alpha) / el, np.cos(alpha), np.sin(alpha), int(n_balls),
-                     1.0, 0.0, np.cos(2.0 * np.pi / n_balls), np.sin(2.0 * np.pi / n_balls))
-    a = ring_load(x[0], x[1], x[4], *geometry_args)
-    b = ring_load(x[2], x[3], -x[4], *geometry_args)
+    p = np.zeros(N_PARAMS)       # gain -I, no damping: the lower-left block of the Jacobian is dP/dq
+    p[P_GAIN:P_GAIN + 25] = -np.eye(N_POS).ravel()
+    _bearing_params(p, state, n_balls, law, el)
+    a = _load(x[0], x[1], x[4], p)
+    b = _load(x[2], x[3], -x[4], p)
     force = np.array([a[0], a[1], b[0], b[1], a[2] - b[2]])
-    unit_gain = np.zeros(N_PARAMS)       # gain -I, no damping: the lower-left block is dP/dq
-    unit_gain[P_GAIN:P_GAIN + 25] = -np.eye(N_POS).ravel()
     jac = np.zeros((2 * N_POS, 2 * N_POS))
-    _jacobian(jac, unit_gain, a, b)
+    _jacobian(jac, p, a, b)
     k = state.contact_constant
     return k * el ** 1.5 * force, k * el ** 0.5 * jac[N_POS:, :N_POS]
+
+
+def _bearing_params(p, state, n_balls, law, el):
+    """The force-law entries of the kernel vector, in units where a bearing force is K L^1.5
+    times the kernel's load (the ball sum of delta^1.5 in units of L; the cubic series with
+    c_r, c_a scaled by 1 / (K sqrt(L)), which is `cubic_coefficients` at K = 1, z0 / L)."""
+    alpha = state.contact_angle
+    p[P_OFFSET] = state.axial_approach * np.sin(alpha) / el
+    p[P_COS_A], p[P_SIN_A] = np.cos(alpha), np.sin(alpha)
+    p[P_NBALLS] = n_balls
+    p[P_COS_D], p[P_SIN_D] = np.cos(2.0 * np.pi / n_balls), np.sin(2.0 * np.pi / n_balls)
+    p[P_LAW] = LAWS[law]
+    p[P_CR], p[P_CA], p[P_Z0], p[P_TAN2] = cubic_coefficients(1.0, state.axial_approach / el, alpha, n_balls)
 
 
 # --- forcing frequencies -----------------------------------------------------------------------
@@ -322,7 +340,8 @@ def forcing_of(speed, support_frequency, unbalance_on, support_on, max_denominat
 
 # --- build -------------------------------------------------------------------------------------
 
-def kernel_params(rotor, state, n_balls, forcing, speed, eccentricity, support, length_scale=LENGTH_SCALE):
+def kernel_params(rotor, state, n_balls, forcing, speed, eccentricity, support, law="ball_sum",
+                  length_scale=LENGTH_SCALE):
     """The kernel parameter vector from SI inputs (state: bearing.PreloadState, support: A_s)."""
     t, el = forcing.period, length_scale
     m_inv = np.linalg.inv(mass_matrix(rotor))
@@ -339,11 +358,7 @@ def kernel_params(rotor, state, n_balls, forcing, speed, eccentricity, support, 
     p[P_SUP:P_SUP + 5] = -t * t / el * support
     p[P_WU] = 2.0 * np.pi * forcing.shaft_turns
     p[P_WS] = 2.0 * np.pi * forcing.support_turns
-    alpha = state.contact_angle
-    p[P_OFFSET] = state.axial_approach * np.sin(alpha) / el
-    p[P_COS_A], p[P_SIN_A] = np.cos(alpha), np.sin(alpha)
-    p[P_NBALLS] = n_balls
-    p[P_COS_D], p[P_SIN_D] = np.cos(2.0 * np.pi / n_balls), np.sin(2.0 * np.pi / n_balls)
+    _bearing_params(p, state, n_balls, law, el)
     return p
 
 
@@ -365,7 +380,7 @@ def build(v):
                          v["support_acceleration"] > 0, v["max_denominator"])
     support = support_vector(v["support_direction"], v["support_acceleration"])
     n_balls = geometry(v["nominal_angle"]).n_balls
-    p = kernel_params(rotor, state, n_balls, forcing, v["speed"], v["eccentricity"], support)
+    p = kernel_params(rotor, state, n_balls, forcing, v["speed"], v["eccentricity"], support, v["law"])
     derived = {
         "contact_angle_used": math.degrees(state.contact_angle),
         "contact_angle_imposed": float(_optional(v, "contact_angle") is not None),
@@ -481,6 +496,9 @@ SPEC = ModelSpec(
                   help="largest q of omega / Omega = p / q shot as periodic (common period q shaft revolutions)"),
         Parameter("choice", "hertz", name="stiffness", section="bearing", choices=tuple(CONSTANTS),
                   help="hertz: K from Hertz theory, the preload balances exactly; paper: K as printed (1.5x)"),
+        Parameter("choice", "ball_sum", name="law", section="bearing", choices=tuple(LAWS),
+                  help="bearing force law: ball_sum (exact Hertz sum over the balls) or cubic (the 2010 "
+                       "papers' power series, small amplitudes: parts from the sum by 1 % at 0.38 z0)"),
         Parameter(name="outer_race_radius", section="bearing", lo=0, lo_open=True, unit="m",
                   help="outer groove-bottom radius R2 [m]; given: the free angle follows from R1/R2 "
                        "instead of the table's nominal angle"),
