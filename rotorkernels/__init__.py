@@ -31,7 +31,7 @@ def _plugin_sources():
     return [Path(spec.origin) for spec in found if spec is not None and spec.origin]
 
 
-PYTHON_ONLY = ("continuation", "orbits.py", "floquet.py")
+PYTHON_ONLY = ("continuation", "nnm", "orbits.py", "floquet.py")
 
 
 def kernel_sources(src=Path(__file__).parent):
