@@ -1,27 +1,13 @@
-"""The conservative polynomial system shared by the models and the nonlinear-normal-mode code.
-
-PolynomialSystem is a copy of the interface that will live in rotorkernels/models/spec.py (branch
-h14m); once that lands, import it from there and delete the class below (the fields must stay
-identical).
+"""The conservative polynomial system shared by the models and the nonlinear-normal-mode code
+(`models.spec.PolynomialSystem`, which a model's `polynomial(values)` returns): its checks, its
+linear part and its right-hand side for scipy.
 """
-from typing import NamedTuple
-
 import numpy as np
+
+from rotorkernels.models.spec import PolynomialSystem  # noqa: F401 (the package's API)
 
 # M symmetric and G skew to this relative accuracy (the models assemble them in floating point).
 SYMMETRY_RTOL = 1e-10
-
-
-class PolynomialSystem(NamedTuple):
-    """M q'' + G q' + K q + f2(q) + f3(q) = 0 in SI units; f2_i = sum_jk Q2[i,j,k] q_j q_k,
-    f3_i = sum_jkl Q3[i,j,k,l] q_j q_k q_l (G already multiplied by the shaft speed; G skew)."""
-    M: np.ndarray
-    G: np.ndarray
-    K: np.ndarray
-    Q2: np.ndarray
-    Q3: np.ndarray
-    coordinates: tuple     # names
-    units: tuple
 
 
 def _asymmetry(a, sign):
