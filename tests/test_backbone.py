@@ -37,6 +37,12 @@ def test_duffing_backbone_is_the_elliptic_function_period():
     a2 = gamma * bb.amplitude ** 2
     exact = 4 * ellipk(a2 / (2 * (1 + a2))) / np.sqrt(1 + a2)
     np.testing.assert_allclose(bb.period, exact, rtol=1e-9)    # omega = 1: tau = t / 2 pi, period in s
+    # x = A cn(w t | m): first Fourier coefficient 2 pi sqrt(q) / (K sqrt(m) (1 + q)) A, q the nome
+    # (Abramowitz-Stegun 16.23.2); the DFT of 64 samples is exact to rounding for this spectrum
+    m = a2 / (2 * (1 + a2))
+    nome = np.exp(-np.pi * ellipk(1 - m) / ellipk(m))
+    first = 2 * np.pi * np.sqrt(nome) / (ellipk(m) * np.sqrt(m) * (1 + nome)) * bb.amplitude
+    np.testing.assert_allclose(bb.harmonic_amplitude, first, rtol=1e-9)
     assert len(bb.amplitude) > 3 and np.all(np.diff(bb.frequency) > 0)     # hardening
 
 

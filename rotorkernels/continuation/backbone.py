@@ -43,7 +43,9 @@ REPEATED_RTOL = 1e-6
 # A second singular value below this (relative) makes the null space two-dimensional (a
 # rotationally symmetric model's circular whirl): the tangent is then the previous one projected.
 NULL_RTOL = 1e-8
-ENERGY_SAMPLES = 32
+# Samples per orbit for its energy drift and harmonic amplitude (the DFT's first harmonic is exact
+# for harmonics below half of it: the orbits' spectra fall far below rounding by then).
+ORBIT_SAMPLES = 64
 
 
 class BackbonePoint(NamedTuple):
@@ -59,6 +61,7 @@ class BackbonePoint(NamedTuple):
 
 class Backbone(NamedTuple):
     amplitude: np.ndarray       # q_j at its turning point [m]
+    harmonic_amplitude: np.ndarray  # amplitude of q_j's first harmonic [m] (the manifold's amplitude)
     frequency: np.ndarray       # [Hz]
     period: np.ndarray          # [s]
     states: np.ndarray          # initial states, SI (model.to_physical)
@@ -225,24 +228,29 @@ def energy(system, q, v):
             + np.einsum("ijkl,...i,...j,...k,...l", system.Q3, q, q, q, q) / 4)
 
 
-def _energy_drift(model, system, built, point, opts):
-    if system is None:
-        return np.nan
-    u = shooting.sample_orbit(model.kernel, point.state, built.p, point.period, ENERGY_SAMPLES, opts)
+def _orbit_measures(model, system, built, point, opts, j):
+    """(energy drift (max - min) / mean of T + V along the orbit, NaN without polynomial form;
+    first-harmonic amplitude of q_j [m]) from ORBIT_SAMPLES states over one period."""
+    u = shooting.sample_orbit(model.kernel, point.state, built.p, point.period, ORBIT_SAMPLES, opts)
     phys = model.to_physical(u, built.period)
+    harmonic = 2.0 * np.abs(np.fft.rfft(phys[:, j])[1]) / ORBIT_SAMPLES
+    if system is None:
+        return np.nan, harmonic
     e = energy(system, phys[:, :model.n_position], phys[:, model.n_position:])
-    return float((e.max() - e.min()) / e.mean())
+    return float((e.max() - e.min()) / e.mean()), harmonic
 
 
 def _result(model, values, built, sh, points, end, detail, omega, n_rhs):
     system = model.polynomial(values) if model.polynomial is not None else None
     periods = np.array([pt.period for pt in points]) * built.period
+    measures = np.array([_orbit_measures(model, system, built, pt, sh.orbit.opts, sh.j) for pt in points]).reshape(-1, 2)
     return Backbone(
         amplitude=np.array([pt.Y[-1] for pt in points]) * sh.scale * model.length_scale,
+        harmonic_amplitude=measures[:, 1],
         frequency=1.0 / periods if points else np.zeros(0),
         period=periods,
         states=model.to_physical(np.array([pt.state for pt in points]).reshape(-1, model.n_state), built.period),
         multipliers=np.array([pt.multipliers for pt in points]).reshape(-1, model.n_state),
-        energy_drift=np.array([_energy_drift(model, system, built, pt, sh.orbit.opts) for pt in points]),
+        energy_drift=measures[:, 0],
         coordinate=sh.j, linear_frequency=omega / (2 * np.pi * built.period),
         status=END_REASONS[end], detail=detail, n_rhs=n_rhs)
