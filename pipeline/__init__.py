@@ -64,25 +64,40 @@ def make_report(cube_or_path, out_dir, points=None, overwrite=False):
     dict {axis: value} or "speed=36 clearance=19e-6" (nearest grid point). A directory holding
     the report of another cube is refused unless overwrite; the report is built next to it and
     then takes its place, so no file of the earlier report is left."""
-    from pipeline import continuation, fileio, report
+    from pipeline import backbone, continuation, fileio, report
 
     is_path = isinstance(cube_or_path, (str, bytes)) or hasattr(cube_or_path, "__fspath__")
     if is_path and continuation.is_continuation_file(cube_or_path):
         ds = continuation.open_result(cube_or_path)
+    elif is_path and backbone.is_backbone_file(cube_or_path):
+        ds = backbone.open_result(cube_or_path)
     else:
         ds = _dataset(cube_or_path)
     identity = fileio.report_identity(ds, None if ds is cube_or_path else cube_or_path)
     fileio.check_report_dir(out_dir, identity, overwrite)
+    kind = ds.attrs.get("result_kind")
+    if points and kind in (continuation.RESULT_KIND, backbone.RESULT_KIND):
+        raise ValueError(f"--point applies to sweep cubes, not to {kind} results")
     with fileio.replaced_dir(out_dir) as tmp:
-        if continuation.is_continuation(ds):
+        if kind == continuation.RESULT_KIND:
             from pipeline.report import branch_result
-            if points:
-                raise ValueError("--point applies to sweep cubes, not to continuation results")
             files = branch_result.make_report(ds, tmp)
+        elif kind == backbone.RESULT_KIND:
+            from pipeline.report import backbone_result
+            files = backbone_result.make_report(ds, tmp)
         else:
             files = report.make_report(ds, tmp, points=points)
         (tmp / fileio.REPORT_MARKER).write_text(json.dumps(identity, indent=2) + "\n")
     return fileio.moved(files, tmp, out_dir)
+
+
+def backbones(config=None, output=None, **kwargs):
+    """Backbone curves of a conservative model's nonlinear normal modes (rotorsweep backbone):
+    manifold and continuation; returns the result's path."""
+    from pipeline import backbone
+
+    cfg = _config(config)
+    return backbone.run(cfg, output or f"out/{cfg.data['scene']['name']}_backbone.nc", **kwargs)
 
 
 def point(speed=None, clearance=None, contact_angle=None, preload=None, config=None, **values):

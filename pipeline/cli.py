@@ -1,4 +1,4 @@
-"""`rotorsweep` command line: run, continue, point, query, report, modes, info.
+"""`rotorsweep` command line: run, continue, backbone, point, query, report, modes, info.
 
 User mistakes (bad config, bad cube, bad query) print one clear message and exit with code 2;
 no traceback."""
@@ -41,6 +41,20 @@ def cmd_run(args):
     if args.report:
         from pipeline import sweep
         sweep.phase_printer(None if args.quiet else sys.stderr)(f"writing the report into {args.report}")
+        files = pipeline.make_report(path, args.report, overwrite=args.overwrite)
+        print(f"report: {files['html']}")
+    return 0
+
+
+def cmd_backbone(args):
+    from pipeline import backbone
+
+    cfg = pipeline._config(args.config)
+    out = args.output or f"out/{cfg.data['scene']['name']}_backbone.nc"
+    path = backbone.run(cfg, out, workers=args.workers, scheduler=args.scheduler, overwrite=args.overwrite,
+                        stream=None if args.quiet else sys.stderr)
+    print(f"backbones: {path}")
+    if args.report:
         files = pipeline.make_report(path, args.report, overwrite=args.overwrite)
         print(f"report: {files['html']}")
     return 0
@@ -202,8 +216,11 @@ def _point_text(r):
 
 
 def cmd_query(args):
-    from pipeline import continuation
+    from pipeline import backbone, continuation
 
+    if backbone.is_backbone_file(args.cube):
+        print(query._render(backbone.table(backbone.open_result(args.cube)), args.format))
+        return 0
     if continuation.is_continuation_file(args.cube):
         print(query._render(continuation.events_table(continuation.open_result(args.cube)), args.format))
         return 0
@@ -229,9 +246,11 @@ def cmd_report(args):
 
 
 def cmd_info(args):
-    from pipeline import continuation
+    from pipeline import backbone, continuation
 
-    if continuation.is_continuation_file(args.cube):
+    if backbone.is_backbone_file(args.cube):
+        print(backbone.describe(backbone.open_result(args.cube)))
+    elif continuation.is_continuation_file(args.cube):
         print(continuation.describe(continuation.open_result(args.cube)))
     else:
         print(cube.describe(cube.open_cube(args.cube)))
@@ -277,6 +296,17 @@ def build_parser():
     c.add_argument("--report", metavar="DIR", help="also write the report into DIR")
     c.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     c.set_defaults(func=cmd_continue)
+
+    b = sub.add_parser("backbone", help="nonlinear normal modes and backbone curves of a conservative model "
+                                         "(invariant manifold and continuation) into a netCDF result")
+    b.add_argument("config", help="scene TOML of symmetric4 or asymmetric5, [backbone] section optional")
+    b.add_argument("-o", "--output", help="result path (default out/<scene name>_backbone.nc)")
+    b.add_argument("--workers", type=_positive_int, help="local Dask worker processes (default: one per core, at least 2)")
+    b.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
+    b.add_argument("--overwrite", action="store_true", help="replace an existing result (and --report DIR)")
+    b.add_argument("--report", metavar="DIR", help="also write the report into DIR")
+    b.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+    b.set_defaults(func=cmd_backbone)
 
     p = sub.add_parser("point", help="periodic orbit and Floquet multipliers at one point")
     p.add_argument("--config", help="scene TOML (default: Bai 2006, 209 bearing, the paper's constant)")

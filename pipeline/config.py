@@ -76,6 +76,19 @@ SCHEMA = {
         "curves_in": Key("str", default="", help="a second swept axis: continue every fold, period doubling and "
                                                   "Neimark-Sacker point of the period-1 branches in it (boundary curves)"),
     },
+    "backbone": {   # `rotorsweep backbone`: nonlinear normal modes of a conservative model
+        "modes": Key("str", default="all", help="mode numbers (1 = the lowest linear frequency), e.g. \"1, 3\"; or all"),
+        "amplitude_max": _num(0, lo_open=True, default=None,
+                              help="largest master amplitude [m] (first harmonic; default: a quarter of the "
+                                   "preload's axial approach z0; must stay below z0)"),
+        "amplitude_min": _num(0, lo_open=True, default=None, help="smallest master amplitude [m] (default: amplitude_max / 100)"),
+        "amplitude_points": _num(3, 2000, kind="int", default=41, help="amplitudes of the grid (log-spaced)"),
+        "continuation": Key("bool", default=True, help="also the reference backbone by continuation of the full model's orbits"),
+        "ds": _num(0, lo_open=True, default=0.2, help="first arclength step (units of the largest amplitude)"),
+        "ds_max": _num(0, lo_open=True, default=2.0, help="largest arclength step"),
+        "max_steps": _num(1, kind="int", default=400, help="continuation points per backbone at most"),
+        "surface_mode": _num(1, kind="int", default=1, help="mode whose invariant manifold the report draws"),
+    },
     "numerics": {
         "integrator": Key("choice", default="dop853", choices=("dop853", "rk4")),
         "rtol": _num(0, 1e-2, lo_open=True, default=1e-10),

@@ -1,0 +1,504 @@
+"""`rotorsweep backbone`: the nonlinear normal modes of a conservative model (symmetric4,
+asymmetric5: Filipkovsky 2010) and their backbone curves, two ways, into a netCDF *backbone result*.
+
+For every mode asked for ([backbone] modes) and every combination of the swept axes (a *line*,
+one Dask task):
+
+- the Shaw-Pierre invariant manifold to cubic order (rotorkernels.nnm): its coefficients, the
+  reduced one-DOF oscillator, its backbone omega(A) = omega_0 + kappa A^2 on the amplitude grid;
+- the reference backbone by pseudo-arclength continuation of the full model's periodic orbits
+  (rotorkernels.continuation.backbone), its frequency at the same amplitudes, their difference
+  and the amplitude where they part by 1 %.
+
+Amplitude: the first harmonic of the master coordinate's displacement [m] (the manifold's
+amplitude; each continued orbit's is taken from its samples), on a log-spaced grid. The manifold
+and the continuation use the same master: the position with the largest component of the mode.
+A repeated linear frequency (symmetric4's cylindrical pair) is continued in the model's invariant
+plane holding the manifold's planar mode (the model module's PLANAR_SUBSPACES).
+
+The continuation frequency on the grid interpolates the continued points by a cubic spline in A^2
+(omega is a smooth function of A^2: omega_0 + kappa A^2 + O(A^4)), inside the amplitudes reached.
+"""
+import functools
+import importlib
+import itertools
+import json
+import os
+import re
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+from scipy.interpolate import CubicSpline
+
+from pipeline import compute, cube, fileio
+from pipeline.config import ConfigError
+from pipeline.continuation import write
+from rotorkernels import nnm
+from rotorkernels.continuation import backbone as cb
+from rotorkernels.continuation.arclength import Settings
+
+RESULT_KIND = "backbone"
+AUTO_FRACTION = 0.25        # default amplitude_max: this fraction of the preload's axial approach z0
+PART_RTOL = 0.01            # the manifold and the continuation "part" at this relative difference
+SURFACE_POINTS = 21         # the report's manifold surface: a SURFACE_POINTS^2 grid in (p, r)
+ORBIT_PERIODS, ORBIT_SAMPLES = 10, 32   # the full-system orbit drawn on the surface (the papers' check)
+
+
+@dataclass(frozen=True)
+class Plan:
+    modes: tuple | None         # 0-based mode indices; None: all
+    amplitude_max: float | None
+    amplitude_min: float | None
+    points: int
+    continuation: bool
+    settings: Settings
+    surface_mode: int           # 0-based
+    lines: tuple                # dicts {swept axis: value}
+    axes: tuple                 # names of the swept axes (the result's leading dimensions)
+
+
+def plan(data):
+    """The backbones a validated scene asks for; raises ConfigError naming every key that cannot
+    work (before any work starts)."""
+    spec = compute.model_of(data)
+    if spec.polynomial is None:
+        raise ConfigError(f"scene.model: {spec.name} is not a conservative polynomial model; backbones are "
+                          f"computed for {', '.join(_conservative_models())}")
+    sec = data["backbone"]
+    errors = []
+    modes = _modes(sec["modes"], errors)
+    settings = Settings(ds=sec["ds"], ds_max=sec["ds_max"], max_steps=sec["max_steps"],
+                        tol=data["numerics"]["newton_tol"])
+    errors += [f"backbone.{p}" for p in settings.problems()]
+    a_max, a_min = sec["amplitude_max"], sec["amplitude_min"]
+    if a_max is not None and a_min is not None and a_min >= a_max:
+        errors.append(f"backbone.amplitude_min: {a_min!r} m must be below backbone.amplitude_max ({a_max!r} m)")
+    axes = tuple(data["sweep"])
+    lines = tuple(dict(zip(axes, map(float, combo))) for combo in itertools.product(*data["sweep"].values()))
+    pl = Plan(modes, a_max, a_min, sec["amplitude_points"], sec["continuation"], settings,
+              sec["surface_mode"] - 1, lines, axes)
+    if not errors:
+        errors += _line_problems(data, pl)
+    if errors:
+        raise ConfigError("\n".join(errors))
+    return pl
+
+
+def _conservative_models():
+    from rotorkernels import models
+    return [name for name, spec in models.REGISTRY.items() if spec.polynomial is not None]
+
+
+def _modes(text, errors):
+    if text.strip() == "all":
+        return None
+    if not re.fullmatch(r"\s*[0-9]+(\s*[, ]\s*[0-9]+)*\s*", text):
+        errors.append(f"backbone.modes: {text!r} is neither \"all\" nor mode numbers such as \"1, 3\" (1 = lowest)")
+        return None
+    numbers = [int(m) for m in re.split(r"[\s,]+", text.strip())]
+    if min(numbers) < 1:
+        errors.append(f"backbone.modes: mode numbers start at 1 (the lowest linear frequency); got {min(numbers)}")
+    return tuple(sorted({m - 1 for m in numbers}))
+
+
+def _line_problems(data, pl):
+    """Per line: the modes exist, the amplitudes stay below the preload's axial approach z0 (where
+    the cubic series has a meaning: it is the ball sum's Taylor expansion about the preloaded state)."""
+    out = []
+    for where in pl.lines:
+        values = line_values(data, where)
+        n = len(nnm.linear_modes(compute.model_of(data).polynomial(values)))
+        z0 = compute.model_of(data).build(values).derived["axial_approach"]
+        label = ", ".join(f"{k} = {v:g}" for k, v in where.items()) or "the scene"
+        wanted = list(pl.modes or ()) + [pl.surface_mode]
+        if max(wanted) >= n:
+            key = "backbone.modes" if pl.modes and max(pl.modes) >= n else "backbone.surface_mode"
+            out.append(f"{key}: mode {max(wanted) + 1} does not exist; the model has {n} modes (1 to {n})")
+        a_max, a_min = amplitudes(pl, z0)[[-1, 0]]
+        if a_max >= z0:
+            out.append(f"backbone.amplitude_max: {a_max!r} m reaches the preload's axial approach z0 = {z0:.4g} m "
+                       f"at {label}: the cubic series is meaningless there (keep amplitudes well below z0)")
+        elif a_min >= a_max:
+            out.append(f"backbone.amplitude_min: {a_min!r} m must be below the amplitude_max {a_max:.4g} m at {label}")
+        if out:
+            break
+    return out
+
+
+def line_values(data, where):
+    """The model's parameter values at one line."""
+    spec = compute.model_of(data)
+    return {**compute.scene_values(data, spec), **compute.fixed_values(data), **where}
+
+
+def amplitudes(pl, z0):
+    """The amplitude grid [m] of a line whose axial approach is z0."""
+    a_max = pl.amplitude_max if pl.amplitude_max is not None else AUTO_FRACTION * z0
+    a_min = pl.amplitude_min if pl.amplitude_min is not None else a_max / 100
+    return np.geomspace(a_min, a_max, pl.points)
+
+
+# --- one line ------------------------------------------------------------------------------------
+
+def backbone_line(data, where):
+    """Every mode of one line (a Dask task): a dict of numpy arrays (mode records stacked)."""
+    pl = plan(data)
+    spec = compute.model_of(data)
+    values = line_values(data, where)
+    system = spec.polynomial(values)
+    z0 = spec.build(values).derived["axial_approach"]
+    grid = amplitudes(pl, z0)
+    modes = nnm.linear_modes(system)
+    chosen = pl.modes if pl.modes is not None else tuple(range(len(modes)))
+    opts = compute.integrator_settings(data)
+    records = [mode_record(spec, values, system, modes, k, grid, pl, opts) for k in chosen]
+    man = records[chosen.index(pl.surface_mode)]["manifold"] if pl.surface_mode in chosen else None
+    surface = surface_record(system, man or _manifold_or_none(system, pl.surface_mode), grid[-1])
+    return {"grid": grid, "z0": z0, "modes": chosen, "records": [_plain(r) for r in records], "surface": surface}
+
+
+def _manifold_or_none(system, k):
+    try:
+        return nnm.manifold(system, k)
+    except ValueError:
+        return None
+
+
+def _plain(record):
+    return {k: v for k, v in record.items() if k != "manifold"}
+
+
+def mode_record(spec, values, system, modes, k, grid, pl, opts):
+    """Manifold and continuation backbones of mode k on the amplitude grid."""
+    bb = _continued(spec, values, modes, k, grid, pl, opts) if pl.continuation else None
+    master = bb.coordinate if bb is not None and bb.status != "start_failed" else None
+    f_cont = _on_grid(bb, grid) if bb is not None else np.full(grid.size, np.nan)
+    record = {"linear_frequency": modes[k].frequency, "label": modes[k].label, "whirl": modes[k].whirl,
+              "frequency_continuation": f_cont, **_continuation_fields(bb)}
+    try:
+        man = nnm.manifold(system, k, master=master)
+    except ValueError as exc:     # an internal resonance the cubic manifold cannot carry: data, not a crash
+        n_state = 2 * len(system.coordinates)
+        return {**record, "manifold": None, "master": -1 if master is None else master, "kappa": np.nan,
+                "sigma": np.nan, "reduced": np.full(len(nnm.MONOMIALS), np.nan),
+                "coefficients": np.full((n_state, len(nnm.MONOMIALS)), np.nan), "notes": f"no manifold: {exc}",
+                "frequency_manifold": np.full(grid.size, np.nan), "relative_difference": np.full(grid.size, np.nan),
+                "parting_amplitude": np.nan, "invariance_distance": np.nan}
+    f_man = nnm.backbone(man, grid)
+    rel = (f_cont - f_man) / f_cont
+    return {
+        **record, "manifold": man, "master": man.master, "kappa": nnm.frequency_coefficient(man),
+        "sigma": nnm.growth_coefficient(man), "reduced": np.array([man.reduced[m] for m in nnm.MONOMIALS]),
+        "coefficients": man.coefficients, "notes": "; ".join(man.notes),
+        "frequency_manifold": f_man, "relative_difference": rel, "parting_amplitude": parting_amplitude(grid, rel),
+        "invariance_distance": nnm.invariance_error(system, man, grid[-1]),
+    }
+
+
+def _continued(spec, values, modes, k, grid, pl, opts):
+    """The continuation backbone of mode k, reaching a little beyond the grid (its amplitude is q_j
+    at the turning point, a little above the first harmonic), from half the grid's first value."""
+    z0 = spec.build(values).derived["axial_approach"]
+    subspace = _subspace(spec, modes, k)
+    index = _index_in(spec, values, subspace, modes[k].frequency)
+    top = min(1.1 * grid[-1], 0.5 * (grid[-1] + z0))
+    try:
+        return cb.follow_backbone(spec, values, opts, index, top, pl.settings, subspace=subspace,
+                                  amplitude_start=grid[0] / 2)
+    except ValueError as exc:       # the plan checked the inputs: what is left is the model's own refusal
+        empty = (np.zeros(0),) * 5 + (np.zeros((0, spec.n_state), complex), np.zeros(0))
+        return cb.Backbone(*empty, coordinate=-1, linear_frequency=modes[k].frequency,
+                           status="start_failed", detail=str(exc), n_rhs=0)
+
+
+def _subspace(spec, modes, k):
+    """None for a simple frequency; for a repeated one, the model's invariant subspace holding
+    the manifold's (planar) mode, in the kernel's scaled state."""
+    others = [m.omega for j, m in enumerate(modes) if j != k]
+    if not np.any(np.abs(np.array(others) / modes[k].omega - 1) < cb.REPEATED_RTOL):
+        return None
+    scale = spec.to_physical(np.ones(spec.n_state), 1.0)
+    v = modes[k].vector / scale
+    for basis in getattr(importlib.import_module(spec.module), "PLANAR_SUBSPACES", {}).values():
+        q = np.linalg.qr(basis)[0]
+        if np.linalg.norm(v - q @ (q.T @ v)) <= 1e-8 * np.linalg.norm(v):
+            return basis
+    return None     # follow_backbone then refuses the repeated frequency: a status, not a crash
+
+
+def _index_in(spec, values, subspace, frequency):
+    """Index of the linear mode of `frequency` [Hz] among follow_backbone's modes (in the subspace)."""
+    built = spec.build(values)
+    basis = np.eye(spec.n_state) if subspace is None else np.linalg.qr(subspace)[0]
+    omegas, _ = cb.linear_modes(spec, built.p, basis)
+    return int(np.argmin(np.abs(omegas / (2 * np.pi * built.period) - frequency)))
+
+
+def _on_grid(bb, grid):
+    """The continued frequencies at the grid amplitudes (cubic spline in A^2; NaN outside the
+    amplitudes reached or with fewer than 4 points)."""
+    a, f = bb.harmonic_amplitude, bb.frequency
+    out = np.full(grid.size, np.nan)
+    if a.size < 4 or np.any(np.diff(a) <= 0):
+        return out
+    inside = (grid >= a[0]) & (grid <= a[-1])
+    out[inside] = CubicSpline(a ** 2, f)(grid[inside] ** 2)
+    return out
+
+
+def parting_amplitude(grid, rel):
+    """The smallest amplitude where |relative difference| reaches PART_RTOL (log-linear between
+    grid points); NaN if it never does on the grid."""
+    d = np.abs(rel)
+    above = np.flatnonzero(d >= PART_RTOL)
+    if above.size == 0:
+        return np.nan
+    i = above[0]
+    if i == 0 or not np.isfinite(d[i - 1]):
+        return float(grid[i])
+    w = (np.log(PART_RTOL) - np.log(d[i - 1])) / (np.log(d[i]) - np.log(d[i - 1]))
+    return float(np.exp(np.log(grid[i - 1]) + w * (np.log(grid[i]) - np.log(grid[i - 1]))))
+
+
+def _continuation_fields(bb):
+    if bb is None:
+        return {"points": {}, "status": "not_computed", "detail": "backbone.continuation = false", "n_rhs": 0}
+    mult = bb.multipliers
+    off_unit = np.where(np.abs(mult - 1) > 1e-4, np.abs(np.abs(mult) - 1), 0.0)
+    return {"points": {"amplitude_turning": bb.amplitude, "amplitude": bb.harmonic_amplitude, "frequency": bb.frequency,
+                       "energy_drift": bb.energy_drift,
+                       "unit_circle_error": off_unit.max(axis=1) if mult.size else np.zeros(0)},
+            "status": bb.status, "detail": bb.detail, "n_rhs": bb.n_rhs}
+
+
+def surface_record(system, man, amplitude):
+    """The report's manifold figure: the slave coordinate with the largest linear motion over the
+    master's (p, r) plane, and the full system's orbit integrated from the manifold at `amplitude`."""
+    if man is None:
+        return None
+    n = len(system.coordinates)
+    shape = np.abs(man.mode.shape).copy()
+    shape[man.master] = -1.0
+    slave = int(np.argmax(shape))
+    span = (-1.2 * amplitude, 1.2 * amplitude)
+    p, r, value = nnm.surface(man, slave, span, tuple(man.omega * np.array(span)), SURFACE_POINTS)
+    orbit = nnm.orbit_on_manifold(system, man, amplitude, ORBIT_PERIODS, ORBIT_SAMPLES)
+    return {"mode": man.mode, "master": man.master, "slave": slave, "p": p[:, 0], "r": r[0], "value": value,
+            "orbit_p": orbit.state[:, man.master], "orbit_r": orbit.state[:, n + man.master],
+            "orbit_slave": orbit.state[:, slave], "orbit_manifold": orbit.manifold_state[:, slave],
+            "t": orbit.t, "amplitude": amplitude}
+
+
+# --- the result ----------------------------------------------------------------------------------
+
+def to_dataset(data, pl, lines, provenance):
+    """The backbone result: lines = [line dicts] in plan order, dims (swept axes..., mode, ...)."""
+    spec = compute.model_of(data)
+    system = spec.polynomial(line_values(data, pl.lines[0]))
+    shape = tuple(len(data["sweep"][a]) for a in pl.axes)
+    first = lines[0]
+    n_mode, n_amp = len(first["modes"]), first["grid"].size
+    n_pt = max([len(r["points"].get("frequency", ())) for ln in lines for r in ln["records"]] + [1])
+    names = tuple(system.coordinates) + tuple(c + "'" for c in system.coordinates)
+
+    def stack(key, tail=(), dtype=float):
+        out = np.empty((len(lines), n_mode) + tail, dtype)
+        for i, ln in enumerate(lines):
+            for k, r in enumerate(ln["records"]):
+                out[i, k] = r[key]
+        return out.reshape(shape + (n_mode,) + tail)
+
+    def points(key):
+        out = np.full((len(lines), n_mode, n_pt), np.nan)
+        for i, ln in enumerate(lines):
+            for k, r in enumerate(ln["records"]):
+                vals = r["points"].get(key, ())
+                out[i, k, :len(vals)] = vals
+        return out.reshape(shape + (n_mode, n_pt))
+
+    lead = pl.axes + ("mode",)
+    hz = {"units": "Hz"}
+    v = {
+        "frequency_manifold": (lead + ("amplitude",), stack("frequency_manifold", (n_amp,)),
+                               {**hz, "long_name": "backbone frequency from the cubic invariant manifold"}),
+        "frequency_continuation": (lead + ("amplitude",), stack("frequency_continuation", (n_amp,)),
+                                   {**hz, "long_name": "backbone frequency from continuation of the full model's orbits"}),
+        "relative_difference": (lead + ("amplitude",), stack("relative_difference", (n_amp,)),
+                                {"units": "1", "long_name": "(continuation - manifold) / continuation frequency"}),
+        "linear_frequency": (lead, stack("linear_frequency"), {**hz, "long_name": "linear natural frequency"}),
+        "kappa": (lead, stack("kappa"), {"units": "rad s-1 m-2", "long_name": "manifold backbone omega = omega_0 + kappa A^2"}),
+        "growth_rate": (lead, stack("sigma"), {"units": "s-1 m-2", "long_name": "reduced oscillator's amplitude growth sigma (0 for a conservative system)"}),
+        "parting_amplitude": (lead, stack("parting_amplitude"), {"units": "m", "long_name": f"amplitude where manifold and continuation part by {PART_RTOL:.0%} (NaN: not on the grid)"}),
+        "invariance_distance": (lead, stack("invariance_distance"), {"units": "m", "long_name": "largest distance from the manifold over 10 periods of the full orbit started on it at amplitude_max"}),
+        "master": (lead, stack("master", dtype="int32"), {"units": "1", "long_name": "index of the master coordinate (see the coordinate coordinate)"}),
+        "mode_label": (lead, stack("label", dtype=object), {"long_name": "mode shape: axial, cylindrical, conical, transverse"}),
+        "mode_whirl": (lead, stack("whirl", dtype=object), {"long_name": "whirl: forward, backward, none"}),
+        "reduced_coefficient": (lead + ("monomial",), stack("reduced", (len(nnm.MONOMIALS),)),
+                                {"units": "SI", "long_name": "B_m of the reduced oscillator p'' + sum_m B_m m(p, p') = 0"}),
+        "manifold_coefficient": (lead + ("state", "monomial"), stack("coefficients", (len(names), len(nnm.MONOMIALS))),
+                                 {"units": "SI", "long_name": "gamma of the manifold: state = gamma @ monomials(p, p')"}),
+        "manifold_notes": (lead, stack("notes", dtype=object), {"long_name": "internal resonances met and how they were resolved"}),
+        "continuation_end": (lead, stack("status", dtype=object), {"long_name": "how the continuation backbone ended"}),
+        "continuation_detail": (lead, stack("detail", dtype=object), {"long_name": "how the continuation backbone ended, in words"}),
+        "continuation_rhs": (lead, stack("n_rhs", dtype="int64"), {"units": "1", "long_name": "right-hand side evaluations of the continuation"}),
+        "point_amplitude": (lead + ("point",), points("amplitude"), {"units": "m", "long_name": "continued orbit: first harmonic amplitude of the master"}),
+        "point_amplitude_turning": (lead + ("point",), points("amplitude_turning"), {"units": "m", "long_name": "continued orbit: master displacement at its turning point"}),
+        "point_frequency": (lead + ("point",), points("frequency"), {**hz, "long_name": "continued orbit: frequency"}),
+        "point_energy_drift": (lead + ("point",), points("energy_drift"), {"units": "1", "long_name": "continued orbit: (max - min) / mean of T + V along it"}),
+        "point_unit_circle_error": (lead + ("point",), points("unit_circle_error"), {"units": "1", "long_name": "continued orbit: largest | |multiplier| - 1 | away from +1"}),
+        "axial_approach": (pl.axes, np.array([ln["z0"] for ln in lines]).reshape(shape), {"units": "m", "long_name": "preload's axial approach z0"}),
+    }
+    v.update(_surface_variables(lines, pl, shape, names))
+    coords = {a: (a, data["sweep"][a], _axis_attrs(spec, a)) for a in pl.axes}
+    coords["mode"] = ("mode", np.array(first["modes"]) + 1, {"long_name": "mode number (1 = lowest linear frequency)"})
+    coords["amplitude_grid"] = (pl.axes + ("amplitude",), np.array([ln["grid"] for ln in lines]).reshape(shape + (n_amp,)),
+                                {"units": "m", "long_name": "master amplitude (first harmonic of its displacement)"})
+    coords["monomial"] = ("monomial", list(nnm.MONOMIALS), {"long_name": "monomials of the master displacement p and velocity r"})
+    coords["state"] = ("state", list(names), {"long_name": "state components (coordinates, then velocities ')"})
+    attrs = {**provenance, "result_kind": RESULT_KIND, "Conventions": "CF-1.10",
+             "coordinates_units": json.dumps(list(system.units))}
+    return xr.Dataset(v, coords=coords, attrs=attrs)
+
+
+def _axis_attrs(spec, axis):
+    par = spec.parameter(axis)
+    return {"units": par.unit, "long_name": par.long_name or axis}
+
+
+def _surface_variables(lines, pl, shape, names):
+    drawn = [ln["surface"] for ln in lines if ln["surface"] is not None]
+    if not drawn:       # no manifold for surface_mode on any line (an internal resonance): no figure
+        return {}
+    s0 = drawn[0]
+    n_p, n_t = len(s0["p"]), len(s0["t"])
+
+    def stack(key, tail):
+        return np.array([ln["surface"][key] if ln["surface"] is not None else np.full(tail, np.nan)
+                         for ln in lines]).reshape(shape + tail)
+    return {
+        "surface_value": (pl.axes + ("surface_p", "surface_r"), stack("value", (n_p, n_p)),
+                          {"units": "SI", "long_name": "a slave coordinate on the invariant manifold of surface_mode over (p, r)"}),
+        "surface_p_values": (pl.axes + ("surface_p",), stack("p", (n_p,)), {"units": "m", "long_name": "master displacement p"}),
+        "surface_r_values": (pl.axes + ("surface_r",), stack("r", (n_p,)), {"units": "m s-1", "long_name": "master velocity r"}),
+        "orbit_p": (pl.axes + ("orbit_sample",), stack("orbit_p", (n_t,)), {"units": "m", "long_name": "full orbit from the manifold: master displacement"}),
+        "orbit_r": (pl.axes + ("orbit_sample",), stack("orbit_r", (n_t,)), {"units": "m s-1", "long_name": "full orbit from the manifold: master velocity"}),
+        "orbit_slave": (pl.axes + ("orbit_sample",), stack("orbit_slave", (n_t,)), {"units": "SI", "long_name": "full orbit from the manifold: the slave coordinate"}),
+        "orbit_on_surface": (pl.axes + ("orbit_sample",), stack("orbit_manifold", (n_t,)), {"units": "SI", "long_name": "the manifold's value of the slave at the orbit's (p, r)"}),
+        "orbit_time": (pl.axes + ("orbit_sample",), stack("t", (n_t,)), {"units": "s", "long_name": "time along the full orbit"}),
+        "surface_info": ((), json.dumps({"mode": pl.surface_mode + 1, "master": names[s0["master"]], "slave": names[s0["slave"]],
+                                         "amplitude": s0["amplitude"]}), {"long_name": "surface figure: mode, master, slave, orbit amplitude [m]"}),
+    }
+
+
+def open_result(path):
+    """Open a backbone result into memory; CubeError if the file is not one."""
+    try:
+        with xr.open_dataset(path, engine="netcdf4", mask_and_scale=False) as ds:
+            ds = ds.load()
+    except (OSError, ValueError) as exc:
+        raise cube.CubeError(f"{path}: cannot be read as netCDF ({exc})") from None
+    if ds.attrs.get("result_kind") != RESULT_KIND:
+        raise cube.CubeError(f"{path}: not a backbone result (no result_kind = {RESULT_KIND!r})")
+    return ds
+
+
+def is_backbone_file(path):
+    try:
+        with xr.open_dataset(path, engine="netcdf4", mask_and_scale=False) as ds:
+            return ds.attrs.get("result_kind") == RESULT_KIND
+    except (OSError, ValueError):
+        return False
+
+
+# --- running -------------------------------------------------------------------------------------
+
+def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr):
+    """Compute the backbones a config asks for into a netCDF result at `output`; returns its path."""
+    from pipeline import sweep
+
+    pl = plan(cfg.data)
+    output = os.path.abspath(output)
+    if os.path.exists(output) and not overwrite:
+        raise cube.CubeError(f"{output} exists; pass --overwrite to replace it")
+    with fileio.output_lock(output, cfg.path or "<default scene>"):
+        if scheduler:
+            sweep.check_scheduler(scheduler)
+        lines = _run_lines(cfg, pl, workers, scheduler, stream)
+        provenance = {**sweep._provenance(cfg), "title": f"rotorsweep backbones: {cfg.data['scene']['name']}"}
+        return write(to_dataset(cfg.data, pl, lines, provenance), output)
+
+
+def _run_lines(cfg, pl, workers, scheduler, stream):
+    from dask.distributed import as_completed
+
+    from pipeline import sweep
+
+    _say(stream, f"backbones of {cfg.data['scene']['model']} on {len(pl.lines)} line(s)"
+                 f"{'' if pl.continuation else ' (manifold only)'}")
+    client, cluster = sweep._client(workers, scheduler)
+    try:
+        submit = functools.partial(client.submit, backbone_line, cfg.data, pure=False)
+        futures = {submit(where): k for k, where in enumerate(pl.lines)}
+        results = [None] * len(pl.lines)
+        for done, future in enumerate(as_completed(futures), 1):
+            k = futures[future]
+            results[k] = future.result()
+            label = ", ".join(f"{a}={v:g}" for a, v in pl.lines[k].items()) or "the scene"
+            _say(stream, f"[{done}/{len(pl.lines)}] {label}: {_line_summary(results[k])}")
+    finally:
+        sweep._close(client, cluster)
+    return results
+
+
+def _say(stream, text):
+    if stream:
+        print(text, file=stream, flush=True)
+
+
+def _line_summary(line):
+    parts = []
+    for k, r in zip(line["modes"], line["records"]):
+        part = f"{r['parting_amplitude'] * 1e6:.3g} um" if np.isfinite(r["parting_amplitude"]) else "no 1 % parting"
+        parts.append(f"mode {k + 1} {r['label']} {r['linear_frequency']:.5g} Hz ({part}; {r['status']})")
+    return "; ".join(parts)
+
+
+# --- what a result holds -------------------------------------------------------------------------
+
+def table(ds):
+    """One row per (line, mode): the columns `query` prints."""
+    cols = {a: [] for a in ds["axial_approach"].dims}
+    cols.update({k: [] for k in ("mode", "label", "whirl", "linear_frequency_hz", "kappa", "parting_amplitude_m",
+                                 "invariance_distance_m", "continuation_end")})
+    for idx in np.ndindex(ds["axial_approach"].shape):
+        sel = dict(zip(ds["axial_approach"].dims, idx))
+        line = ds.isel(sel)
+        for a, i in sel.items():
+            cols[a] += [float(ds[a].values[i])] * ds.sizes["mode"]
+        cols["mode"] += [int(m) for m in ds["mode"].values]
+        cols["label"] += [str(x) for x in line["mode_label"].values]
+        cols["whirl"] += [str(x) for x in line["mode_whirl"].values]
+        cols["linear_frequency_hz"] += line["linear_frequency"].values.tolist()
+        cols["kappa"] += line["kappa"].values.tolist()
+        cols["parting_amplitude_m"] += line["parting_amplitude"].values.tolist()
+        cols["invariance_distance_m"] += line["invariance_distance"].values.tolist()
+        cols["continuation_end"] += [str(x) for x in line["continuation_end"].values]
+    return cols
+
+
+def describe(ds):
+    """`rotorsweep info` of a backbone result."""
+    lines = [f"backbone result: scene {ds.attrs.get('scene', '?')}, model {ds.attrs.get('model', '?')}",
+             f"{ds.sizes['mode']} mode(s) x {ds.sizes['amplitude']} amplitudes"
+             + "".join(f" x {ds.sizes[a]} {a}" for a in ds["axial_approach"].dims)]
+    cols = table(ds)
+    for i in range(len(cols["mode"])):
+        where = ", ".join(f"{a}={cols[a][i]:g}" for a in ds["axial_approach"].dims)
+        part = cols["parting_amplitude_m"][i]
+        lines.append(f"  mode {cols['mode'][i]}{f' ({where})' if where else ''}: {cols['label'][i]} {cols['whirl'][i]}, "
+                     f"{cols['linear_frequency_hz'][i]:.6g} Hz, manifold and continuation part by 1 % at "
+                     f"{f'{part * 1e6:.3g} um' if np.isfinite(part) else 'no amplitude of the grid'}; "
+                     f"continuation {cols['continuation_end'][i]}")
+    return "\n".join(lines)

@@ -1,0 +1,175 @@
+"""The report of a backbone result (`rotorsweep backbone`): the backbone of every mode as a
+bearing engineer reads a resonance (amplitude against frequency), the invariant manifold's
+(dashed) over the continuation's (solid, its orbits as dots); the relative difference of the two
+against amplitude on log-log axes with the A^4 slope the cubic theory predicts; and the manifold
+of one mode as a map of a slave coordinate over the master's (p, p') plane with the full system's
+orbit started on it (the papers' check: the orbit stays on the surface)."""
+import html
+import json
+from pathlib import Path
+
+import numpy as np
+
+from pipeline import backbone, query
+from pipeline.report import page, style
+
+UM = 1e6
+
+
+def _lines(ds):
+    """[(label, {axis: index})] of the swept axes' combinations."""
+    dims = ds["axial_approach"].dims
+    out = []
+    for idx in np.ndindex(ds["axial_approach"].shape):
+        sel = dict(zip(dims, idx))
+        label = ", ".join(f"{a} = {float(ds[a].values[i]):g} {ds[a].attrs.get('units', '')}" for a, i in sel.items())
+        out.append((label, sel))
+    return out
+
+
+def _mode_title(ds, k, sel):
+    line = ds.isel(sel)
+    return (f"mode {int(ds['mode'].values[k])}: {line['mode_label'].values[k]} {line['mode_whirl'].values[k]}, "
+            f"{float(line['linear_frequency'].values[k]):.5g} Hz")
+
+
+def _backbone_panel(hv, ds, k, backend, show):
+    dims = (hv.Dimension("frequency", label="frequency [Hz]"), hv.Dimension("amplitude", label="master amplitude [µm]"))
+    elements = []
+    for j, (label, sel) in enumerate(_lines(ds)):
+        line, colour = ds.isel(sel), style.LINE_COLOURS[j % len(style.LINE_COLOURS)]
+        grid = line["amplitude_grid"].values * UM
+        suffix = f" ({label})" if label else ""
+        elements.append(hv.Curve((line["frequency_manifold"].values[k], grid), *dims, label=f"manifold{suffix}")
+                        .opts(color=colour, **style.line_style(backend, 1.6, dash=True), backend=backend))
+        f, a = line["point_frequency"].values[k], line["point_amplitude"].values[k] * UM
+        elements.append(hv.Curve((f, a), *dims, label=f"continuation{suffix}")
+                        .opts(color=colour, **style.line_style(backend, 1.2, alpha=0.8), backend=backend))
+        elements.append(style.legend_points(hv, f, a, dims, f"continued orbits{suffix}")
+                        .opts(**style.marker_style(backend, colour, 4), backend=backend))
+    show_x, show_y = show
+    return hv.Overlay(elements).opts(title=_mode_title(ds, k, _lines(ds)[0][1]), show_grid=True, xlabel="frequency [Hz]"
+                                     if show_x else "", ylabel="master amplitude [µm]" if show_y else "",
+                                     backend=backend)
+
+
+def _backbones(hv, ds, backend):
+    n = ds.sizes["mode"]
+    columns = style.ncols(n)
+    panels = []
+    for k in range(n):
+        panel = _backbone_panel(hv, ds, k, backend, style.grid_opts(k, n, backend, columns))
+        size = {"width": 520, "height": 340} if backend == "bokeh" else {}
+        panels.append(panel.opts(legend_position="top_left" if k == 0 else None, show_legend=k == 0, **size,
+                                 backend=backend))
+    rows = -(-n // columns)
+    return style.layout(hv, panels, backend, columns, "Backbone curves: invariant manifold (dashed), continuation (solid)",
+                        fig_inches=(5.0 * columns, 3.6 * rows))
+
+
+def _difference(hv, ds, backend):
+    """|relative difference| against amplitude, log-log, one curve per mode (first line), with the
+    predicted A^4 slope through the middle of the first curve and the 1 % level."""
+    dims = (hv.Dimension("amplitude", label="master amplitude [µm]"),
+            hv.Dimension("difference", label="|f_continuation - f_manifold| / f_continuation"))
+    sel = _lines(ds)[0][1]
+    line = ds.isel(sel)
+    grid = line["amplitude_grid"].values * UM
+    elements = []
+    for k in range(ds.sizes["mode"]):
+        d = np.abs(line["relative_difference"].values[k])
+        ok = np.isfinite(d) & (d > 0)
+        colour = style.LINE_COLOURS[k % len(style.LINE_COLOURS)]
+        elements.append(hv.Curve((grid[ok], d[ok]), *dims, label=_mode_title(ds, k, sel))
+                        .opts(color=colour, **style.line_style(backend, 1.6), backend=backend))
+    ref = np.abs(line["relative_difference"].values[0])
+    if np.isfinite(ref).any():
+        mid = np.nanargmin(np.abs(np.log(grid) - np.log(grid).mean()))
+        slope = ref[mid] * (grid / grid[mid]) ** 4
+        elements.append(hv.Curve((grid, slope), *dims, label="slope A^4 (cubic theory)")
+                        .opts(color="#777777", **style.line_style(backend, 1.0, dash=True), backend=backend))
+    elements.append(hv.Curve((grid[[0, -1]], [backbone.PART_RTOL] * 2), *dims, label="1 %")
+                    .opts(color="#C00000", **style.line_style(backend, 1.0, dash=True), backend=backend))
+    size = {"width": 900, "height": 420} if backend == "bokeh" else {"fig_inches": (9, 4.6)}
+    return hv.Overlay(elements).opts(logx=True, logy=True, show_grid=True, legend_position="bottom_right", **size,
+                                     backend=backend)
+
+
+def _surface(hv, ds, backend):
+    """The slave coordinate on the manifold over (p, r), the full orbit's (p, r) path over it, and
+    beside it the slave along the orbit against the surface's value at the orbit's (p, r)."""
+    info = json.loads(str(ds["surface_info"].values))
+    sel = _lines(ds)[0][1]
+    line = ds.isel(sel)
+    p, r = line["surface_p_values"].values * UM, line["surface_r_values"].values
+    master, slave = info["master"], info["slave"]
+    kd = [hv.Dimension("p", label=f"{master} [µm]"), hv.Dimension("r", label=f"{master}' [m/s]")]
+    vd = hv.Dimension("value", label=f"{slave} on the manifold [SI]")
+    mesh = hv.QuadMesh((p, r, line["surface_value"].values.T), kd, vd).opts(cmap="RdBu_r", colorbar=True, backend=backend)
+    path = hv.Curve((line["orbit_p"].values * UM, line["orbit_r"].values), *kd, label="full orbit started on it") \
+        .opts(color="black", **style.line_style(backend, 1.2), backend=backend)
+    left = (mesh * path).opts(title=f"mode {info['mode']}: {slave} over the master's ({master}, {master}')", backend=backend)
+    td = hv.Dimension("t", label="time [ms]")
+    sd = hv.Dimension("slave", label=f"{slave} [SI]")
+    t = line["orbit_time"].values * 1e3
+    right = (hv.Curve((t, line["orbit_slave"].values), td, sd, label="full system")
+             .opts(color="black", **style.line_style(backend, 1.6), backend=backend)
+             * hv.Curve((t, line["orbit_on_surface"].values), td, sd, label="manifold at its (p, p')")
+             .opts(color="#D55E00", **style.line_style(backend, 1.2, dash=True), backend=backend)) \
+        .opts(title=f"{slave} along 10 periods at A = {info['amplitude'] * UM:.3g} µm", legend_position="top_right",
+              backend=backend)
+    size = {"width": 560, "height": 420} if backend == "bokeh" else {}
+    return style.layout(hv, [left.opts(**size, backend=backend), right.opts(**size, backend=backend)], backend, 2,
+                        "Invariant manifold and an orbit of the full system on it", fig_inches=(12, 4.6))
+
+
+def figures(ds, backend):
+    """(caption, filename, figure) of each figure."""
+    hv = style.holoviews()
+    out = [("Backbone curves of every mode", "backbones.png", _backbones(hv, ds, backend)),
+           ("Manifold vs continuation: relative frequency difference", "backbone_difference.png",
+            _difference(hv, ds, backend))]
+    if "surface_info" in ds:
+        out.append(("The invariant manifold of one mode with a full-system orbit", "manifold_surface.png",
+                    _surface(hv, ds, backend)))
+    return out
+
+
+def _modes_html(ds):
+    cols = backbone.table(ds)
+    head = "".join(f"<th>{html.escape(k)}</th>" for k in cols)
+    rows = "\n".join("<tr>" + "".join(f"<td>{html.escape(_cell(v))}</td>" for v in vals) + "</tr>"
+                     for vals in zip(*cols.values()))
+    return f'<h2>Modes</h2><table class="intervals"><thead><tr>{head}</tr></thead>\n<tbody>{rows}</tbody></table>'
+
+
+def _cell(v):
+    return f"{v:.6g}" if isinstance(v, float) else str(v)
+
+
+def _header_html(ds, title):
+    lines = backbone.describe(ds).splitlines()
+    return (f"<h1>{html.escape(title)}</h1><p>{html.escape(lines[0])}<br>{html.escape(lines[1])}</p>"
+            "<p>Amplitude: the first harmonic of the master coordinate's displacement (the largest in the "
+            "mode). Manifold: Shaw-Pierre invariant manifold to cubic order, backbone to second order "
+            "in the amplitude. Continuation: periodic orbits of the full conservative model.</p>")
+
+
+def make_report(ds, out_dir, title=None):
+    """report.html, one PNG per figure and modes.csv into out_dir; returns the paths as
+    pipeline.report.make_report does."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    title = title or f"Backbone report: {ds.attrs.get('scene', '')}"
+    csv_path = out / "modes.csv"
+    csv_path.write_text(query._render(backbone.table(ds), "csv") + "\n")
+    pngs = []
+    with style.backend("matplotlib") as hv:
+        for _, filename, fig in figures(ds, "matplotlib"):
+            hv.save(fig, out / filename, backend="matplotlib", dpi=style.DPI)
+            pngs.append(out / filename)
+    html_path = out / "report.html"
+    with style.backend("bokeh"):
+        figs = [(caption, fig) for caption, _, fig in figures(ds, "bokeh")]
+        page.save_html(html_path, title, _header_html(ds, title), figs, _modes_html(ds), ds.attrs.get("config_toml", ""))
+    return {"html": html_path, "png": pngs, "csv": csv_path, "points": []}
