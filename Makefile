@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions bench-continuation fig13 cascade fold clean
+.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions bench-continuation fig13 cascade fold backbone clean
 
 # CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
 CONSTRAINTS ?= constraints.txt
@@ -33,6 +33,10 @@ cascade: $(STAMP)  ## 19 um route to chaos, attractors swept up and down, with t
 
 fold: $(STAMP)  ## Bai 2006 by continuation: the 7.6 um fold pair, the 19 um cascade's branches (~1 min)
 	$(BIN)/rotorsweep continue configs/bai2006_fold.toml -o out/bai2006_fold.nc --overwrite --report out/bai2006_fold_report
+
+backbone: $(STAMP)  ## Filipkovsky 2010 nonlinear normal modes: manifold vs continuation backbones of both rotors (~2 min)
+	$(BIN)/rotorsweep backbone configs/filipkovsky2010_axial.toml -o out/filipkovsky2010_axial_backbone.nc --overwrite --report out/filipkovsky2010_axial_backbone_report
+	$(BIN)/rotorsweep backbone configs/filipkovsky2010_symmetric.toml -o out/filipkovsky2010_symmetric_backbone.nc --overwrite --report out/filipkovsky2010_symmetric_backbone_report
 
 bench: $(STAMP)  ## work-precision and baseline benchmarks -> docs/benchmarks/
 	$(BIN)/python -m workflows.bench.kernels

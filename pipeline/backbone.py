@@ -116,12 +116,12 @@ def _line_problems(data, pl):
         if max(wanted) >= n:
             key = "backbone.modes" if pl.modes and max(pl.modes) >= n else "backbone.surface_mode"
             out.append(f"{key}: mode {max(wanted) + 1} does not exist; the model has {n} modes (1 to {n})")
-        a_max, a_min = amplitudes(pl, z0)[[-1, 0]]
+        a_max, a_min = (float(a) for a in amplitudes(pl, z0)[[-1, 0]])
         if a_max >= z0:
-            out.append(f"backbone.amplitude_max: {a_max!r} m reaches the preload's axial approach z0 = {z0:.4g} m "
+            out.append(f"backbone.amplitude_max: {a_max:g} m reaches the preload's axial approach z0 = {z0:.4g} m "
                        f"at {label}: the cubic series is meaningless there (keep amplitudes well below z0)")
         elif a_min >= a_max:
-            out.append(f"backbone.amplitude_min: {a_min!r} m must be below the amplitude_max {a_max:.4g} m at {label}")
+            out.append(f"backbone.amplitude_min: {a_min:g} m must be below the amplitude_max {a_max:.4g} m at {label}")
         if out:
             break
     return out
@@ -274,14 +274,15 @@ def _continuation_fields(bb):
 
 
 def surface_record(system, man, amplitude):
-    """The report's manifold figure: the slave coordinate with the largest linear motion over the
-    master's (p, r) plane, and the full system's orbit integrated from the manifold at `amplitude`."""
+    """The report's manifold figure: the slave coordinate moving most on the manifold's orbit of
+    `amplitude`, over the master's (p, r) plane, and the full system's orbit integrated from the
+    manifold there."""
     if man is None:
         return None
     n = len(system.coordinates)
-    shape = np.abs(man.mode.shape).copy()
-    shape[man.master] = -1.0
-    slave = int(np.argmax(shape))
+    motion = nnm.coordinate_amplitudes(man, [amplitude])[0, :n]
+    motion[man.master] = -1.0
+    slave = int(np.argmax(motion))
     span = (-1.2 * amplitude, 1.2 * amplitude)
     p, r, value = nnm.surface(man, slave, span, tuple(man.omega * np.array(span)), SURFACE_POINTS)
     orbit = nnm.orbit_on_manifold(system, man, amplitude, ORBIT_PERIODS, ORBIT_SAMPLES)

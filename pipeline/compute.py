@@ -18,6 +18,16 @@ def model_of(data):
     return models.get(data["scene"]["model"])
 
 
+def require_forced(data, command):
+    """ConfigError unless the scene's model is forced: `run`, `continue` and `point` shoot orbits
+    over a forcing period, which a conservative model (symmetric4, asymmetric5) has not."""
+    spec = model_of(data)
+    if not spec.forced:
+        from pipeline.config import ConfigError
+        raise ConfigError(f"scene.model: {spec.name} is conservative (no damping, no forcing): `rotorsweep {command}` "
+                          "needs a forced model; its nonlinear normal modes and backbones: `rotorsweep backbone`")
+
+
 def scene_values(data, spec):
     """The model's parameter values given by the scene (its sections), by parameter name."""
     return {p.name: data[p.section][p.name] for p in spec.parameters if p.section is not None}
@@ -56,6 +66,7 @@ def point_values(cfg, given):
     fixed values; raises config.ConfigError naming what is missing or out of range."""
     from pipeline import config
 
+    require_forced(cfg.data, "point")
     spec = cfg.model
     values = {**fixed_values(cfg.data), **{k: v for k, v in given.items() if v is not None}}
     unknown = sorted(set(values) - set(spec.axes))

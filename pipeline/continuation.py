@@ -49,6 +49,7 @@ class Plan:
 def plan(data):
     """The continuation a validated scene asks for; raises ConfigError naming every key that
     cannot work (before any work starts)."""
+    compute.require_forced(data, "continue")
     spec = compute.model_of(data)
     sec = data["continuation"]
     name = sec["parameter"] or continued_axis(spec, data["sweep"])

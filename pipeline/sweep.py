@@ -210,6 +210,7 @@ def run(cfg, output, workers=None, scheduler=None, resume=False, overwrite=False
     """Run a sweep from a validated config into a netCDF cube at `output`; returns its path.
     The output is locked for the whole run, so two runs never share part files. Phase and
     progress lines go to `stream` (default: sys.stderr at the time of the call)."""
+    compute.require_forced(cfg.data, "run")
     output = os.path.abspath(output)
     with fileio.output_lock(output, cfg.path or "<default scene>"):
         if scheduler:

@@ -45,7 +45,7 @@ def _backbone_panel(hv, ds, k, backend, show):
         f, a = line["point_frequency"].values[k], line["point_amplitude"].values[k] * UM
         elements.append(hv.Curve((f, a), *dims, label=f"continuation{suffix}")
                         .opts(color=colour, **style.line_style(backend, 1.2, alpha=0.8), backend=backend))
-        elements.append(style.legend_points(hv, f, a, dims, f"continued orbits{suffix}")
+        elements.append(style.legend_points(hv, f, a, list(dims), f"continued orbits{suffix}")
                         .opts(**style.marker_style(backend, colour, 4), backend=backend))
     show_x, show_y = show
     return hv.Overlay(elements).opts(title=_mode_title(ds, k, _lines(ds)[0][1]), show_grid=True, xlabel="frequency [Hz]"
@@ -60,8 +60,7 @@ def _backbones(hv, ds, backend):
     for k in range(n):
         panel = _backbone_panel(hv, ds, k, backend, style.grid_opts(k, n, backend, columns))
         size = {"width": 520, "height": 340} if backend == "bokeh" else {}
-        panels.append(panel.opts(legend_position="top_left" if k == 0 else None, show_legend=k == 0, **size,
-                                 backend=backend))
+        panels.append(panel.opts(legend_position="bottom_left", show_legend=k == 0, **size, backend=backend))
     rows = -(-n // columns)
     return style.layout(hv, panels, backend, columns, "Backbone curves: invariant manifold (dashed), continuation (solid)",
                         fig_inches=(5.0 * columns, 3.6 * rows))
@@ -105,7 +104,8 @@ def _surface(hv, ds, backend):
     master, slave = info["master"], info["slave"]
     kd = [hv.Dimension("p", label=f"{master} [µm]"), hv.Dimension("r", label=f"{master}' [m/s]")]
     vd = hv.Dimension("value", label=f"{slave} on the manifold [SI]")
-    mesh = hv.QuadMesh((p, r, line["surface_value"].values.T), kd, vd).opts(cmap="RdBu_r", colorbar=True, backend=backend)
+    mesh = hv.QuadMesh((p, r, line["surface_value"].values.T), kd, vd).opts(cmap="RdBu_r", colorbar=True,
+                                                                            clabel=slave, backend=backend)
     path = hv.Curve((line["orbit_p"].values * UM, line["orbit_r"].values), *kd, label="full orbit started on it") \
         .opts(color="black", **style.line_style(backend, 1.2), backend=backend)
     left = (mesh * path).opts(title=f"mode {info['mode']}: {slave} over the master's ({master}, {master}')", backend=backend)
@@ -120,7 +120,7 @@ def _surface(hv, ds, backend):
               backend=backend)
     size = {"width": 560, "height": 420} if backend == "bokeh" else {}
     return style.layout(hv, [left.opts(**size, backend=backend), right.opts(**size, backend=backend)], backend, 2,
-                        "Invariant manifold and an orbit of the full system on it", fig_inches=(12, 4.6))
+                        "Invariant manifold and an orbit of the full system on it", fig_inches=(13, 4.6))
 
 
 def figures(ds, backend):

@@ -1,0 +1,105 @@
+"""`rotorsweep backbone`: the pipeline around the invariant manifold (rotorkernels.nnm) and the
+continuation backbones (rotorkernels.continuation.backbone) — the result file, the manifold vs
+continuation agreement at the order the cubic theory predicts, info / query / report, and input
+errors before any work."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from pipeline import backbone, cli, compute, config
+
+AXIAL = "configs/filipkovsky2010_axial.toml"
+
+
+def scene(**backbone_keys):
+    """The axial paper's scene (asymmetric5) with a [backbone] section replaced."""
+    text = open(AXIAL).read().split("[backbone]")[0]
+    keys = "\n".join(f"{k} = {json.dumps(v)}" for k, v in backbone_keys.items())
+    return text + f"[backbone]\n{keys}\n[numerics]\nrtol = 1e-12\natol = 1e-14\nnewton_tol = 1e-11\n"
+
+
+@pytest.fixture(scope="module")
+def axial_result(tmp_path_factory):
+    """Mode 1 (axial, 395 Hz) over two decades of amplitude, one local worker, with its report
+    (whose manifold figure shows mode 2, a whirl: the axial mode moves alone, its manifold is flat)."""
+    out = tmp_path_factory.mktemp("bb")
+    path = out / "scene.toml"
+    path.write_text(scene(modes="1", amplitude_max=4e-6, amplitude_points=21, surface_mode=2))
+    nc = out / "bb.nc"
+    rc = cli.main(["backbone", str(path), "-o", str(nc), "--workers", "1", "--report", str(out / "report"), "-q"])
+    assert rc == 0
+    return nc, out / "report"
+
+
+def test_manifold_and_continuation_agree_at_fourth_order(axial_result):
+    """The cubic manifold's backbone omega_0 + kappa A^2 is exact to O(A^2), so its difference from
+    the continuation backbone is O(A^4): the log-log slope over the lowest decade is 4. Tolerance
+    +-0.3: the next order O(A^6) is (A / z0)^2 <= 1e-3 relative to it there, the continuation's
+    frequencies carry rtol 1e-12 integration errors far below the difference's 1e-14..1e-10
+    relative (checked: at least 100x the integration error at the smallest amplitude)."""
+    ds = backbone.open_result(axial_result[0]).isel(speed=0)
+    a = ds["amplitude_grid"].values
+    d = np.abs(ds["relative_difference"].values[0])
+    lowest = a <= a[0] * 10 * (1 + 1e-9)
+    assert np.all(np.isfinite(d[lowest])) and d[lowest].min() > 1e-14
+    slope = np.polyfit(np.log(a[lowest]), np.log(d[lowest]), 1)[0]
+    assert slope == pytest.approx(4.0, abs=0.3)
+    # the linear limit: both backbones start at the eigenfrequency of the polynomial form
+    f0 = float(ds["linear_frequency"].values[0])
+    assert ds["frequency_manifold"].values[0, 0] == pytest.approx(f0, rel=1e-6)
+    assert ds["frequency_continuation"].values[0, 0] == pytest.approx(f0, rel=1e-6)
+    assert str(ds["mode_label"].values[0]) == "axial"
+
+
+def test_result_holds_the_continued_orbits_conservative_and_cf_units(axial_result):
+    ds = backbone.open_result(axial_result[0]).isel(speed=0)
+    assert ds.attrs["result_kind"] == "backbone"
+    for name in ("frequency_manifold", "frequency_continuation", "point_frequency"):
+        assert ds[name].attrs["units"] == "Hz"
+    assert ds["amplitude_grid"].attrs["units"] == "m" and ds["parting_amplitude"].attrs["units"] == "m"
+    drift = ds["point_energy_drift"].values[0]
+    assert np.nanmax(drift) < 1e-10                          # rtol 1e-12 over one period
+    assert np.nanmax(ds["point_unit_circle_error"].values[0]) < 1e-8
+    assert str(ds["continuation_end"].values[0]) == "left_range"
+    # the manifold figure's orbit of the full system stays on the surface: the cubic manifold's
+    # error is O(A^4), relative to the slave's O(A) motion O((A / z0)^3) = 1.4 % at 4 um
+    off = np.abs(ds["orbit_slave"].values - ds["orbit_on_surface"].values).max()
+    assert off < 0.05 * np.abs(ds["orbit_slave"].values).max()
+
+
+def test_info_query_and_report_of_a_backbone_result(axial_result, capsys):
+    nc, report = axial_result
+    assert cli.main(["info", str(nc)]) == 0
+    assert "mode 1" in capsys.readouterr().out
+    assert cli.main(["query", str(nc), "--format", "csv"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert lines[0].startswith("speed,mode,label") and len(lines) == 2
+    for name in ("report.html", "backbones.png", "backbone_difference.png", "manifold_surface.png", "modes.csv"):
+        assert (report / name).stat().st_size > 0
+
+
+@pytest.mark.parametrize("keys, message", [
+    ({"modes": "0"}, "backbone.modes: mode numbers start at 1"),
+    ({"modes": "one"}, "backbone.modes: 'one' is neither"),
+    ({"modes": "9"}, "backbone.modes: mode 9 does not exist; the model has 5 modes"),
+    ({"surface_mode": 7}, "backbone.surface_mode: mode 7 does not exist"),
+    ({"amplitude_max": 2e-5}, "backbone.amplitude_max: 2e-05 m reaches the preload's axial approach z0"),
+    ({"amplitude_max": 1e-6, "amplitude_min": 2e-6}, "backbone.amplitude_min: 2e-06 m must be below"),
+    ({"ds": 0.0}, "backbone.ds"),
+])
+def test_invalid_backbone_input_names_the_key_before_any_work(keys, message):
+    with pytest.raises(config.ConfigError, match=message.replace("(", r"\(")):
+        backbone.plan(config.parse_config(scene(**keys)).data)
+
+
+def test_a_forced_model_has_no_backbone_and_a_conservative_one_no_sweep():
+    with pytest.raises(config.ConfigError, match="scene.model: rigid_preloaded is not a conservative"):
+        backbone.plan(config.load_config("configs/filipkovsky2016_quick.toml").data)
+    with pytest.raises(config.ConfigError, match="symmetric4 is conservative.*rotorsweep backbone"):
+        compute.require_forced(config.load_config("configs/filipkovsky2010_symmetric.toml").data, "run")
+    done = subprocess.run([sys.executable, "-m", "pipeline.cli", "run", AXIAL, "-o", "/nonexistent/x.nc"],
+                          capture_output=True, text=True)
+    assert done.returncode == 2 and "asymmetric5 is conservative" in done.stderr
