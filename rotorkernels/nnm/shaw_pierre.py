@@ -159,20 +159,32 @@ def _linear_part(vector, master, n):
     return basis @ np.linalg.inv(basis[[master, n + master]])
 
 
-def _solve_equilibrated(op, rhs):
-    """Least-squares solution of op x = rhs after row/column scaling; (x, singular, consistent)."""
-    rows = np.abs(op).max(axis=1)
-    rows = 1.0 / np.where(rows > 0, rows, 1.0)
-    scaled = op * rows[:, None]
-    cols = np.abs(scaled).max(axis=0)
-    cols = 1.0 / np.where(cols > 0, cols, 1.0)
-    scaled = scaled * cols[None, :]
-    b = rhs * rows
+def _scales(system, omega, degree, cols, free):
+    """The natural size of each degree-`degree` unknown gamma[s, (a, b)] (a + b = degree), up to
+    a factor common to all: the coordinate's size relative to the master's ~ 1 / sqrt(M_ss), times
+    omega for a velocity row, over omega^b (r ~ omega p)."""
+    n = len(system.coordinates)
+    size = 1.0 / np.sqrt(np.diag(system.M))
+    rows = np.concatenate([size, omega * size])
+    powers = np.array([omega ** -float(EXPONENTS[c][1]) for c in cols])
+    return np.outer(rows, powers).ravel()[free]
+
+
+def _solve_scaled(op, rhs, scale, omega, size):
+    """Least-squares solution of op x = rhs in the natural units (the similarity transform
+    x = scale y, equations divided by scale and omega: the scaled operator has the eigenvalues of op
+    over omega, i omega (a - b) - lambda_s, and entries O(1)); (x, singular, consistent).
+    Consistent: the residual is rounding relative to the larger of |rhs| and `size` (the scaled
+    size of the terms rhs is made of: a rhs that cancels to rounding, as a slave that the forces
+    leave linear, is not a reference)."""
+    scaled = op * scale[None, :] / (scale[:, None] * omega)
+    b = rhs / (scale * omega)
     y, *_ = np.linalg.lstsq(scaled, b, rcond=SINGULAR_RTOL)
     sv = np.linalg.svd(scaled, compute_uv=False)
     singular = sv[-1] < SINGULAR_RTOL * sv[0]
-    consistent = np.linalg.norm(scaled @ y - b) <= CONSISTENT_RTOL * max(np.linalg.norm(b), 1e-300)
-    return y * cols, singular, consistent
+    reference = max(np.linalg.norm(b), size, 1e-300)
+    consistent = np.linalg.norm(scaled @ y - b) <= CONSISTENT_RTOL * reference
+    return y * scale, singular, consistent
 
 
 def _resonance(slave_omegas, omega, degree):
@@ -196,7 +208,10 @@ def _solve_degree(system, state, master, omega, degree, slave_omegas, notes):
     if not free.any():
         return      # one degree of freedom: no slaves
     rhs = -invariance_residual(system, state, master)[:, cols].ravel()
-    x, singular, consistent = _solve_equilibrated(op[np.ix_(free, free)], rhs[free])
+    every = np.ones(2 * n * len(cols), bool)
+    scale, all_scales = _scales(system, omega, degree, cols, free), _scales(system, omega, degree, cols, every)
+    size = np.linalg.norm(field(system, state)[:, cols].ravel() / (all_scales * omega))
+    x, singular, consistent = _solve_scaled(op[np.ix_(free, free)], rhs[free], scale, omega, size)
     if singular:
         ratio, slave = _resonance(slave_omegas, omega, degree)
         what = (f"{ratio}:1 internal resonance (a slave mode at {slave / (2 * np.pi):.6g} Hz, "
