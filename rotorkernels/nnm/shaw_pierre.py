@@ -28,14 +28,28 @@ matched power by power in (p, r) up to degree 3 (the papers' "equating coefficie
   (p' = r, r' = -omega^2 p) on degree-k monomials, P = I - gamma_1[:, r] e_{n+J}^T removes the part
   of the state's derivative carried by the master's own equation (W contains C_k through
   f_{n+J}), and R_k is the degree-k residual of (*) with C_k = 0 (quadratic terms of f2 at k = 2;
-  f3 and the f2 cross terms of degrees 1 x 2, and dX_2/dr W_2, at k = 3). Solved with numpy after
-  row/column equilibration (the columns span powers of omega).
+  f3 and the f2 cross terms of degrees 1 x 2, and dX_2/dr W_2, at k = 3). Solved with numpy in
+  the system's natural units: the similarity transform that scales the unknown gamma[s, (a, b)]
+  by 1 / sqrt(M_ss) (times omega for a velocity row) and by omega^-b (r ~ omega p), equations
+  divided by omega. The scaled operator keeps the eigenvalues (over omega) and has O(1) entries,
+  so its singular values measure the distance to resonance. (Max-based row/column equilibration,
+  used before, made the regular degree-3 operator of every gyroscopic whirl mode of the
+  rotationally symmetric models look singular, condition ~1e17; its truncated least-squares
+  solution was a wrong manifold with an O(1) error in kappa, and the two planes of a degenerate
+  pair were judged differently.)
 - Internal resonance: the operator's eigenvalues are i omega (a - b) - lambda_s (a + b = k,
-  lambda_s the other modes' eigenvalues), singular when a slave frequency omega_s = j omega,
-  j in {k, k-2, ...}: 2:1 at degree 2, 3:1 and 1:1 at degree 3. A singular system whose right-hand
-  side lies in the operator's range (e.g. the other planar mode of a degenerate pair when the
-  forces keep the motion planar) is solved by least squares and noted in Manifold.notes; one that
-  is not raises ValueError naming the ratio.
+  lambda_s the other modes' eigenvalues: those of the slaves' linear dynamics P A on the slave
+  rows), singular when a slave frequency omega_s = j omega, j in {k, k-2, ...}: 2:1 at degree 2,
+  3:1 and 1:1 at degree 3. The graph form itself adds no singularity: a circular whirl of a
+  rotationally symmetric rotor (y_J = -x_J' / Omega(A): the slave depends on the amplitude-
+  dependent frequency through the cubic terms p^2 r, r^3) is the unique solution when no slave is
+  resonant. A singular system whose right-hand side lies in the operator's range (the other
+  planar mode of a degenerate pair when the isotropic forces keep the motion planar) is solved by
+  least squares, minimum norm in the scaled units (the partner plane's rows stay zero: the planar
+  manifold), and noted in Manifold.notes; one that is not raises ValueError naming the ratio.
+  Consistency is judged against the larger of the right-hand side and the size of the terms it is
+  made of (a right-hand side that cancels to rounding, as for a slave the forces leave linear, is
+  no reference).
 
 The reduced oscillator is the master's own equation on the manifold, p'' = W(p, p'), written as
 
@@ -159,20 +173,32 @@ def _linear_part(vector, master, n):
     return basis @ np.linalg.inv(basis[[master, n + master]])
 
 
-def _solve_equilibrated(op, rhs):
-    """Least-squares solution of op x = rhs after row/column scaling; (x, singular, consistent)."""
-    rows = np.abs(op).max(axis=1)
-    rows = 1.0 / np.where(rows > 0, rows, 1.0)
-    scaled = op * rows[:, None]
-    cols = np.abs(scaled).max(axis=0)
-    cols = 1.0 / np.where(cols > 0, cols, 1.0)
-    scaled = scaled * cols[None, :]
-    b = rhs * rows
+def _scales(system, omega, degree, cols, free):
+    """The natural size of each degree-`degree` unknown gamma[s, (a, b)] (a + b = degree), up to
+    a factor common to all: the coordinate's size relative to the master's ~ 1 / sqrt(M_ss), times
+    omega for a velocity row, over omega^b (r ~ omega p)."""
+    n = len(system.coordinates)
+    size = 1.0 / np.sqrt(np.diag(system.M))
+    rows = np.concatenate([size, omega * size])
+    powers = np.array([omega ** -float(EXPONENTS[c][1]) for c in cols])
+    return np.outer(rows, powers).ravel()[free]
+
+
+def _solve_scaled(op, rhs, scale, omega, size):
+    """Least-squares solution of op x = rhs in the natural units (the similarity transform
+    x = scale y, equations divided by scale and omega: the scaled operator has the eigenvalues of op
+    over omega, i omega (a - b) - lambda_s, and entries O(1)); (x, singular, consistent).
+    Consistent: the residual is rounding relative to the larger of |rhs| and `size` (the scaled
+    size of the terms rhs is made of: a rhs that cancels to rounding, as a slave that the forces
+    leave linear, is not a reference)."""
+    scaled = op * scale[None, :] / (scale[:, None] * omega)
+    b = rhs / (scale * omega)
     y, *_ = np.linalg.lstsq(scaled, b, rcond=SINGULAR_RTOL)
     sv = np.linalg.svd(scaled, compute_uv=False)
     singular = sv[-1] < SINGULAR_RTOL * sv[0]
-    consistent = np.linalg.norm(scaled @ y - b) <= CONSISTENT_RTOL * max(np.linalg.norm(b), 1e-300)
-    return y * cols, singular, consistent
+    reference = max(np.linalg.norm(b), size, 1e-300)
+    consistent = np.linalg.norm(scaled @ y - b) <= CONSISTENT_RTOL * reference
+    return y * scale, singular, consistent
 
 
 def _resonance(slave_omegas, omega, degree):
@@ -196,7 +222,10 @@ def _solve_degree(system, state, master, omega, degree, slave_omegas, notes):
     if not free.any():
         return      # one degree of freedom: no slaves
     rhs = -invariance_residual(system, state, master)[:, cols].ravel()
-    x, singular, consistent = _solve_equilibrated(op[np.ix_(free, free)], rhs[free])
+    every = np.ones(2 * n * len(cols), bool)
+    scale, all_scales = _scales(system, omega, degree, cols, free), _scales(system, omega, degree, cols, every)
+    size = np.linalg.norm(field(system, state)[:, cols].ravel() / (all_scales * omega))
+    x, singular, consistent = _solve_scaled(op[np.ix_(free, free)], rhs[free], scale, omega, size)
     if singular:
         ratio, slave = _resonance(slave_omegas, omega, degree)
         what = (f"{ratio}:1 internal resonance (a slave mode at {slave / (2 * np.pi):.6g} Hz, "
