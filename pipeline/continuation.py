@@ -84,8 +84,34 @@ def plan(data):
                           f"{', '.join(a for a in sweep if a != name and len(sweep[a]) > 1) or 'none'}")
     others = [a for a in sweep if a != name]
     lines = tuple(dict(zip(others, map(float, combo))) for combo in itertools.product(*(sweep[a] for a in others)))
+    problem = _period_problem(data, name, start, stop, lines[0])
+    if problem:
+        raise ConfigError(f"continuation.parameter: {problem}")
     return Plan(name, start, stop, lines, settings, sec["periods"], sec["period_doubling_switches"], second,
                 tuple(float(v) for v in sweep.get(second, ())))
+
+
+# The shooting period must be a continuous function of the continued parameter. Probed at the
+# start and PERIOD_PROBE x the range width away: a continuous period moves by about that much
+# relative to itself (far below PERIOD_JUMP_RTOL for any range narrower than 10^3 x its start),
+# two forcings whose ratio the parameter changes become aperiodic there or jump in period by O(1).
+PERIOD_PROBE = 1e-7
+PERIOD_JUMP_RTOL = 1e-4
+
+
+def _period_problem(data, name, start, stop, line):
+    """Why the forcing period is not continuous in the parameter near its start ("": it is)."""
+    build = compute.builder(data)
+    values = {**compute.fixed_values(data), **line}
+    near = start + PERIOD_PROBE * (stop - start)
+    a, b = (build({**values, name: lam}) for lam in (start, near))
+    if a.periodic and b.periodic and abs(b.period / a.period - 1.0) <= PERIOD_JUMP_RTOL:
+        return ""
+    what = "is not periodic" if not (a.periodic and b.periodic) else f"has period {b.period:.6g} s (not {a.period:.6g} s)"
+    return (f"continuing {name} is ill-posed: at {name} = {near!r} the forcing {what}, so no periodic orbit is "
+            f"continuous in {name} (two forcings whose frequency ratio {name} changes are periodic only at "
+            "rational ratios, with a common period that jumps); continue with one forcing on (rigid_preloaded: "
+            "forcing.eccentricity = 0 or forcing.support_acceleration = 0)")
 
 
 def _within(value, par):

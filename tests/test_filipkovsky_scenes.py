@@ -1,0 +1,173 @@
+"""The Filipkovsky 2016 scenes by continuation (Figs. 2a, 2b-4), the unstable-branch point
+(Figs. 5-6), and the preloaded rotor driven hard enough that balls unload."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline import compute, config, continuation
+from rotorkernels import continuation as kc, integrators as ig, shooting
+from rotorkernels.continuation import arclength as al
+from rotorkernels.models import rigid_preloaded as rp
+
+SPEC = rp.SPEC
+FIG2A = Path("configs/filipkovsky2016_fig2a_continue.toml")
+FIG2B = Path("configs/filipkovsky2016_fig2b_continue.toml")
+
+
+def _quick_fig2a():
+    """Fig. 2a's scene narrowed to 15 deg and 560-720 Hz (both folds inside; ~15 s)."""
+    text = FIG2A.read_text().replace("speed = {start = 300.0, stop = 800.0, step = 5.0}",
+                                     "speed = {start = 560.0, stop = 720.0, step = 5.0}")
+    return config.parse_config(text.replace("nominal_angle = [12, 15, 26, 36, 40]", "nominal_angle = [15]"))
+
+
+def _half_pp_y_b(built, u0, periods, opts):
+    """Half peak-to-peak of y_B [m] over the last of `periods` forcing periods from u0 (a
+    transient: integration only, no shooting)."""
+    traj = shooting.sample_orbit(SPEC.kernel, u0, built.p, float(periods), 64 * periods, opts)
+    y = traj[-64:, 3] * rp.LENGTH_SCALE
+    return 0.5 * (y.max() - y.min()), traj[-1]
+
+
+@pytest.fixture(scope="module")
+def fig2a_line():
+    cfg = _quick_fig2a()
+    (where,) = continuation.plan(cfg.data).lines
+    return cfg, where, continuation.continue_line(cfg.data, where)[0]
+
+
+def test_fig2a_continuation_passes_the_fold_pair(fig2a_line):
+    """Unbalance response at 15 deg through the resonance: the branch turns at two folds (LP,
+    one multiplier +1), the middle part between them unstable through a real multiplier > 1
+    (saddle: the paper's 'left branches' lose stability by a saddle-node), and the soft
+    characteristic the paper describes: the upper fold lies below the lower one, both below
+    the linear forward cylindrical frequency at 1x (Campbell crossing ~ 690 Hz)."""
+    _, _, rec = fig2a_line
+    assert al.EVENT_LABELS[rec["event_type"][0]] == "LP" and list(rec["event_type"]) == [al.FOLD, al.FOLD]
+    lower, upper = rec["event_parameter"]
+    assert 600.0 < upper < lower < 690.0
+    # the folds' critical multiplier: +1 to the located point's accuracy (Brent on the
+    # arclength to the Newton tolerance; test functions of the multipliers ~1e-6)
+    for m in rec["event_multipliers"]:
+        assert np.min(np.abs(m - 1.0)) < 1e-4
+    mid = (rec["parameter"] > upper) & (rec["parameter"] < lower)
+    idx = np.arange(len(rec["parameter"]))
+    between = (idx > rec["event_index"][0]) & (idx <= rec["event_index"][1])
+    lead = rec["multipliers"][between][np.arange(between.sum()), np.abs(rec["multipliers"][between]).argmax(axis=1)]
+    assert mid[between].all() and (np.abs(lead) > 1).all() and np.allclose(lead.imag, 0) and (lead.real > 1).all()
+
+
+def test_fig2a_bistability_between_the_folds_by_transients(fig2a_line):
+    """Independent of the continuation's Newton: between the folds, a long transient from rest
+    and one from the upper branch's nearest computed orbit (a few Hz away) settle on two
+    different orbits whose y_B half
+    peak-to-peak equal the branch's lower and upper stable amplitudes there. 400 periods:
+    |multiplier| <= 0.969 on the stable parts, 0.969^400 ~ 3e-6 of the initial offset left,
+    far below the 2 % tolerance (the branch amplitudes are linear interpolations between
+    continuation points ~ 1 Hz apart)."""
+    cfg, where, rec = fig2a_line
+    lower, upper = rec["event_parameter"]
+    f = 0.5 * (lower + upper)
+    built = compute.builder(cfg.data)({**compute.fixed_values(cfg.data), **where, "speed": f})
+    opts = compute.integrator_settings(cfg.data)
+    lam, amp = rec["parameter"], rec["amplitude_half_pp"][:, 3]
+    stable = np.abs(rec["multipliers"]).max(axis=1) < 1
+    first, last = rec["event_index"][0], rec["event_index"][1] + 1
+    on_lower = np.interp(f, lam[:first + 1][stable[:first + 1]], amp[:first + 1][stable[:first + 1]])
+    tail = slice(last, None)
+    order = np.argsort(lam[tail])
+    on_upper = np.interp(f, lam[tail][order], amp[tail][order])
+    from_rest, _ = _half_pp_y_b(built, np.zeros(10), 400, opts)
+    near_upper = last + np.argmin(np.abs(lam[tail] - f))
+    from_far, _ = _half_pp_y_b(built, rec["state"][near_upper], 400, opts)
+    assert from_rest == pytest.approx(on_lower, rel=0.02)
+    assert from_far == pytest.approx(on_upper, rel=0.02)
+    assert on_upper > 1.5 * on_lower
+
+
+def test_continuing_a_frequency_with_both_forcings_on_is_rejected_before_work():
+    """Unbalance and support vibration together: the common period jumps with either
+    frequency, so `rotorsweep continue` refuses, naming the key and the way out."""
+    text = FIG2B.read_text().replace("eccentricity = 0.0", "eccentricity = 0.2e-6")
+    cfg = config.parse_config(text)
+    with pytest.raises(config.ConfigError, match="continuation.parameter: continuing support_frequency is ill-posed"):
+        continuation.plan(cfg.data)
+    assert continuation.plan(config.parse_config(FIG2B.read_text()).data).parameter == "support_frequency"
+
+
+# --- balls unloading -------------------------------------------------------------------------
+
+def _unloading_point():
+    """Vertical support vibration of 150 m/s^2 at 400 Hz, 15 deg, 250 Hz shaft speed: the
+    inertia force M A ~ 1800 N against a 300 N preload; the journals' excursion exceeds
+    z0 sin(a) / cos(a) ~ 5 um."""
+    v = {p.name: (p.unset if p.axis else p.default) for p in SPEC.parameters}
+    v.update(speed=250.0, eccentricity=0.0, support_acceleration=150.0, support_frequency=400.0)
+    return v
+
+
+def _min_delta(traj, p):
+    """Smallest ball deformation [m] of both bearings along the samples (the kernel's delta_k
+    written out, SPEC 2.2)."""
+    b = 2 * np.pi * np.arange(int(p[rp.P_NBALLS])) / p[rp.P_NBALLS]
+    ca, sa, off = p[rp.P_COS_A], p[rp.P_SIN_A], p[rp.P_OFFSET]
+    da = (traj[:, [0]] * np.cos(b) + traj[:, [1]] * np.sin(b)) * ca + traj[:, [4]] * sa + off
+    db = (traj[:, [2]] * np.cos(b) + traj[:, [3]] * np.sin(b)) * ca - traj[:, [4]] * sa + off
+    return min(da.min(), db.min()) * rp.LENGTH_SCALE
+
+
+def test_balls_unload_and_the_integration_error_follows_the_tolerance():
+    """Along the converged orbit at the unloading point some balls lose contact (delta < 0,
+    also seen through bearing_load: a ball-free direction carries no force). The force is only
+    C^1 where a ball leaves contact, which the embedded error estimate sees as a larger local
+    error and answers with smaller steps: the error over 5 periods against an rtol = 1e-13
+    reference shrinks with the tolerance, by at least 100x from rtol 1e-8 to 1e-11 (1000x for
+    a tolerance-proportional error; a factor 10 margin for DOP853's step-control constant across
+    the kinks), and stays within 100 x rtol x the orbit's size at each tolerance. Measured: 4.0e-6
+    at 1e-8, 1.2e-8 at 1e-11 (orbit size 141 um-units: 2.8 and 8.6 x rtol x size; slope ~0.85
+    per decade of rtol from 1e-6 to 1e-12)."""
+    v = _unloading_point()
+    built = SPEC.build(v)
+    opts = ig.settings(rtol=1e-11, atol=1e-13)
+    sol = kc.solve_orbit(SPEC, built.p, opts, cold_guess=SPEC.cold_guess, tol=1e-9)
+    assert sol.status == shooting.CONVERGED
+    orbit = shooting.sample_orbit(SPEC.kernel, sol.state, built.p, 1.0, 256, opts)
+    assert _min_delta(orbit, built.p) < -0.5e-6
+    # bearing_load where a ball of bearing A (next to the disk) is most unloaded: unloaded balls
+    # carry nothing (A's force equals the sum over its balls with delta > 0 only, written out)
+    state = rp.bearing_state(v)
+    b = 2 * np.pi * np.arange(int(built.p[rp.P_NBALLS])) / built.p[rp.P_NBALLS]
+    a = state.contact_angle
+    q = orbit[:, :5] * rp.LENGTH_SCALE
+    deltas = ((q[:, [0]] * np.cos(b) + q[:, [1]] * np.sin(b)) * np.cos(a)
+              + (state.axial_approach + q[:, [4]]) * np.sin(a))
+    worst = np.argmin(deltas.min(axis=1))
+    delta = deltas[worst]
+    assert (delta < 0).any() and (delta > 0).any()
+    force, _ = rp.bearing_load(q[worst], state, rp.geometry(15).n_balls)
+    load = state.contact_constant * np.maximum(delta, 0.0) ** 1.5 * np.cos(a)
+    np.testing.assert_allclose(force[0:2], [np.sum(load * np.cos(b)), np.sum(load * np.sin(b))], rtol=1e-12)
+
+    def end_state(rtol):
+        return shooting.sample_orbit(SPEC.kernel, sol.state, built.p, 5.0, 5,
+                                     ig.settings(rtol=rtol, atol=rtol * 1e-2))[-1]
+    ref = end_state(1e-13)
+    size = np.abs(orbit).max()
+    errors = {rtol: np.abs(end_state(rtol) - ref).max() for rtol in (1e-8, 1e-11)}
+    assert errors[1e-8] <= 100 * 1e-8 * size and errors[1e-11] <= 100 * 1e-11 * size
+    assert errors[1e-11] * 100 <= errors[1e-8]
+
+
+def test_forcing_too_strong_for_newton_gives_a_status_not_an_exception():
+    """At 10^4 m/s^2 (the parameter's upper bound) and 500 Hz the shooting's integrations run
+    into the amplitude limit: a diverged status with its reason (amplitude_limit), no
+    multipliers. (At 300 and 600 Hz the same forcing still converges: a failure is found, not
+    assumed.)"""
+    v = {**_unloading_point(), "support_acceleration": 1e4, "support_frequency": 500.0}
+    built = SPEC.build(v)
+    sol = kc.solve_orbit(SPEC, built.p, ig.settings(rtol=1e-9, atol=1e-11), cold_guess=SPEC.cold_guess,
+                         tol=1e-9, max_iter=15)
+    from pipeline import schema
+    assert (sol.status, schema.ORBIT_REASON[sol.reason]) == (shooting.DIVERGED, "amplitude_limit")
+    assert np.isnan(sol.multipliers.real).all()
