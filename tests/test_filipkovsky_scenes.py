@@ -171,3 +171,48 @@ def test_forcing_too_strong_for_newton_gives_a_status_not_an_exception():
     from pipeline import schema
     assert (sol.status, schema.ORBIT_REASON[sol.reason]) == (shooting.DIVERGED, "amplitude_limit")
     assert np.isnan(sol.multipliers.real).all()
+
+
+# --- the paper's frequency unit and the report ---------------------------------------------------
+
+def test_omega_l_is_the_axial_mode_at_15_deg():
+    """omega_l = the lowest natural frequency of `rotorsweep modes` with the 15 deg bearing;
+    independently, the axial mode of the rigid rotor on two bearings of axial stiffness k_a
+    (bearing.preload_state, closed form): sqrt(2 k_a / (m_B + m_0)) sqrt(1 - zeta^2) / 2 pi,
+    zeta = C / (2 sqrt(2 k_a (m_B + m_0))); equal to 1e-9 (the linearization at the static
+    state, q = 0, is exact)."""
+    from pipeline import modes
+    data = config.parse_config(FIG2A.read_text().replace("nominal_angle = [12, 15, 26, 36, 40]",
+                                                         "nominal_angle = [40]")).data
+    wl = modes.omega_l(data)
+    at15 = modes.scene_values(data, {"speed": 300.0, "nominal_angle": 15.0})
+    assert wl == modes.modes(at15, 300.0)[0].frequency
+    k = 2 * rp.bearing_state(at15).axial_stiffness
+    m = at15["shaft_mass"] + at15["disk_mass"]
+    zeta = at15["damping"] / (2 * np.sqrt(k * m))
+    assert wl == pytest.approx(np.sqrt(k / m) * np.sqrt(1 - zeta ** 2) / (2 * np.pi), rel=1e-9)
+
+
+def test_continuation_report_draws_the_response_in_omega_l_and_the_campbell_diagram(fig2a_line, tmp_path):
+    """The result carries the continued speed over omega_l (the paper's axis), the report draws
+    the half peak-to-peak of y_B (the [report] observable) against it, and the Campbell diagram
+    (forward / backward whirl, the 1x line)."""
+    from pipeline.report import branch_result
+    cfg, where, rec = fig2a_line
+    pl = continuation.plan(cfg.data)
+    ds = continuation.to_dataset(cfg.data, pl, [(where, [rec])],
+                                 {"config_toml": cfg.source, "model": "rigid_preloaded", "scene": "fig2a_quick"})
+    wl = ds["parameter_over_omega_l"].attrs["omega_l"]
+    np.testing.assert_array_equal(ds["parameter_over_omega_l"].values, ds["parameter"].values / wl)
+    np.testing.assert_array_equal(ds["event_parameter_over_omega_l"].values, ds["event_parameter"].values / wl)
+    assert ds.attrs["report_observable"] == "y_B"
+    j = list(ds["observable"].values).index("y_B")
+    np.testing.assert_allclose(ds["event_amplitude_half_pp"].values[:, j],
+                               rec["event_amplitude_half_pp"][:, j], rtol=0)
+    out = branch_result.make_report(ds, tmp_path)
+    names = {p.name for p in out["png"]}
+    assert {"response_y_B.png", "mode_campbell.png", "branch_stability_map.png"} <= names
+    page = out["html"].read_text()
+    assert "Response: half peak-to-peak of y_B" in page
+    assert "speed / \\\\u03c9_l (\\\\u03c9_l = 340 Hz)" in page       # bokeh's JSON escapes the omega
+    assert "Campbell diagram" in page and "forward whirl" in page and "backward whirl" in page and "1x (shaft speed)" in page
