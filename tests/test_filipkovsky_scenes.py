@@ -216,3 +216,41 @@ def test_continuation_report_draws_the_response_in_omega_l_and_the_campbell_diag
     assert "Response: half peak-to-peak of y_B" in page
     assert "speed / \\\\u03c9_l (\\\\u03c9_l = 340 Hz)" in page       # bokeh's JSON escapes the omega
     assert "Campbell diagram" in page and "forward whirl" in page and "backward whirl" in page and "1x (shaft speed)" in page
+
+
+SWEEP_GRID = """
+[scene]
+name = "angle_preload_map"
+model = "rigid_preloaded"
+
+[forcing]
+eccentricity = 0.2e-6
+
+[sweep]
+speed = [640.0, 660.0, 680.0]
+nominal_angle = [15, 26]
+preload = [200.0, 300.0]
+"""
+
+
+def test_sweep_report_maps_stability_over_contact_angle_and_preload(tmp_path):
+    """A rigid_preloaded sweep with the contact angle and the preload as the other axes: the
+    stability map has one band per nominal angle (y) and one panel per preload (facet), the
+    derived contact angle reads 'from the preload solve' (not the clearance model's text), and
+    the report adds the Campbell diagram with the grid's speeds marked."""
+    from pipeline import cube, sweep
+    from pipeline.report import axes_plan, make_report, map_rectangles
+    from pipeline.report.plan import fmt
+    cfg = config.parse_config(SWEEP_GRID)
+    ds = cube.open_cube(sweep.run(cfg, tmp_path / "grid.nc", workers=1, progress=False))
+    plan = axes_plan(ds)
+    assert (plan["x"], plan["y"], plan["facets"]) == ("speed", "nominal_angle", ["preload"])
+    rects, _ = map_rectangles(ds, plan, {"preload": 300.0})
+    bands = sorted({round(r[1] + 0.45) for rows in rects.values() for r in rows})
+    assert bands == [0, 1]
+    assert fmt(ds, "contact_angle", float("nan")) == "from the preload solve"
+    out = make_report(ds, tmp_path / "report")
+    names = {p.name for p in out["png"]}
+    assert {"stability_map.png", "mode_campbell.png", "branches.png"} <= names
+    page = out["html"].read_text()
+    assert "Campbell diagram" in page and "from clearance" not in page
