@@ -254,3 +254,74 @@ def test_sweep_report_maps_stability_over_contact_angle_and_preload(tmp_path):
     assert {"stability_map.png", "mode_campbell.png", "branches.png"} <= names
     page = out["html"].read_text()
     assert "Campbell diagram" in page and "from clearance" not in page
+
+
+# --- Figs. 5-6: the motion at a point of an unstable branch --------------------------------------
+
+FIG5 = Path("configs/filipkovsky2016_fig5.toml")
+
+
+@pytest.fixture(scope="module")
+def ns_branch():
+    """The 15 deg branch of Fig. 2b/3 (support vibration alone) from 590 to 700 Hz: two fold
+    pairs and the Neimark-Sacker pair between them (~15 s)."""
+    text = FIG2B.read_text().replace("support_frequency = {start = 300.0, stop = 800.0, step = 5.0}",
+                                     "support_frequency = {start = 590.0, stop = 700.0, step = 5.0}")
+    cfg = config.parse_config(text.replace("nominal_angle = [15, 26, 36]", "nominal_angle = [15]"))
+    (where,) = continuation.plan(cfg.data).lines
+    return cfg, where, continuation.continue_line(cfg.data, where)[0]
+
+
+def test_transient_leaves_the_torus_unstable_orbit_beating_and_settles_on_the_stable_one(ns_branch):
+    """At the branch point nearest 627.3 Hz (between the NS points: a complex pair |lambda| > 1)
+    a transient started on the orbit (perturbed by 1e-4 of its size) leaves it as the
+    multipliers say: the stroboscopic distance grows by |lambda| per period (fit over periods
+    5-40, still linear: distance < 2 % of the orbit; 3 % for the other, decaying components in
+    the fit) and y_B's deviation changes sign every pi / arg(lambda) periods (the beats of
+    Figs. 5-6; +-30 %: a count of ~3 sign changes). After 400 periods it sits on a stable
+    period-1 orbit of smaller amplitude (the lower branch's: Newton from there converges,
+    stable): the unstable orbit's beating is a transient, not an attractor."""
+    cfg, where, rec = ns_branch
+    ns = rec["event_parameter"][rec["event_type"] == al.NEIMARK_SACKER]
+    assert ns.size == 2
+    i = int(np.argmin(np.abs(rec["parameter"] - 627.3)))
+    assert ns.min() < rec["parameter"][i] < ns.max()
+    mult = rec["multipliers"][i]
+    lead = mult[np.argmax(np.abs(mult))]
+    assert abs(lead) > 1.0 and abs(lead.imag) > 0.05
+    built = compute.builder(cfg.data)({**compute.fixed_values(cfg.data), **where,
+                                       "support_frequency": rec["parameter"][i]})
+    opts = compute.integrator_settings(cfg.data)
+    u = rec["state"][i]
+    start = u + 1e-4 * np.abs(u).max() * np.random.default_rng(0).standard_normal(u.size)
+    strobe = shooting.sample_orbit(SPEC.kernel, start, built.p, 400.0, 400, opts)
+    distance = np.abs(strobe - u).max(axis=1)
+    assert distance[40] < 0.02 * np.abs(u).max()
+    growth = np.exp(np.polyfit(np.arange(5, 41), np.log(distance[5:41]), 1)[0])
+    assert growth == pytest.approx(abs(lead), rel=0.03)
+    dev = strobe[5:90, 3] - u[3]
+    spacing = np.diff(np.flatnonzero(np.diff(np.sign(dev)) != 0)).mean()
+    assert spacing == pytest.approx(np.pi / abs(np.angle(lead)), rel=0.3)
+    # period-1 by now: |multiplier| 0.966 on the stable orbit, ~200 periods since the landing
+    assert np.abs(strobe[-1] - strobe[-2]).max() < 1e-3 * np.abs(strobe[-1]).max()
+    sol = kc.solve_orbit(SPEC, built.p, opts, [strobe[-1]], cold_guess=SPEC.cold_guess, tol=1e-9)
+    assert sol.status == shooting.CONVERGED and sol.stable
+    assert np.abs(sol.state - u).max() > 0.1 * np.abs(u).max()
+    assert _half_pp_y_b(built, sol.state, 1, opts)[0] < _half_pp_y_b(built, u, 1, opts)[0]
+
+
+def test_fig5_point_with_the_unbalance_on_beats_on_a_forced_torus():
+    """configs/filipkovsky2016_fig5.toml: 627.3 / 250 Hz is no ratio of small integers, so the
+    forcing is quasi-periodic: no orbit, and the attractor (Poincare once per shaft revolution)
+    is the forced torus, quasi_periodic, not period-1: its y_B samples spread over a band (beats)
+    while its Lyapunov exponents are all negative (a forced torus contracts)."""
+    from pipeline import schema
+    cfg = config.load_config(FIG5)
+    data = {**cfg.data, "analysis": {**cfg.data["analysis"], "transient_periods": 200, "lyapunov_max_periods": 200}}
+    out = compute.solve_segment(data, [{**compute.fixed_values(data), "speed": 250.0, "support_frequency": 627.3,
+                                        "nominal_angle": 15.0}])
+    assert out["periodic_forcing"][0] == 0.0
+    assert schema.ATTRACTOR[int(out["attractor"][0])] == "quasi_periodic"
+    assert out["lle"][0] < 0
+    y = out["poincare_y_B"][0]
+    assert np.ptp(y) > 0.1 * np.abs(y).max()
