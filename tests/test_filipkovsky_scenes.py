@@ -237,7 +237,8 @@ def test_sweep_report_maps_stability_over_contact_angle_and_preload(tmp_path):
     """A rigid_preloaded sweep with the contact angle and the preload as the other axes: the
     stability map has one band per nominal angle (y) and one panel per preload (facet), the
     derived contact angle reads 'from the preload solve' (not the clearance model's text), and
-    the report adds the Campbell diagram with the grid's speeds marked."""
+    the report adds the Campbell diagram with the grid's speeds marked, and draws a --point of
+    this model (no x, y observables)."""
     from pipeline import cube, sweep
     from pipeline.report import axes_plan, make_report, map_rectangles
     from pipeline.report.plan import fmt
@@ -249,9 +250,10 @@ def test_sweep_report_maps_stability_over_contact_angle_and_preload(tmp_path):
     bands = sorted({round(r[1] + 0.45) for rows in rects.values() for r in rows})
     assert bands == [0, 1]
     assert fmt(ds, "contact_angle", float("nan")) == "from the preload solve"
-    out = make_report(ds, tmp_path / "report")
+    out = make_report(ds, tmp_path / "report", points=[{"speed": 660.0, "nominal_angle": 15.0, "preload": 300.0}])
     names = {p.name for p in out["png"]}
     assert {"stability_map.png", "mode_campbell.png", "branches.png"} <= names
+    assert [p.name for p in out["points"]] == ["point_660Hz_15deg_300N.png"]     # drawn in (x_A, y_A)
     page = out["html"].read_text()
     assert "Campbell diagram" in page and "from clearance" not in page
 
