@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions bench-continuation fig13 cascade fold backbone clean
+.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions bench-continuation bench-reductions fig13 cascade fold backbone clean
 
 # CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
 CONSTRAINTS ?= constraints.txt
@@ -49,6 +49,9 @@ bench-revisions: $(STAMP)  ## per-point cost before/after the model registry (cc
 
 bench-continuation: $(STAMP)  ## pseudo-arclength continuation vs a scipy peer, Duffing resonance curve (~1 min) -> docs/benchmarks/continuation.*
 	$(BIN)/python -m workflows.bench.continuation
+
+bench-reductions: $(STAMP)  ## rigid_preloaded reductions (balanced, one frequency, cubic law) vs the fuller model (~1 min) -> docs/benchmarks/reductions.*
+	$(BIN)/python -m workflows.bench.reductions
 
 clean:
 	rm -rf out .pytest_cache

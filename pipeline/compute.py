@@ -232,7 +232,7 @@ def point_detail(data, point, start_state=None, periods=256, steps_per_period=32
     start_state: a state on the attractor (a cube's attractor_state) to start from instead of
     diagnosing the point afresh from its periodic orbit -- where attractors coexist, this picks
     the one the sweep found. Returns dict(row, time [s], one array per observable (SI; x and y
-    for jeffcott_clearance), frequency [Hz], power [unit^2])."""
+    for jeffcott_clearance), frequency [Hz], power [unit^2], spectrum_of: the observable's name)."""
     data = {**data, "analysis": {**data["analysis"], "attractor": True, "sweep_direction": "up"}}
     row = {k: v[0] for k, v in solve_segment(data, [point]).items()}
     model = model_of(data)
@@ -247,7 +247,8 @@ def point_detail(data, point, start_state=None, periods=256, steps_per_period=32
     ok = np.all(np.isfinite(values), axis=1)
     freq, power = attractor.power_spectrum(values[ok, 0], dt) if ok.sum() > 8 else (np.array([]), np.array([]))
     observed = {o.name: values[:, k] for k, o in enumerate(model.observables)}
-    return {"row": row, "time": np.arange(n) * dt, **observed, "frequency": freq, "power": power}
+    return {"row": row, "time": np.arange(n) * dt, **observed, "frequency": freq, "power": power,
+            "spectrum_of": model.observables[0].name}
 
 
 def attractor_variables(model, att, period):

@@ -45,6 +45,11 @@ def _num(lo=-math.inf, hi=math.inf, lo_open=False, hi_open=False, default=None, 
     return Key(kind, default, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open, **kw)
 
 
+# Frequency units of the reports: Hz, or over omega_l (pipeline.modes.omega_l, the models that
+# have a linear analysis)
+FREQUENCY_UNITS = ("Hz", "omega_l")
+OMEGA_L_MODELS = ("rigid_preloaded",)
+
 SCHEMA = {
     "scene": {
         "name": Key("str", required=True, pattern=r"[A-Za-z0-9_.-]+"),
@@ -88,6 +93,13 @@ SCHEMA = {
         "ds_max": _num(0, lo_open=True, default=2.0, help="largest arclength step"),
         "max_steps": _num(1, kind="int", default=400, help="continuation points per backbone at most"),
         "surface_mode": _num(1, kind="int", default=1, help="mode whose invariant manifold the report draws"),
+    },
+    "report": {   # how the reports draw the scene's results
+        "observable": Key("str", default="", help="observable of the branch diagrams (its orbit's half peak-to-peak "
+                                                   "amplitude; default: the model's first observable)"),
+        "frequency_unit": Key("choice", default="Hz", choices=FREQUENCY_UNITS,
+                              help="Hz, or omega_l: frequencies over the lowest linear natural frequency at a 15 deg "
+                                   "contact angle (Filipkovsky 2016's nondimensional frequency; rigid_preloaded)"),
     },
     "numerics": {
         "integrator": Key("choice", default="dop853", choices=("dop853", "rk4")),
@@ -395,10 +407,23 @@ def _cross_checks(spec, data, axes, errors):
         errors.append(f"analysis.poincare_samples: must be >= 4 x analysis.max_period "
                       f"(= {4 * ana['max_period']}): a period is detected on the second half of "
                       "the samples and must repeat there at least twice")
+    errors.extend(_report_checks(spec, data["report"]))
     num = data["numerics"]
     if num["integrator"] == "dop853" and num["newton_tol"] < num["rtol"]:
         errors.append(f"numerics.newton_tol: must be >= numerics.rtol ({num['rtol']:g}); Newton cannot "
                       "converge below the integration accuracy")
+
+
+def _report_checks(spec, rep):
+    errors = []
+    names = [o.name for o in spec.observables]
+    if rep["observable"] and rep["observable"] not in names:
+        errors.append(f"report.observable: {rep['observable']!r} is not an observable of model {spec.name} "
+                      f"(allowed: {', '.join(names)})")
+    if rep["frequency_unit"] == "omega_l" and spec.name not in OMEGA_L_MODELS:
+        errors.append(f"report.frequency_unit: omega_l needs a model with a linear analysis "
+                      f"({', '.join(OMEGA_L_MODELS)}); model {spec.name} has none: use Hz")
+    return errors
 
 
 def _scene_model(raw):

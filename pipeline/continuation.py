@@ -85,8 +85,37 @@ def plan(data):
                           f"{', '.join(a for a in sweep if a != name and len(sweep[a]) > 1) or 'none'}")
     others = [a for a in sweep if a != name]
     lines = tuple(dict(zip(others, map(float, combo))) for combo in itertools.product(*(sweep[a] for a in others)))
+    problem = _period_problem(data, name, start, stop, lines[0])
+    if problem:
+        raise ConfigError(f"continuation.parameter: {problem}")
+    if data["report"]["frequency_unit"] == "omega_l" and par.unit != "Hz":
+        raise ConfigError(f"report.frequency_unit: omega_l scales frequencies; the continued parameter {name} is in "
+                          f"{par.unit or 'no unit'} (use Hz)")
     return Plan(name, start, stop, lines, settings, sec["periods"], sec["period_doubling_switches"], second,
                 tuple(float(v) for v in sweep.get(second, ())))
+
+
+# The shooting period must be a continuous function of the continued parameter. Probed at the
+# start and PERIOD_PROBE x the range width away: a continuous period moves by about that much
+# relative to itself (far below PERIOD_JUMP_RTOL for any range narrower than 10^3 x its start),
+# two forcings whose ratio the parameter changes become aperiodic there or jump in period by O(1).
+PERIOD_PROBE = 1e-7
+PERIOD_JUMP_RTOL = 1e-4
+
+
+def _period_problem(data, name, start, stop, line):
+    """Why the forcing period is not continuous in the parameter near its start ("": it is)."""
+    build = compute.builder(data)
+    values = {**compute.fixed_values(data), **line}
+    near = start + PERIOD_PROBE * (stop - start)
+    a, b = (build({**values, name: lam}) for lam in (start, near))
+    if a.periodic and b.periodic and abs(b.period / a.period - 1.0) <= PERIOD_JUMP_RTOL:
+        return ""
+    what = "is not periodic" if not (a.periodic and b.periodic) else f"has period {b.period:.6g} s (not {a.period:.6g} s)"
+    return (f"continuing {name} is ill-posed: at {name} = {near!r} the forcing {what}, so no periodic orbit is "
+            f"continuous in {name} (two forcings whose frequency ratio {name} changes are periodic only at "
+            "rational ratios, with a common period that jumps); continue with one forcing on (rigid_preloaded: "
+            "forcing.eccentricity = 0 or forcing.support_acceleration = 0)")
 
 
 def _within(value, par):
@@ -176,6 +205,7 @@ def branch_record(family, built, branch, parent):
     steps = np.linalg.norm(np.diff(X, axis=0), axis=1) if len(pts) > 1 else np.zeros(0)
     amp = np.array([_amplitudes(fam, built, p) for p in pts]).reshape(len(pts), 2, len(model.observables))
     ev = branch.events
+    ev_amp = np.array([_amplitudes(fam, built, e.point) for e in ev]).reshape(len(ev), 2, len(model.observables))
     return {
         "parameter": np.array([p.lam for p in pts]),
         "arclength": np.concatenate(([0.0], np.cumsum(steps)))[:len(pts)],
@@ -190,7 +220,7 @@ def branch_record(family, built, branch, parent):
         "event_index": np.array([e.index for e in ev], int),
         "event_state": np.array([e.point.state for e in ev]).reshape(len(ev), model.n_state),
         "event_multipliers": np.array([e.point.multipliers for e in ev]).reshape(len(ev), model.n_state),
-        "event_amplitude_max": np.array([_amplitudes(fam, built, e.point)[0] for e in ev]).reshape(len(ev), len(model.observables)),
+        "event_amplitude_max": ev_amp[:, 0], "event_amplitude_half_pp": ev_amp[:, 1],
     }
 
 
@@ -254,6 +284,18 @@ def _curve_variables(spec, pl, curves, par_attrs):
     }
 
 
+def _omega_l_variables(data, pl, v):
+    """The continued frequency and the events' over omega_l (pipeline.modes.omega_l): the
+    paper's nondimensional frequency, a coordinate the report draws its axes in."""
+    from pipeline import modes
+
+    wl = modes.omega_l(data)
+    attrs = {"units": "1", "long_name": f"{pl.parameter} / omega_l", "omega_l": wl,
+             "comment": f"omega_l = {wl:.10g} Hz: the lowest linear natural frequency with the 15 deg bearing"}
+    return {"parameter_over_omega_l": (v["parameter"][0], v["parameter"][1] / wl, attrs),
+            "event_parameter_over_omega_l": (v["event_parameter"][0], v["event_parameter"][1] / wl, attrs)}
+
+
 def _global_parents(lines):
     """Parent branch indices over the whole result (a line's records number them locally)."""
     out, offset = [], 0
@@ -312,7 +354,11 @@ def to_dataset(data, pl, lines, provenance):
         "event_multiplier_imag": (("event", "multiplier"), ev_mult.imag, {"units": "1", "long_name": "Floquet multiplier at the event, imaginary part"}),
         "event_state": (("event", "state"), np.array([r["event_state"][k] for _, r, k in ev]).reshape(len(ev), n), dict(schema.VARIABLES["orbit_state"][2])),
         "event_amplitude_max": (("event", "observable"), np.array([r["event_amplitude_max"][k] for _, r, k in ev]).reshape(len(ev), n_obs), {"units": amp_unit, "long_name": "max |observable| over the orbit at the event"}),
+        "event_amplitude_half_pp": (("event", "observable"), np.array([r["event_amplitude_half_pp"][k] for _, r, k in ev]).reshape(len(ev), n_obs), {"units": amp_unit, "long_name": "half peak-to-peak of the observable over the orbit at the event"}),
     }
+    rep = data["report"]
+    if rep["frequency_unit"] == "omega_l":
+        v.update(_omega_l_variables(data, pl, v))
     if pl.second:
         v.update(_curve_variables(spec, pl, [c for _, r in records for c in r.get("curves", [])], par_attrs))
     coords = {"observable": ("observable", [o.name for o in spec.observables], {"long_name": "observable (units: " + ", ".join(obs_units) + ")"})}
@@ -320,6 +366,7 @@ def to_dataset(data, pl, lines, provenance):
         attrs = spec.parameter(axis)
         coords[axis] = ("branch", np.array([w[axis] for w, _ in records]), {"units": attrs.unit, "long_name": attrs.long_name or axis})
     attrs = {**provenance, "result_kind": RESULT_KIND, "parameter": pl.parameter, "curves_in": pl.second,
+             "report_observable": rep["observable"] or spec.observables[0].name,
              "range": json.dumps(list(pl.range)), "Conventions": "CF-1.10"}
     return xr.Dataset(v, coords=coords, attrs=attrs)
 

@@ -118,6 +118,22 @@ def campbell(values, speeds_hz):
             for f in speeds_hz for k, m in enumerate(modes(values, f, eq))]
 
 
+# Filipkovsky 2016's frequency unit omega_l: the lowest natural frequency of the linearized
+# system with the bearing of the 15 deg row of the paper's table.
+OMEGA_L_ANGLE = 15.0
+
+
+def omega_l(data):
+    """omega_l [Hz] of a scene: the lowest damped natural frequency at the scene's first grid
+    point, its bearing replaced by the paper's 15 deg row (loaded angle from the preload solve,
+    no imposed angle or R2), at that point's shaft speed. With the paper's rotor it is the axial
+    mode, which the shaft speed does not move."""
+    first = {name: float(values[0]) for name, values in data["sweep"].items()}
+    values = {**scene_values(data, first), "nominal_angle": OMEGA_L_ANGLE, "contact_angle": None,
+              "outer_race_radius": None}
+    return modes(values, values["speed"])[0].frequency
+
+
 CAMPBELL_COLUMNS = ("speed_hz", "mode", "frequency_hz", "damping_ratio", "whirl", "label")
 
 

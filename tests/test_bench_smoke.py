@@ -65,3 +65,26 @@ def test_scaling_bench_core_on_a_tiny_grid(tmp_path):
     assert "QUICK" in text and "| w2_chunk4 |" in text and "## Verdict" in text
     assert (out / "scaling.png").stat().st_size > 1000
     assert not (tmp_path / "work" / "bench_smoke").exists()               # cubes removed
+
+
+def test_reductions_bench_on_one_repeat(tmp_path):
+    """workflows/bench/reductions.py once: the balanced (one-frequency) orbit is the two-frequency
+    one to the Newton tolerance (1e-9 on a state of ~1e-6 m: relative errors below 1e-7) and
+    cheaper (the fuller one integrates 5 support periods per step: at least 2x); the cage row and,
+    without a `law` key, the cubic-law row say why they are skipped; the shipped write-up is its
+    JSON rendered."""
+    from workflows.bench import reductions as br
+
+    res = br.main(["--repeats", "1", "--out", str(tmp_path)])
+    assert json.loads((tmp_path / "reductions.json").read_text()) == json.loads(json.dumps(res))
+    balanced, cage, law = res["rows"]
+    assert balanced["reduced"]["status"] == balanced["fuller"]["status"] == 0
+    assert balanced["state_error"] < 1e-7 and balanced["half_pp_error"] < 1e-7
+    assert balanced["speedup"] > 2.0
+    assert "no cage rotation" in cage["skipped"]
+    if "law" not in [p.name for p in br.SPEC.parameters]:
+        assert "no [bearing] law key" in law["skipped"]
+    else:
+        assert law["reduced"]["status"] == law["fuller"]["status"] == 0
+    shipped = json.loads((DOCS / "reductions.json").read_text())
+    assert br.markdown(shipped) == (DOCS / "reductions.md").read_text()

@@ -13,6 +13,7 @@ import numpy as np
 
 from pipeline import continuation, query
 from pipeline.report import branches, page, style
+from pipeline.report.figures import mode_campbell
 from rotorkernels.continuation import arclength as al
 
 def _shown(value, units):
@@ -27,43 +28,67 @@ def _branch_label(ds, b):
     return f"period-{k}" + (f" ({where})" if where else "")
 
 
-def _panel(hv, ds, yname, ylabel, backend, ref_one=False):
-    """All branches: y against the parameter, solid where stable, dashed where not, each with its
-    located events (branches.branch_elements, shared with the sweep report's branch diagrams)."""
+def parameter_axis(ds):
+    """(branch x point values, event values, axis label) of the continued parameter as the
+    report draws it: in its units, or over omega_l where the result has that coordinate
+    ([report] frequency_unit = "omega_l")."""
     par = ds.attrs["parameter"]
-    xlabel = f"{par} [{ds['parameter'].attrs.get('units', '')}]"
+    if "parameter_over_omega_l" in ds:
+        wl = ds["parameter_over_omega_l"].attrs["omega_l"]
+        return (ds["parameter_over_omega_l"].values, ds["event_parameter_over_omega_l"].values,
+                f"{par} / ω_l (ω_l = {wl:.4g} Hz)")
+    return ds["parameter"].values, ds["event_parameter"].values, f"{par} [{ds['parameter'].attrs.get('units', '')}]"
+
+
+def _panel(hv, ds, yname, ylabel, backend, ref_one=False, kind="amplitude_max"):
+    """All branches: y (an observable's `kind` of amplitude, or max |multiplier|) against the
+    parameter, solid where stable, dashed where not, each with its located events
+    (branches.branch_elements, shared with the sweep report's branch diagrams)."""
+    par = ds.attrs["parameter"]
+    xs, event_xs, xlabel = parameter_axis(ds)
     dims = (hv.Dimension(par, label=xlabel), hv.Dimension(yname, label=ylabel))
-    ys, event_ys = _values(ds, yname), _event_values(ds, yname)
+    ys, event_ys = _values(ds, yname, kind), _event_values(ds, yname, kind)
     elements = []
     for b in range(ds.sizes["branch"]):
         mine = ds["event_branch"].values == b
         special = [(x, y, al.EVENT_LABELS[int(k)]) for x, y, k in
-                   zip(ds["event_parameter"].values[mine], event_ys[mine], ds["event_type"].values[mine])]
-        elements += branches.branch_elements(ds["parameter"].values[b], ys[b], ds["stable"].values[b] == 1, special,
+                   zip(event_xs[mine], event_ys[mine], ds["event_type"].values[mine])]
+        elements += branches.branch_elements(xs[b], ys[b], ds["stable"].values[b] == 1, special,
                                              backend, dims, (xlabel, ylabel), style.LINE_COLOURS[b % len(style.LINE_COLOURS)],
                                              _branch_label(ds, b), legend_unstable=False)
     if ref_one:
-        x = ds["parameter"].values
-        ref = hv.Curve(([np.nanmin(x), np.nanmax(x)], [1.0, 1.0]), *dims, label="|λ| = 1")
+        ref = hv.Curve(([np.nanmin(xs), np.nanmax(xs)], [1.0, 1.0]), *dims, label="|λ| = 1")
         elements.append(ref.opts(color="#C00000", **style.line_style(backend, 1.2, dash=True), backend=backend))
     size = {"width": 1100, "height": 460} if backend == "bokeh" else {"fig_inches": (12, 4.8), "aspect": 1.9}
     return hv.Overlay(elements).opts(show_grid=True, legend_position="right", **size, backend=backend)
 
 
-def _values(ds, yname):
+def _values(ds, yname, kind):
     """(branch, point) values of a plotted quantity: max |multiplier| or an observable's
-    amplitude (max |o| over the orbit), in the units the report shows."""
+    amplitude (kind: amplitude_max, max |o| over the orbit, or amplitude_half_pp), in the units
+    the report shows."""
     if yname == "max_abs_multiplier":
         return ds["max_abs_multiplier"].values
     j = list(ds["observable"].values).index(yname)
-    return _shown(ds["amplitude_max"].values[:, :, j], ds["amplitude_max"].attrs.get("units"))[0]
+    return _shown(ds[kind].values[:, :, j], ds[kind].attrs.get("units"))[0]
 
 
-def _event_values(ds, yname):
+def _event_values(ds, yname, kind):
+    """The events' values of the plotted quantity (NaN: not in the result, one written before
+    event_amplitude_half_pp existed)."""
+    n = ds.sizes.get("event", 0)
     if yname == "max_abs_multiplier":
-        return np.ones(ds.sizes.get("event", 0))
+        return np.ones(n)
+    name = "event_" + kind
+    if name not in ds:
+        return np.full(n, np.nan)
     j = list(ds["observable"].values).index(yname)
-    return _shown(ds["event_amplitude_max"].values[:, j], ds["amplitude_max"].attrs.get("units"))[0]
+    return _shown(ds[name].values[:, j], ds[kind].attrs.get("units"))[0]
+
+
+def _parameter_scale(ds):
+    """Factor from the parameter's units to the drawn axis (1 / omega_l, or 1)."""
+    return 1.0 / ds["parameter_over_omega_l"].attrs["omega_l"] if "parameter_over_omega_l" in ds else 1.0
 
 
 CLASS_COLOURS = {0: ("no stable orbit on the branches", "#D55E00"), 1: ("stable", "#56B4E9"),
@@ -75,21 +100,22 @@ def _stability_map(hv, ds, backend):
     line's branches changes (none / one / two or more: bistable)."""
     keys, lines = continuation.stability_classes(ds)
     par = ds.attrs["parameter"]
-    xdim = hv.Dimension(par, label=f"{par} [{ds['parameter'].attrs.get('units', '')}]")
+    x, _, xlabel = parameter_axis(ds)
+    scale = _parameter_scale(ds)
+    xdim = hv.Dimension(par, label=xlabel)
     rects = {c: [] for c in CLASS_COLOURS}
     ticks = []
     for i, (where, pieces) in enumerate(lines.items()):
         units = [ds[k].attrs.get("units", "") for k in keys]
         ticks.append((i, ", ".join("{:.4g} {}".format(*_shown(v, u)) for v, u in zip(where, units)) or "line"))
         for lo, hi, n in pieces:
-            rects[min(n, 2)].append((lo, i - 0.42, hi, i + 0.42))
+            rects[min(n, 2)].append((lo * scale, i - 0.42, hi * scale, i + 0.42))
     elements = []
     for c, (name, colour) in CLASS_COLOURS.items():
         data = rects[c] or [(0, 0, 0, 0)]
         hover = {"tools": ["hover"]} if backend == "bokeh" else {}
         el = hv.Rectangles(data, kdims=[xdim, "y", "x1", "y1"], label=name)
         elements.append(el.opts(**style.fill_style(backend, colour), **hover, backend=backend))
-    x = ds["parameter"].values
     size = {"width": 1100, "height": 140 + 40 * len(lines)} if backend == "bokeh" else {"fig_inches": (12, 1.6 + 0.5 * len(lines)), "aspect": "auto"}
     return hv.Overlay(elements).opts(yticks=ticks, ylim=(-0.5, len(lines) - 0.5), xlim=(np.nanmin(x), np.nanmax(x)),
                                      ylabel=", ".join(keys) or "", legend_position="right", **size, backend=backend)
@@ -134,15 +160,21 @@ def figures(ds, backend):
     hv = style.holoviews()
     obs = list(ds["observable"].values)
     units = _shown(1.0, ds["amplitude_max"].attrs.get("units", ""))[1]
-    out = [(f"Branch diagram: max |{o}| over the orbit", f"branch_{o}.png",
-            _panel(hv, ds, o, f"max |{o}| [{units}]", backend)) for o in obs[:2]]
-    out.insert(0, ("Stability along the parameter: stable, none stable, bistable", "branch_stability_map.png",
+    main = ds.attrs.get("report_observable") or obs[0]
+    out = [(f"Response: half peak-to-peak of {main} over the orbit", f"response_{main}.png",
+            _panel(hv, ds, main, f"half peak-to-peak {main} [{units}]", backend, kind="amplitude_half_pp"))]
+    out += [(f"Branch diagram: max |{o}| over the orbit", f"branch_{o}.png",
+             _panel(hv, ds, o, f"max |{o}| [{units}]", backend)) for o in obs[:2]]
+    out.insert(1, ("Stability along the parameter: stable, none stable, bistable", "branch_stability_map.png",
                    _stability_map(hv, ds, backend)))
     if "curve" in ds.dims and ds.sizes["curve"]:
-        out.insert(1, (f"Stability boundary curves in ({ds.attrs['parameter']}, {ds.attrs['curves_in']})",
+        out.insert(2, (f"Stability boundary curves in ({ds.attrs['parameter']}, {ds.attrs['curves_in']})",
                        "boundary_curves.png", _curves_map(hv, ds, backend)))
     out.append(("Largest Floquet multiplier modulus along the branches", "branch_max_multiplier.png",
                 _panel(hv, ds, "max_abs_multiplier", "max |multiplier|", backend, ref_one=True)))
+    if mode_campbell.has_linear_analysis(ds):
+        out.append(("Campbell diagram: natural frequencies vs shaft speed (forward solid, backward dashed)",
+                    "mode_campbell.png", mode_campbell.result_figure(ds, backend)))
     return out
 
 

@@ -40,7 +40,8 @@ def fmt(ds, axis, value):
     """A value of an axis in display units, e.g. '7.6 µm'."""
     factor, unit, _ = axis_display(ds, axis)
     if value is None or not np.isfinite(value):
-        return "from clearance" if axis == "contact_angle" else "n/a"
+        how = cube.derived_parameters(ds).get(axis, "")
+        return "from " + how[len("derived from "):].split(" per point")[0] if how.startswith("derived from ") else "n/a"
     return f"{float(value) * factor:.4g} {unit}"
 
 
@@ -81,7 +82,7 @@ def axes_plan(ds):
     omitted."""
     x = continued_axis(ds)
     swept = [a for a in other_axes(ds) if ds.sizes[a] > 1]
-    derived = cube.derived_parameters(ds)     # NaN: fmt writes "from clearance"
+    derived = cube.derived_parameters(ds)     # NaN: fmt writes where it comes from
     fixed = {a: np.nan if a in derived else float(np.ravel(ds[a].values)[0])
              for a in schema.axes_of(schema.model_of(ds))
              if a != x and a not in swept and (a in ds.coords or a in derived)}

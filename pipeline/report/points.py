@@ -13,8 +13,14 @@ POINT_STEPS = 64           # samples per forcing period (the Poincare section is
 
 _POINT_CUBE_VARS = ("orbit_status", "stable", "bifurcation", "max_abs_multiplier", "multiplier_real",
                     "multiplier_imag", "forcing_period", "attractor", "period", "lle", "lle_stderr",
-                    "lle_method", "poincare_x", "poincare_y", "attractor_multiplier_real",
-                    "attractor_multiplier_imag", "attractor_state")
+                    "lle_method", "attractor_multiplier_real", "attractor_multiplier_imag", "attractor_state")
+
+
+def orbit_pair(names, main=""):
+    """The two observables a point's orbit is drawn in: the scene's [report] observable `main`
+    with its x partner (y_B -> (x_B, y_B)) where the model has one, else the first two."""
+    partner = "x" + main[1:] if main.startswith("y") else ""
+    return (partner, main) if partner in names else tuple(names[:2])
 
 
 def parse_point(items):
@@ -117,7 +123,8 @@ def compute_point(ds, data, resolved):
     values = resolved["values"]
     point = {**fixed, **values}
     sub = ds.isel(resolved["index"])
-    names = [n + sfx for n in _POINT_CUBE_VARS for sfx in ("", schema.DOWN_SUFFIX)
+    pair = orbit_pair([o.name for o in compute.model_of(data).observables], data["report"]["observable"])
+    names = [n + sfx for n in (*_POINT_CUBE_VARS, *(f"poincare_{o}" for o in pair)) for sfx in ("", schema.DOWN_SUFFIX)
              if n + sfx in sub.variables] + (["hysteresis"] if "hysteresis" in sub.variables else [])
     cube_values = {n: np.asarray(sub[n].values) for n in names}
     labels = sweep_labels(ds)
@@ -132,7 +139,7 @@ def compute_point(ds, data, resolved):
                                       steps_per_period=POINT_STEPS)
         runs.append({"suffix": suffix, "label": label, "detail": detail, "from_cube": start is not None})
     return {"resolved": resolved, "point": point, "cube": cube_values, "runs": runs,
-            "labels": labels, "where": where_label(ds, values)}
+            "labels": labels, "where": where_label(ds, values), "pair": pair}
 
 
 def point_title(pt):

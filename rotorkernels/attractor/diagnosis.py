@@ -70,7 +70,7 @@ def closed_curve(samples, max_gap=np.pi / 3, max_jump=0.25, min_aspect=0.02):
 
 
 def classify(samples, lle, lle_stderr, period_k, status=ig.STATUS_OK, *, sigmas=SIGMAS,
-             floor=LLE_FLOOR, check_curve=True):
+             floor=LLE_FLOOR, check_curve=True, forced_torus=False):
     """(code into ATTRACTOR, k) from the Poincare samples, the largest exponent and its standard
     error, and the detected period.
 
@@ -81,6 +81,9 @@ def classify(samples, lle, lle_stderr, period_k, status=ig.STATUS_OK, *, sigmas=
     - not_settled (a contracting attractor whose period is not resolved: longer than max_period,
       or not settled to the detection tolerance, typically close to a bifurcation) when
       lle < -(sigmas * lle_stderr + floor);
+      Under quasi-periodic forcing (forced_torus) a contracting attractor whose samples lie on
+      a closed curve is the forced torus (the forcing's phase is no state, so its exponent
+      is not 0): quasi_periodic;
     - zero within the uncertainty: quasi_periodic -- unless check_curve is set and the tail
       samples do not lie on a closed curve (`closed_curve`): then not_settled. This is what
       an orbit next to a bifurcation looks like (a multiplier near -1 or +1: the state settles
@@ -100,7 +103,8 @@ def classify(samples, lle, lle_stderr, period_k, status=ig.STATUS_OK, *, sigmas=
     if lle > margin:
         return CHAOTIC, 0
     if lle < -margin:
-        return NOT_SETTLED, 0
+        on_curve = forced_torus and samples is not None and closed_curve(samples)
+        return (QUASI_PERIODIC, 0) if on_curve else (NOT_SETTLED, 0)
     if check_curve and samples is not None and not closed_curve(samples):
         return NOT_SETTLED, 0
     return QUASI_PERIODIC, 0
@@ -242,7 +246,7 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
     expo, stderr, n_done, lstatus, end2, t_end = _run_benettin(
         model, end, p, opts, 0, renorm_periods, max_periods, n_blocks, rtol_stop, min_periods,
         atol_stop, align_periods, weighted, clock * (n_transient + n_samples - 1), clock)
-    code, k = classify(samples, expo[0], stderr[0], k, lstatus)
+    code, k = classify(samples, expo[0], stderr[0], k, lstatus, forced_torus=not periodic)
     if code == NOT_SETTLED and lstatus == ig.STATUS_OK:
         # a contracting attractor whose samples had not settled: by the end of the Lyapunov run
         # they have, so sample again there

@@ -8,23 +8,37 @@ from pipeline.report.points import POINT_STEPS, point_rows, point_title
 SPECTRUM_HARMONICS = 3.3   # spectrum drawn up to this multiple of the ball-passage frequency
 
 
-def _run_elements(hv, run, colour, cube, backend):
-    """The orbit curve and Poincare points of one trajectory (and the cube's samples)."""
+def _run_elements(hv, run, colour, cube, backend, pair):
+    """The orbit curve and Poincare points of one trajectory (and the cube's samples) in the
+    observables `pair` (points.orbit_pair)."""
     d, label = run["detail"], run["label"]
-    x, y = d["x"] * 1e6, d["y"] * 1e6
+    a, b = pair
+    x, y = d[a] * 1e6, d[b] * 1e6
     orbit = (hv.Curve((x, y), "x", "y", label=label)
              .opts(color=colour, **style.line_style(backend, 0.9 if backend == "bokeh" else 0.6, alpha=0.8),
                    backend=backend))
     poinc = []
-    cube_x = cube.get("poincare_x" + run["suffix"])
+    cube_x = cube.get(f"poincare_{a}" + run["suffix"])
     if cube_x is not None and np.isfinite(cube_x).any():
-        cy = cube["poincare_y" + run["suffix"]]
+        cy = cube[f"poincare_{b}" + run["suffix"]]
         poinc.append(hv.Points((cube_x * 1e6, cy * 1e6), ["x", "y"], label=f"{label}: cube samples")
                      .opts(**style.marker_style(backend, colour, 6 if backend == "bokeh" else 4.5), backend=backend))
     poinc.append(hv.Points((x[::POINT_STEPS], y[::POINT_STEPS]), ["x", "y"], label=f"{label}: this trajectory")
                  .opts(**style.marker_style(backend, colour, 9 if backend == "bokeh" else 6.5, "o", hollow=True,
                                             alpha=0.6), backend=backend))
     return orbit, poinc
+
+
+def _history(hv, pt, backend):
+    """The time history of the drawn pair's second observable over the trajectory (the paper's
+    Figs. 5a / 6a: beats show as a varying envelope)."""
+    name = pt["pair"][1]
+    curves = [hv.Curve((run["detail"]["time"] * 1e3, run["detail"][name] * 1e6), "time", name, label=run["label"])
+              .opts(color=colour, **style.line_style(backend, 0.8), backend=backend)
+              for run, colour in zip(pt["runs"], style.SWEEP_COLOURS)]
+    return hv.Overlay(curves).opts(title=f"time history of {name} (on the attractor)", xlabel="time [ms]",
+                                   ylabel=f"{name} [µm]", show_legend=len(curves) > 1,
+                                   fontsize=style.fonts(backend), backend=backend)
 
 
 def _spectrum(hv, pt, backend):
@@ -52,7 +66,7 @@ def _spectrum(hv, pt, backend):
     for fm, name, c, dash in marks:
         curves.append(hv.Curve(([fm, fm], [floor, top]), "frequency", "power", label=f"{name} {fm:.4g} Hz")
                       .opts(color=c, **style.line_style(backend, 1.3, dash=dash), backend=backend))
-    return hv.Overlay(curves).opts(title="power spectrum of x", xlabel="frequency [Hz]",
+    return hv.Overlay(curves).opts(title=f"power spectrum of {pt['runs'][0]['detail']['spectrum_of']}", xlabel="frequency [Hz]",
                                    ylabel="power [µm²]", logy=True, ylim=(floor, top),
                                    xlim=(0, SPECTRUM_HARMONICS * f_bp), show_legend=True,
                                    legend_position="top_right" if backend == "bokeh" else "best",
@@ -73,30 +87,35 @@ def _text_table(hv, rows, backend):
 
 
 def fig_point(pt, backend="bokeh", table=True):
-    """Orbit (x vs y), Poincare section, power spectrum of x and (table=True) the point's table."""
+    """Orbit and Poincare section in the pair of observables (points.orbit_pair), power spectrum of
+    the first observable, the time history of the pair's second and (table=True) the point's
+    table."""
     hv = style.holoviews()
     orbit, poinc = [], []
     for run, colour in zip(pt["runs"], style.SWEEP_COLOURS):
-        o, p = _run_elements(hv, run, colour, pt["cube"], backend)
+        o, p = _run_elements(hv, run, colour, pt["cube"], backend, pt["pair"])
         orbit.append(o)
         poinc += p
     fonts = style.fonts(backend)
-    o = hv.Overlay(orbit).opts(title="orbit", xlabel="x [µm]", ylabel="y [µm]", show_legend=len(orbit) > 1,
+    xl, yl = (f"{o} [µm]" for o in pt["pair"])
+    o = hv.Overlay(orbit).opts(title="orbit", xlabel=xl, ylabel=yl, show_legend=len(orbit) > 1,
                                fontsize=fonts, backend=backend)
-    q = hv.Overlay(poinc).opts(title="Poincaré section (once per forcing period)", xlabel="x [µm]",
-                               ylabel="y [µm]", show_legend=True,
+    q = hv.Overlay(poinc).opts(title="Poincaré section (once per forcing period)", xlabel=xl,
+                               ylabel=yl, show_legend=True,
                                legend_position="bottom_right" if backend == "bokeh" else "best",
                                fontsize=fonts, backend=backend)
     sp = _spectrum(hv, pt, backend)
+    th = _history(hv, pt, backend)
     if backend == "bokeh":
         o = o.opts(width=380, height=360, backend=backend)
         q = q.opts(width=380, height=360, backend=backend)
         sp = sp.opts(width=560, height=360, backend=backend)
-        return hv.Layout([o, q, sp]).cols(3).opts(title=point_title(pt), shared_axes=False, backend=backend)
+        th = th.opts(width=1320, height=260, backend=backend)
+        return hv.Layout([o, q, sp, th]).cols(3).opts(title=point_title(pt), shared_axes=False, backend=backend)
     # "auto": a numeric aspect is a data aspect in holoviews-mpl, wrong on the log axis
-    panels = [p.opts(aspect="auto", backend=backend) for p in (o, q, sp)]
+    panels = [p.opts(aspect="auto", backend=backend) for p in (o, q, sp, th)]
     if table:
         panels.append(_text_table(hv, point_rows(pt), backend))
-    return hv.Layout(panels).cols(2).opts(title=point_title(pt), sublabel_format="", fig_inches=(12, 10),
+    return hv.Layout(panels).cols(2).opts(title=point_title(pt), sublabel_format="", fig_inches=(12, 14),
                                          hspace=0.3, vspace=0.35, fontsize={"title": 13},
                                          backend=backend)
