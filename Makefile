@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions bench-continuation fig13 cascade fold clean
+.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions bench-continuation bench-compile fig13 cascade fold clean
 
 # CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
 CONSTRAINTS ?= constraints.txt
@@ -45,6 +45,9 @@ bench-revisions: $(STAMP)  ## per-point cost before/after the model registry (cc
 
 bench-continuation: $(STAMP)  ## pseudo-arclength continuation vs a scipy peer, Duffing resonance curve (~1 min) -> docs/benchmarks/continuation.*
 	$(BIN)/python -m workflows.bench.continuation
+
+bench-compile: $(STAMP)  ## cold and warm first point per model, this tree vs 4e517dd (~15 min on 2 cores) -> docs/benchmarks/compile.*
+	$(BIN)/python -m workflows.bench.compile --revision 4e517dd --revision worktree
 
 clean:
 	rm -rf out .pytest_cache

@@ -65,3 +65,24 @@ def test_scaling_bench_core_on_a_tiny_grid(tmp_path):
     assert "QUICK" in text and "| w2_chunk4 |" in text and "## Verdict" in text
     assert (out / "scaling.png").stat().st_size > 1000
     assert not (tmp_path / "work" / "bench_smoke").exists()               # cubes removed
+
+
+def test_bench_compile_writes_json_and_markdown(tmp_path, monkeypatch):
+    """The compile benchmark's plumbing with the measurement stubbed (a real cold run compiles
+    for minutes): arguments, provenance, JSON and the write-up from it."""
+    from workflows.bench import compile as bc
+
+    times = {"cold": {"wall_s": 9.0, "cpu_s": 8.0, "load_before": [1.0, 1.0, 1.0]},
+             "warm": {"wall_s": 0.9, "cpu_s": 0.8, "load_before": [1.0, 1.0, 1.0]}}
+    monkeypatch.setattr(bc, "measure_model", lambda tree, model: times)
+    result = bc.main(["--models", "duffing", "--out", str(tmp_path)])
+    assert result["results"] == {"worktree": {"duffing": times}}
+    assert {"date", "machine", "load", "command"} <= set(result)
+    assert json.loads((tmp_path / "compile.json").read_text()) == result
+    assert "| `worktree` | duffing | 9.0 | 8.0 | 1.0 | 0.9 | 0.8 |" in (tmp_path / "compile.md").read_text()
+
+
+def test_shipped_compile_writeup_is_its_json_rendered():
+    from workflows.bench.compile import markdown
+
+    assert markdown(json.loads((DOCS / "compile.json").read_text())) == (DOCS / "compile.md").read_text()
