@@ -21,7 +21,9 @@ import numpy as np
 
 from pipeline import compute
 from rotorkernels import integrators as ig, models, shooting
-from rotorkernels.attractor import lyapunov, poincare
+from rotorkernels.attractor.lyapunov import _benettin
+from rotorkernels.attractor.period import _detect_period
+from rotorkernels.attractor.poincare import _poincare
 
 
 def entry_points(spec, attractor=True):
@@ -29,18 +31,18 @@ def entry_points(spec, attractor=True):
     with the types of those calls (rotorkernels.orbits, attractor.diagnosis, pipeline.compute);
     without `attractor`, only those of periodic orbits."""
     kernel, n = spec.kernel, spec.n_state
-    u, z, p, opts = np.zeros(n), np.zeros(n + n * n), np.zeros(1), ig.settings()
+    u, p, opts = np.zeros(n), np.zeros(1), ig.settings()
     # the autonomous orbits' ig.derivative (backbones, in the driver) compiles on first use
     orbits = [
         (shooting.shoot, (kernel, u, p, 1.0, opts, 1e-9, 1)),
         (shooting.settle, (kernel, u, p, 1.0, opts)),
         (shooting.sample_orbit, (kernel, u, p, 1.0, 1, opts)),
-        (ig.flow, (kernel, 0.0, 1.0, u, p, False, opts, 0.0)),
-        (ig.flow, (kernel, 0.0, 1.0, z, p, True, opts, 0.0)),
+        (ig.flow, (kernel, 0.0, 1.0, u, p, False, opts, 0.0)),     # Python's bool, either value
     ]
     attractors = [
-        (poincare._poincare, (kernel, u, p, opts, 0, 1, 0.0, 0.0)),
-        (lyapunov._benettin, (kernel, u, p, opts, 0, 0, 1.0, 1, 2, 2, 1e-3, 1e-4, True, 0.0, 0.0)),
+        (_poincare, (kernel, u, p, opts, 0, 1, 0.0, 0.0)),
+        (_benettin, (kernel, u, p, opts, 0, 0, 1.0, 1, 2, 2, 1e-3, 1e-4, True, 0.0, 0.0)),
+        (_detect_period, (np.zeros((2, n)), 1, 1e-6, 1e-3)),     # the same for every model
     ]
     return orbits + attractors if attractor else orbits
 

@@ -78,7 +78,8 @@ def _group_source(group, specs):
     cls = class_name(group)
     members = ", ".join(f"{s.name} ({s.id})" for s in specs)
     sizes = sorted({s.n_state for s in specs if s.n_state <= FAST_PATH_MAX_STATE})
-    one_size = len({s.n_state for s in specs}) == 1 and len(specs) == 1 and bool(sizes)
+    # a group of one model knows n: no runtime-size copy (an unknown id never integrates)
+    generic_tangent = not (len(specs) == 1 and sizes)
     lines = ["", "", f"class {cls}(NamedTuple):",
              f'    """Kernel tag of the group `{group}`: {members}."""', "    id: int",
              "", "", f"class _{cls}Kernels:", f'    """The bodies of the dispatch functions for {cls} tags."""']
@@ -87,7 +88,7 @@ def _group_source(group, specs):
     lines += ["", "    def known(tag):",
               "        return " + " or ".join(f"tag.id == {s.id}" for s in specs)]
     lines += ["", "    def tangent(tag, velocity_form, z, n, jbuf, dz):"]
-    lines += _sized("tangent_product(velocity_form, z, {size}, jbuf, dz)", sizes, "n", not one_size)
+    lines += _sized("tangent_product(velocity_form, z, {size}, jbuf, dz)", sizes, "n", generic_tangent)
     lines += ["", "    def combine(tag, K, coef, n_terms, z, step, out):"]
     lines += _sized("combine(K, coef, n_terms, z, step, out, {size})", sizes, "z.size", True)
     return lines
