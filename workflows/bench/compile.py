@@ -1,7 +1,7 @@
 """First-result time per model, cold (empty Numba cache) and warm (cache filled by the cold run):
 what compiling costs a user before the first answer.
 
-    python -m workflows.bench.compile [--revision REV ...] [--models NAME ...]
+    python -m workflows.bench.compile [--revision REV ...] [--models NAME ...] [--keep]
         # -> docs/benchmarks/compile.{json,md}
 
 Each measurement is a fresh process running the model's first point through the CLI
@@ -84,8 +84,9 @@ def markdown(result):
                          r["warm"]["wall_s"], r["warm"]["cpu_s"]])
     table = render.table(["revision", "model", "cold wall [s]", "cold CPU [s]", "load (1 min)",
                           "warm wall [s]", "warm CPU [s]"], rows)
-    return render.fill("compile", table=table, machine=json.dumps(result["machine"]),
-                       **{k: result[k] for k in ("date", "command", "load")})
+    runs = "\n".join(f"- `{run['command']}` on {run['date']}, load {run['load']}" for run in result["runs"])
+    machines = {json.dumps(run["machine"]) for run in result["runs"]}
+    return render.fill("compile", table=table, runs=runs, machine="; ".join(sorted(machines)))
 
 
 def main(argv=None):
@@ -94,14 +95,18 @@ def main(argv=None):
     ap.add_argument("--revision", action="append",
                     help=f"git revision to measure, repeatable (default: the working tree, `{WORKTREE}`)")
     ap.add_argument("--models", nargs="+", choices=list(POINTS), default=list(POINTS))
+    ap.add_argument("--keep", action="store_true",
+                    help="add to the results already in --out (revisions measured in separate runs)")
     ap.add_argument("--out", type=Path, default=DOCS)
     args = ap.parse_args(argv)
+    path = args.out / "compile.json"
+    result = json.loads(path.read_text()) if args.keep and path.exists() else {"results": {}, "runs": []}
     load = loadavg()
-    results = {rev: {m: measure_model(tree_of(rev), m) for m in args.models}
-               for rev in args.revision or [WORKTREE]}
-    result = {"results": results, **provenance(load, "workflows.bench.compile", argv)}
+    for rev in args.revision or [WORKTREE]:
+        result["results"][rev] = {m: measure_model(tree_of(rev), m) for m in args.models}
+    result["runs"].append(provenance(load, "workflows.bench.compile", argv))
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "compile.json").write_text(json.dumps(result, indent=1) + "\n")
+    path.write_text(json.dumps(result, indent=1) + "\n")
     (args.out / "compile.md").write_text(markdown(result))
     log(f"wrote {args.out / 'compile.md'}")
     return result
