@@ -76,10 +76,11 @@ def test_bench_compile_writes_json_and_markdown(tmp_path, monkeypatch):
              "warm": {"wall_s": 0.9, "cpu_s": 0.8, "load_before": [1.0, 1.0, 1.0]}}
     monkeypatch.setattr(bc, "measure_model", lambda tree, model: times)
     result = bc.main(["--models", "duffing", "--out", str(tmp_path)])
-    assert result["results"] == {"worktree": {"duffing": times}}
+    head = bc.label(bc.WORKTREE)        # the working tree's commit, + when it has changes
+    assert result["results"] == {head: {"duffing": times}}
     assert len(result["runs"]) == 1 and {"date", "machine", "load", "command"} <= set(result["runs"][0])
     assert json.loads((tmp_path / "compile.json").read_text()) == result
-    assert "| `worktree` | duffing | 9.0 | 8.0 | 1.0 | 0.9 | 0.8 |" in (tmp_path / "compile.md").read_text()
+    assert f"| `{head}` | duffing | 9.0 | 8.0 | 1.0 | 0.9 | 0.8 |" in (tmp_path / "compile.md").read_text()
 
 
 def test_shipped_compile_writeup_is_its_json_rendered():

@@ -46,6 +46,16 @@ def tree_of(revision):
     return path
 
 
+def label(revision):
+    """The revision as the results name it: the working tree as its commit (+ if it has changes)."""
+    if revision != WORKTREE:
+        return revision
+    git = ["git", "-C", str(ROOT)]
+    sha = subprocess.run([*git, "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
+    dirty = subprocess.run([*git, "status", "--porcelain", "--untracked-files=no"], capture_output=True, text=True).stdout
+    return f"{sha}+" if dirty.strip() else sha
+
+
 def run_point(tree, cache, args):
     """(wall s, CPU s of the child) of one `rotorsweep point` in a fresh process."""
     env = {**os.environ, "PYTHONPATH": str(tree), "ROTORSWEEP_CACHE": str(cache), "NUMBA_NUM_THREADS": "1"}
@@ -103,7 +113,7 @@ def main(argv=None):
     result = json.loads(path.read_text()) if args.keep and path.exists() else {"results": {}, "runs": []}
     load = loadavg()
     for rev in args.revision or [WORKTREE]:
-        result["results"][rev] = {m: measure_model(tree_of(rev), m) for m in args.models}
+        result["results"][label(rev)] = {m: measure_model(tree_of(rev), m) for m in args.models}
     result["runs"].append(provenance(load, "workflows.bench.compile", argv))
     args.out.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(result, indent=1) + "\n")
