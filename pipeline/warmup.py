@@ -38,6 +38,7 @@ def entry_points(spec, attractor=True):
         (shooting.settle, (kernel, u, p, 1.0, opts)),
         (shooting.sample_orbit, (kernel, u, p, 1.0, 1, opts)),
         (ig.flow, (kernel, 0.0, 1.0, u, p, False, opts, 0.0)),     # Python's bool, either value
+        (ig.initial_state, (u, n, False)),       # continuation (the boundaries' refinement)
     ]
     attractors = [
         (_poincare, (kernel, u, p, opts, 0, 1, 0.0, 0.0)),
