@@ -1,4 +1,4 @@
-"""`rotorsweep` command line: run, continue, backbone, point, query, report, modes, info.
+"""`rotorsweep` command line: run, continue, backbone, point, query, report, modes, warmup, info.
 
 User mistakes (bad config, bad cube, bad query) print one clear message and exit with code 2;
 no traceback."""
@@ -268,6 +268,16 @@ def _positive_int(text):
     return value
 
 
+def cmd_warmup(args):
+    import numba
+
+    from pipeline import warmup
+
+    print(f"Numba cache: {numba.config.CACHE_DIR}")
+    warmup.warmup(args.models)
+    return 0
+
+
 def build_parser():
     ap = argparse.ArgumentParser(prog="rotorsweep", description=__doc__.splitlines()[0])
     ap.add_argument("--version", action="version", version=f"rotorsweep {_version()}")
@@ -354,6 +364,11 @@ def build_parser():
     m.add_argument("--campbell", metavar="START:STOP:NUM", help="shaft speeds [Hz] of the Campbell table")
     m.add_argument("-o", "--output", help="Campbell table CSV (speed_hz, mode, frequency_hz, damping_ratio, whirl, label)")
     m.set_defaults(func=cmd_modes)
+
+    w = sub.add_parser("warmup", help="compile the kernels of models into the Numba cache (a cluster "
+                                      "image, before the first run); idempotent")
+    w.add_argument("models", nargs="*", metavar="MODEL", help="model names (default: every registered model)")
+    w.set_defaults(func=cmd_warmup)
 
     i = sub.add_parser("info", help="what a cube holds")
     i.add_argument("cube", help="result cube (.nc) written by rotorsweep run")

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from pipeline import compute, cube, fileio, schema
+from pipeline import compute, cube, fileio, schema, warmup
 from pipeline.config import ConfigError, continued_axis
 from rotorkernels.continuation import arclength as al, solve_orbit, twoparam
 
@@ -437,6 +437,7 @@ def _run_lines(cfg, pl, workers, scheduler, stream):
     _say(stream, f"continuing {pl.parameter} from {pl.start:g} to {pl.stop:g} on {len(pl.lines)} line(s)")
     client, cluster = sweep._client(workers, scheduler)
     try:
+        warmup.compile_scene(cfg.data, lambda text: _say(stream, text))
         submit = functools.partial(client.submit, continue_line, cfg.data, pure=False)
         futures = {submit(where): k for k, where in enumerate(pl.lines)}
         results = [None] * len(pl.lines)

@@ -20,7 +20,7 @@ from datetime import datetime, timezone
 
 import numpy as np
 
-from pipeline import boundaries, compute, cube, fileio
+from pipeline import boundaries, compute, cube, fileio, warmup
 
 VERSION = "0.1.0"
 
@@ -87,12 +87,6 @@ def compute_chunk(data, chunk):
     parts = [compute.solve_segment(data, list(seg.points)) for seg in chunk]
     results = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
     return [seg.id for seg in chunk], index, results
-
-
-def _warm_up(data, segment):
-    """Compile the kernels once in the driver so workers load them from Numba's disk cache
-    instead of each compiling them again."""
-    compute.solve_segment(data, list(segment.points[:1]))
 
 
 class Progress:
@@ -263,17 +257,6 @@ def _count(n, noun):
     return f"{n} {noun}{'' if n == 1 else 's'}"
 
 
-def _compile(data, segment, say):
-    """Compile (or load from Numba's cache) the kernels in the driver before the workers need them."""
-    import numba
-
-    say(f"compiling the kernels for this scene: about a minute the first time on a machine, then "
-        f"loaded from the cache ({numba.config.CACHE_DIR})")
-    start = time.monotonic()
-    _warm_up(data, segment)
-    say(f"kernels ready ({time.monotonic() - start:.1f} s)")
-
-
 def _write_failure(exc, output, parts):
     """One line for an OS error during a run (disk full, read-only, lost scheduler): what
     failed, what is kept, how to go on."""
@@ -314,7 +297,7 @@ def _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points,
     try:
         n_workers = max(1, len(client.scheduler_info()["workers"]))
         say(f"{_count(n_workers, 'worker')}; Dask dashboard: {client.dashboard_link}")
-        _compile(cfg.data, todo[0], say)
+        warmup.compile_scene(cfg.data, say)
         chunks = plan_chunks(todo, n_workers, chunk_points)
         say(f"sweeping {_count(sum(len(s.points) for s in todo), 'point')} in {_count(len(chunks), 'chunk')}")
         if bar:

@@ -1,5 +1,6 @@
 """Numba integrators for any registered model (by its kernel identity, through the generated
-`models.dispatch`), optionally carrying the variational equations.
+`models.dispatch`: each function is compiled once per kernel group, the tag's type), optionally
+carrying the variational equations.
 
 The integrated vector is z = [u (n), Phi (n x n, row-major)] when `variational` is set, with
 Phi' = J(t, u) Phi; otherwise z = u. Both integrators return (z_end, status, n_rhs, h_next):
@@ -50,7 +51,7 @@ def _derivative(kernel, t, z, p, variational, dz, jbuf):
     (`rhs_jac`, one ball sum)."""
     if variational:
         dispatch.rhs_jac(kernel[0], t, z, p, dz, jbuf)
-        dispatch.tangent(kernel[3], z, kernel[1], jbuf, dz)
+        dispatch.tangent(kernel[0], kernel[3], z, kernel[1], jbuf, dz)
     else:
         dispatch.rhs(kernel[0], t, z, p, dz)
 
@@ -75,7 +76,8 @@ def state_status(z, n, n_position, amplitude_limit):
 
 @njit(cache=True, nogil=True, inline="always")
 def start_status(kernel, z, amplitude_limit):
-    """An unknown model id is an error status (the dispatch would give NaN), else state_status."""
+    """An id that is no model of the tag's group is an error status (the dispatch would give
+    NaN), else state_status."""
     if not dispatch.known(kernel[0]):
         return STATUS_UNKNOWN_MODEL
     return state_status(z, kernel[1], kernel[2], amplitude_limit)
@@ -166,7 +168,7 @@ def _dop853_steps(kernel, t0, t1, z, p, variational, rtol, atol, h0, max_steps, 
                     target = z
                 else:
                     target = znew if s == _N_STAGES else stage
-                    dispatch.combine(K, _A[s], s, z, step, target)
+                    dispatch.combine(kernel[0], K, _A[s], s, z, step, target)
                 _derivative(kernel, t + _C[s] * step, target, p, variational, K[s], jbuf)
             n_rhs += _N_STAGES + 1 - first_stage
             first_stage = 1
@@ -258,9 +260,12 @@ def settings(method="dop853", rtol=1e-10, atol=1e-12, steps_per_unit=512, max_st
 def flow(kernel, t0, t1, z0, p, variational, opts, h0):
     """Integrate with the method and tolerances in `opts` (see `settings`).
 
-    kernel: the model's identity (id, n_state, n_position, velocity form), `ModelSpec.kernel`."""
+    kernel: the model's identity (tag, n_state, n_position, velocity form), `ModelSpec.kernel`."""
+    # A literal True or False from a jitted caller would compile both integrators once per value
+    # (and once more for Python's plain bool): one compilation of each serves all three.
+    tangents = bool(variational)
     if opts[S_METHOD] == METHOD_RK4:
         n_steps = max(1, int(round(opts[S_STEPS_PER_UNIT] * (t1 - t0))))
-        return rk4(kernel, t0, t1, z0, p, variational, n_steps, opts[S_AMPLITUDE])
-    return dop853(kernel, t0, t1, z0, p, variational, opts[S_RTOL], opts[S_ATOL], h0,
+        return rk4(kernel, t0, t1, z0, p, tangents, n_steps, opts[S_AMPLITUDE])
+    return dop853(kernel, t0, t1, z0, p, tangents, opts[S_RTOL], opts[S_ATOL], h0,
                   int(opts[S_MAX_STEPS]), opts[S_AMPLITUDE])

@@ -88,3 +88,25 @@ def test_reductions_bench_on_one_repeat(tmp_path):
         assert law["reduced"]["status"] == law["fuller"]["status"] == 0
     shipped = json.loads((DOCS / "reductions.json").read_text())
     assert br.markdown(shipped) == (DOCS / "reductions.md").read_text()
+
+
+def test_bench_compile_writes_json_and_markdown(tmp_path, monkeypatch):
+    """The compile benchmark's plumbing with the measurement stubbed (a real cold run compiles
+    for minutes): arguments, provenance, JSON and the write-up from it."""
+    from workflows.bench import compile as bc
+
+    times = {"cold": {"wall_s": 9.0, "cpu_s": 8.0, "load_before": [1.0, 1.0, 1.0]},
+             "warm": {"wall_s": 0.9, "cpu_s": 0.8, "load_before": [1.0, 1.0, 1.0]}}
+    monkeypatch.setattr(bc, "measure_model", lambda tree, model: times)
+    result = bc.main(["--models", "duffing", "--out", str(tmp_path)])
+    head = bc.label(bc.WORKTREE)        # the working tree's commit, + when it has changes
+    assert result["results"] == {head: {"duffing": times}}
+    assert len(result["runs"]) == 1 and {"date", "machine", "load", "command"} <= set(result["runs"][0])
+    assert json.loads((tmp_path / "compile.json").read_text()) == result
+    assert f"| `{head}` | duffing | 9.0 | 8.0 | 1.0 | 0.9 | 0.8 |" in (tmp_path / "compile.md").read_text()
+
+
+def test_shipped_compile_writeup_is_its_json_rendered():
+    from workflows.bench.compile import markdown
+
+    assert markdown(json.loads((DOCS / "compile.json").read_text())) == (DOCS / "compile.md").read_text()

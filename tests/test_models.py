@@ -21,18 +21,41 @@ def test_committed_dispatch_is_generated_from_the_registry():
     assert generate.PATH.read_text() == generate.builtin_source()
 
 
-def test_unknown_model_id_is_an_error_status_not_another_model():
-    jeff = models.get("jeffcott_clearance")
-    unknown = (99, jeff.n_state, jeff.n_position, 1)
-    assert not models.dispatch.known(99) and models.dispatch.known(jeff.id)
+def test_unknown_id_in_a_group_is_an_error_status_not_another_model():
+    """The tag's type picks the kernel group at compile time; within the group an id that is no
+    model reaches no model's equations."""
+    duffing = models.get("duffing")
+    group = type(duffing.kernel[0])
+    unknown = (group(99), duffing.n_state, duffing.n_position, 1)
+    assert not models.dispatch.known(group(99)) and models.dispatch.known(duffing.kernel[0])
     opts = ig.settings()
-    z, status, n_rhs, _ = ig.flow(unknown, 0.0, 1.0, np.zeros(4), np.zeros(11), False, opts, 0.0)
+    z, status, n_rhs, _ = ig.flow(unknown, 0.0, 1.0, np.zeros(2), np.zeros(4), False, opts, 0.0)
     assert status == ig.STATUS_UNKNOWN_MODEL and n_rhs == 0
-    out = shooting.shoot(unknown, np.zeros(4), np.zeros(11), 1.0, opts, 1e-9, 5)
+    out = shooting.shoot(unknown, np.zeros(2), np.zeros(4), 1.0, opts, 1e-9, 5)
     assert out[2] == shooting.NOT_CONVERGED and out[3] == shooting.R_UNKNOWN_MODEL
-    du = np.zeros(4)
-    models.dispatch.rhs(99, 0.0, np.ones(4), np.zeros(11), du)
+    du = np.zeros(2)
+    models.dispatch.rhs(group(99), 0.0, np.ones(2), np.zeros(4), du)
     assert np.isnan(du).all()
+
+
+def test_models_are_compiled_in_their_kernel_groups():
+    """Each model's tag type is its group's: the validation models share one, so do the two
+    power-series rotors (their bodies differ only in the number of positions), the others are alone."""
+    tags = {name: models.get(name).kernel[0] for name in models.BUILTIN_NAMES}
+    groups = {}
+    for n in tags:
+        groups.setdefault(models.get(n).group, set()).add(n)
+    assert groups["validation"] == {"linear_oscillator", "damped_mathieu", "duffing"}
+    assert groups["series_rotor"] == {"symmetric4", "asymmetric5"}
+    assert all(len({type(tags[n]) for n in members}) == 1 for members in groups.values())
+    assert len({type(t) for t in tags.values()}) == len(groups)
+    assert all(tags[n].id == models.get(n).id for n in tags)
+
+
+def test_a_spec_missing_from_the_dispatch_has_no_kernel():
+    from dataclasses import replace
+    with pytest.raises(models.ModelError, match="'ghost' .* is not in the kernels' dispatch"):
+        replace(models.get("duffing"), name="ghost").kernel
 
 
 def test_registry_refuses_a_second_model_with_a_taken_name_or_id():
@@ -197,3 +220,21 @@ def test_python_only_modules_hold_no_compiled_code_and_no_kernel_reads_them():
         if "numba" in path.read_text():
             assert not re.search(rf"^\s*(from|import) rotorkernels(\.| import ).*\b({names})\b",
                                  path.read_text(), re.M), path
+
+
+def test_warmup_compiles_what_a_point_with_attractor_then_runs(capsys):
+    """`rotorsweep warmup duffing` compiles the validation group's entry points for the types the
+    pipeline passes: a Duffing point with its attractor afterwards compiles nothing."""
+    from numba.core import event
+
+    import pipeline
+    from pipeline import cli, compute
+
+    assert cli.main(["warmup", "duffing"]) == 0
+    assert "duffing (kernel group validation)" in capsys.readouterr().out
+    cfg = pipeline._config(str(ROOT / "configs" / "duffing_resonance.toml"))
+    data = {**cfg.data, "analysis": {**cfg.data["analysis"], "attractor": True}}
+    compiled = event.RecordingListener()
+    with event.install_listener("numba:compile", compiled):
+        compute.point_detail(data, compute.point_values(cfg, {"omega": 1.0}), periods=4, steps_per_period=8)
+    assert [ev.data["dispatcher"].py_func.__qualname__ for _, ev in compiled.buffer] == []

@@ -136,7 +136,7 @@ def linear_modes(model, p, basis):
 
     n = model.n_state
     jac = np.empty((n, n))
-    dispatch.jac(model.id, 0.0, np.zeros(n), p, jac)
+    dispatch.jac(model.kernel[0], 0.0, np.zeros(n), p, jac)
     lam, vec = np.linalg.eig(basis.T @ jac @ basis)
     keep = np.flatnonzero(lam.imag > 0)
     keep = keep[np.argsort(lam.imag[keep])]

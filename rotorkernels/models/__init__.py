@@ -6,6 +6,10 @@ defining `SPEC`): a user's own model needs no edit of rotorsweep. Dask workers i
 variable from a local cluster; set it on remote workers too. With such models the kernels' dispatch
 is generated for the extended registry into the Numba cache directory instead of using the
 committed `dispatch.py`.
+
+Kernels are compiled per kernel group (`ModelSpec.group`: the model alone unless it names one;
+the validation models share one), so a scene compiles only its own model's group and adding a
+model does not slow the first result of another (see `models.generate`).
 """
 import importlib
 import importlib.util
@@ -47,6 +51,16 @@ def get(name):
         return REGISTRY[name]
     except KeyError:
         raise ModelError(f"unknown model {name!r}; registered: {', '.join(REGISTRY)}") from None
+
+
+def kernel_tag(spec):
+    """The tag of `spec` in the kernels' dispatch (`ModelSpec.kernel[0]`): its type names the
+    model's kernel group, its id the model within the group."""
+    tag = dispatch.TAGS.get(spec.name)
+    if tag is None or tag.id != spec.id:
+        raise ModelError(f"model {spec.name!r} (id {spec.id}) is not in the kernels' dispatch; "
+                         f"it has: {', '.join(dispatch.TAGS)}")
+    return tag
 
 
 def _load_dispatch():

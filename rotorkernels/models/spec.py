@@ -2,7 +2,8 @@
 how to build the kernel's parameter vector, its observables and checks.
 
 `pipeline/` knows a model only through its `ModelSpec` (looked up in `models.REGISTRY`); the
-kernels know it only through its integer id, dispatched by the generated `models.dispatch`.
+kernels know it only through `ModelSpec.kernel`, whose tag the generated `models.dispatch` turns
+into the model's functions when Numba compiles a kernel for the tag's kernel group.
 """
 import math
 from dataclasses import dataclass, field
@@ -88,15 +89,25 @@ class ModelSpec:
     fill_defaults: Callable = None  # fill_defaults(data): defaults that depend on other keys
     references: str = ""            # the model's sources (the cube's CF `references` attribute)
     polynomial: Callable = None     # polynomial(values) -> PolynomialSystem (conservative models)
+    kernel_group: str = ""          # models compiled together (default: the model alone), see models.dispatch
 
     @property
     def n_state(self):
         return 2 * self.n_position if self.velocity_form else self.n_state_override
 
     @property
+    def group(self):
+        """The kernel group's name: models of one group share one compiled copy of each kernel."""
+        return self.kernel_group or self.name
+
+    @property
     def kernel(self):
-        """The kernel identity every njit function takes: (id, n_state, n_position, velocity form)."""
-        return (self.id, self.n_state, self.n_position, int(self.velocity_form))
+        """The kernel identity every njit function takes: (tag, n_state, n_position, velocity form).
+        The tag's type names the model's kernel group, so Numba compiles and caches each kernel
+        once per group; its value is the model's id within the group."""
+        from rotorkernels.models import kernel_tag   # the registry imports this module
+
+        return (kernel_tag(self), self.n_state, self.n_position, int(self.velocity_form))
 
     @property
     def axes(self):
@@ -119,11 +130,15 @@ class ModelSpec:
         return self.to_physical(u, period)[..., :weights.shape[1]] @ weights.T
 
 
+VALIDATION_GROUP = "validation"
+
+
 def validation_spec(name, id, module, names, description):
     """The spec of a 2-DOF validation model in scaled time (period 1) whose kernel parameters are
-    its values `names` in order; such a model has no sweep axis and is used by the kernels' tests."""
+    its values `names` in order; such a model has no sweep axis and is used by the kernels' tests.
+    The validation models share one kernel group: compiled once for all of them."""
     def build(v):
         return Built(np.array([float(v[k]) for k in names]), 1.0, {})
     return ModelSpec(name=name, id=id, module=module, n_position=2, description=description,
                      parameters=tuple(Parameter(name=k, default=0.0) for k in names), build=build,
-                     cold_guess=lambda p: np.zeros(4), length_scale=1.0)
+                     cold_guess=lambda p: np.zeros(4), length_scale=1.0, kernel_group=VALIDATION_GROUP)

@@ -161,12 +161,12 @@ def locate(opts, tol, states, xtol_rel, bracket=None):
 # --- per-evaluation loops for the C floor comparison --------------------------------------------
 
 @njit(cache=True)
-def _rhs_loop(model, taus, states, p):
+def _rhs_loop(tag, taus, states, p):
     """The model dispatch's rhs over many states, the way an integrator calls it (array arguments)."""
     du = np.empty(states.shape[1])
     acc = 0.0
     for i in range(taus.size):
-        models.dispatch.rhs(model, taus[i], states[i], p, du)
+        models.dispatch.rhs(tag, taus[i], states[i], p, du)
         acc += du[2] + du[3]
     return acc
 
@@ -213,7 +213,7 @@ def _variational_loop(kernel, taus, states, p):
 
 
 def rhs_loop(taus, states, p):
-    return _rhs_loop(JEFF.id, taus, states, p)
+    return _rhs_loop(JEFF.kernel[0], taus, states, p)
 
 
 def force_loop(taus, states, p):

@@ -24,7 +24,7 @@ def driver_max_rss_kib():
 # (phase, module, function). The first five follow one another in pipeline.sweep.run, except that
 # driver_warmup runs inside compute (after the cluster has started); the last two run inside the
 # compute phase (in the driver, while the workers compute).
-PHASES = (("driver_warmup", "pipeline.sweep", "_warm_up"),
+PHASES = (("driver_warmup", "pipeline.warmup", "compile_scene"),
           ("compute", "pipeline.sweep", "_run_chunks"),
           ("assemble", "pipeline.cube", "assemble"),
           ("boundaries", "pipeline.boundaries", "add_boundary_table"),

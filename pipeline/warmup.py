@@ -1,0 +1,91 @@
+"""Compile (or load from Numba's disk cache) every kernel a model's scenes run, without running
+any: `rotorsweep warmup [MODEL...]`, once in a cluster image or before a sweep fans out.
+
+Kernels are compiled per kernel group (`ModelSpec.group`), so warming one model warms the other
+models of its group. Each entry point below is compiled for the argument types the Python
+orchestration passes it (`Dispatcher.compile(signature)`, which loads a cached compilation when
+there is one); the values are never used.
+
+Numba's cache index is read, extended and rewritten without a lock, and its data files are
+numbered by the index's length: two processes compiling different signatures of one function at
+once (two models' groups) may both write `<function>.1.nbc`, and the index may then point one
+signature at the other's machine code. Compiling under an exclusive lock on the cache directory
+serialises them; the process that waited then loads what the other compiled."""
+import contextlib
+import fcntl
+import os
+import time
+
+import numba
+import numpy as np
+
+from pipeline import compute
+from rotorkernels import integrators as ig, models, shooting
+from rotorkernels.attractor.lyapunov import _benettin
+from rotorkernels.attractor.period import _detect_period
+from rotorkernels.attractor.poincare import _poincare
+
+
+def entry_points(spec, attractor=True):
+    """(jitted function, example arguments) of each kernel that Python code calls for `spec`,
+    with the types of those calls (rotorkernels.orbits, attractor.diagnosis, pipeline.compute);
+    without `attractor`, only those of periodic orbits."""
+    kernel, n = spec.kernel, spec.n_state
+    u, p, opts = np.zeros(n), np.zeros(1), ig.settings()
+    # the autonomous orbits' ig.derivative (backbones, in the driver) compiles on first use
+    orbits = [
+        (shooting.shoot, (kernel, u, p, 1.0, opts, 1e-9, 1)),
+        (shooting.settle, (kernel, u, p, 1.0, opts)),
+        (shooting.sample_orbit, (kernel, u, p, 1.0, 1, opts)),
+        (ig.flow, (kernel, 0.0, 1.0, u, p, False, opts, 0.0)),     # Python's bool, either value
+        (ig.initial_state, (u, n, False)),       # continuation (the boundaries' refinement)
+    ]
+    attractors = [
+        (_poincare, (kernel, u, p, opts, 0, 1, 0.0, 0.0)),
+        (_benettin, (kernel, u, p, opts, 0, 0, 1.0, 1, 2, 2, 1e-3, 1e-4, True, 0.0, 0.0)),
+        (_detect_period, (np.zeros((2, n)), 1, 1e-6, 1e-3)),     # the same for every model
+    ]
+    return orbits + attractors if attractor else orbits
+
+
+@contextlib.contextmanager
+def cache_lock():
+    """An exclusive flock on the Numba cache directory (blocking; released when the process ends)."""
+    os.makedirs(numba.config.CACHE_DIR, exist_ok=True)
+    fd = os.open(os.path.join(numba.config.CACHE_DIR, "compile.lock"), os.O_RDWR | os.O_CREAT, 0o666)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)
+
+
+def compile_model(spec, attractor=True):
+    """Compile (or load) the kernels of `spec`'s group; returns the seconds it took."""
+    start = time.perf_counter()
+    with cache_lock():
+        for function, args in entry_points(spec, attractor):
+            function.compile(tuple(numba.typeof(a) for a in args))
+    return time.perf_counter() - start
+
+
+def compile_scene(data, say):
+    """Compile (or load) a scene's kernels in the driver before its workers start solving, so
+    that they load them from the disk cache instead of each compiling them again."""
+    model = compute.model_of(data)
+    say(f"compiling the kernels of {model.name}: under a minute the first time on a machine, then "
+        f"loaded from the cache ({numba.config.CACHE_DIR})")
+    seconds = compile_model(model, attractor=data["analysis"]["attractor"])
+    say(f"kernels ready ({seconds:.1f} s)")
+
+
+def warmup(names=None, say=print):
+    """Compile the kernels of the named models (default: all registered), one group at a time;
+    {model: seconds}, 0 for a model whose group was compiled just before."""
+    specs = [models.get(name) for name in names] if names else list(models.REGISTRY.values())
+    done, seconds = set(), {}
+    for spec in specs:
+        seconds[spec.name] = 0.0 if spec.group in done else compile_model(spec)
+        done.add(spec.group)
+        say(f"{spec.name} (kernel group {spec.group}): {seconds[spec.name]:.1f} s")
+    return seconds

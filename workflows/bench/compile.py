@@ -1,0 +1,126 @@
+"""First-result time per model, cold (empty Numba cache) and warm (cache filled by the cold run):
+what compiling costs a user before the first answer.
+
+    python -m workflows.bench.compile [--revision REV ...] [--models NAME ...] [--keep]
+        # -> docs/benchmarks/compile.{json,md}
+
+Each measurement is a fresh process running the model's first point through the CLI
+(`rotorsweep point`), with its own empty cache directory ($ROTORSWEEP_CACHE) for the cold run
+and the same directory again for the warm run. CPU time (user + sys of the child) is recorded
+beside wall time: on a shared machine the wall time moves with the load, the compile work does
+not. A revision other than the working tree is exported (`git archive`) under build/compile/."""
+import argparse
+import json
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from workflows.bench import render
+from workflows.bench.common import DOCS, ROOT, loadavg, log, provenance
+
+# The first point of each model's scene: linear_oscillator and damped_mathieu have no scene and
+# share duffing's kernels (the validation group), so duffing's times are theirs.
+POINTS = {
+    "jeffcott_clearance": ["point", "--speed", "100", "--clearance", "7.6e-6", "--json"],
+    "duffing": ["point", "--config", "configs/duffing_resonance.toml", "--at", "omega=1.0", "--json"],
+    "rigid_preloaded": ["point", "--config", "configs/filipkovsky2016_quick.toml", "--at", "speed=250",
+                        "--at", "support_frequency=150", "--json"],
+}
+WORKTREE = "worktree"
+
+
+def tree_of(revision):
+    """The source tree to measure: this working tree, or `revision` exported under build/compile."""
+    if revision == WORKTREE:
+        return ROOT
+    path = ROOT / "build" / "compile" / revision
+    if not path.exists():
+        path.mkdir(parents=True)
+        archive = subprocess.run(["git", "archive", revision], cwd=ROOT, check=True, capture_output=True).stdout
+        subprocess.run(["tar", "-x", "-C", str(path)], input=archive, check=True)
+    return path
+
+
+def label(revision):
+    """The revision as the results name it: the working tree as its commit (+ if it has changes)."""
+    if revision != WORKTREE:
+        return revision
+    git = ["git", "-C", str(ROOT)]
+    sha = subprocess.run([*git, "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
+    dirty = subprocess.run([*git, "status", "--porcelain", "--untracked-files=no"], capture_output=True, text=True).stdout
+    return f"{sha}+" if dirty.strip() else sha
+
+
+def run_point(tree, cache, args):
+    """(wall s, CPU s of the child) of one `rotorsweep point` in a fresh process."""
+    env = {**os.environ, "PYTHONPATH": str(tree), "ROTORSWEEP_CACHE": str(cache), "NUMBA_NUM_THREADS": "1"}
+    for name in ("NUMBA_CACHE_DIR", "ROTORSWEEP_NUMBA_CACHE_DIR", "ROTORSWEEP_MODELS"):
+        env.pop(name, None)
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "pipeline.cli", *args], cwd=tree, env=env, check=True,
+                   capture_output=True, text=True)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return round(wall, 2), round(cpu, 2)
+
+
+def measure_model(tree, model):
+    """Cold then warm first point of `model`, with the load average before each."""
+    cache = Path(tempfile.mkdtemp(prefix="rotorsweep_bench_compile_"))
+    try:
+        record = {}
+        for kind in ("cold", "warm"):
+            load = loadavg()
+            wall, cpu = run_point(tree, cache, POINTS[model])
+            record[kind] = {"wall_s": wall, "cpu_s": cpu, "load_before": load}
+            log(f"{model} {kind}: {wall:.1f} s wall, {cpu:.1f} s CPU, load {load}")
+        return record
+    finally:
+        shutil.rmtree(cache, ignore_errors=True)
+
+
+def markdown(result):
+    rows = []
+    for rev, per_model in result["results"].items():
+        for model, r in per_model.items():
+            rows.append([f"`{rev}`", model, r["cold"]["wall_s"], r["cold"]["cpu_s"], r["cold"]["load_before"][0],
+                         r["warm"]["wall_s"], r["warm"]["cpu_s"]])
+    table = render.table(["revision", "model", "cold wall [s]", "cold CPU [s]", "load (1 min)",
+                          "warm wall [s]", "warm CPU [s]"], rows)
+    runs = "\n".join(f"- `{run['command']}` on {run['date']}, load {run['load']}" for run in result["runs"])
+    machines = {json.dumps(run["machine"]) for run in result["runs"]}
+    return render.fill("compile", table=table, runs=runs, machine="; ".join(sorted(machines)))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="python -m workflows.bench.compile", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--revision", action="append",
+                    help=f"git revision to measure, repeatable (default: the working tree, `{WORKTREE}`)")
+    ap.add_argument("--models", nargs="+", choices=list(POINTS), default=list(POINTS))
+    ap.add_argument("--keep", action="store_true",
+                    help="add to the results already in --out (revisions measured in separate runs)")
+    ap.add_argument("--out", type=Path, default=DOCS)
+    args = ap.parse_args(argv)
+    path = args.out / "compile.json"
+    result = json.loads(path.read_text()) if args.keep and path.exists() else {"results": {}, "runs": []}
+    load = loadavg()
+    for rev in args.revision or [WORKTREE]:
+        result["results"][label(rev)] = {m: measure_model(tree_of(rev), m) for m in args.models}
+    result["runs"].append(provenance(load, "workflows.bench.compile", argv))
+    args.out.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(result, indent=1) + "\n")
+    (args.out / "compile.md").write_text(markdown(result))
+    log(f"wrote {args.out / 'compile.md'}")
+    return result
+
+
+if __name__ == "__main__":
+    main()
