@@ -417,7 +417,7 @@ def is_backbone_file(path):
 
 def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr):
     """Compute the backbones a config asks for into a netCDF result at `output`; returns its path."""
-    from pipeline import sweep
+    from pipeline import sweep, warmup
 
     pl = plan(cfg.data)
     output = os.path.abspath(output)
@@ -426,6 +426,8 @@ def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.s
     with fileio.output_lock(output, cfg.path or "<default scene>"):
         if scheduler:
             sweep.check_scheduler(scheduler)
+        if pl.continuation:
+            warmup.compile_scene(cfg.data, lambda text: _say(stream, text))
         lines = _run_lines(cfg, pl, workers, scheduler, stream)
         provenance = {**sweep._provenance(cfg), "title": f"rotorsweep backbones: {cfg.data['scene']['name']}"}
         return write(to_dataset(cfg.data, pl, lines, provenance), output)

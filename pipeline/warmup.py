@@ -32,7 +32,6 @@ def entry_points(spec, attractor=True):
     without `attractor`, only those of periodic orbits."""
     kernel, n = spec.kernel, spec.n_state
     u, p, opts = np.zeros(n), np.zeros(1), ig.settings()
-    # the autonomous orbits' ig.derivative (backbones, in the driver) compiles on first use
     orbits = [
         (shooting.shoot, (kernel, u, p, 1.0, opts, 1e-9, 1)),
         (shooting.settle, (kernel, u, p, 1.0, opts)),
@@ -40,6 +39,8 @@ def entry_points(spec, attractor=True):
         (ig.flow, (kernel, 0.0, 1.0, u, p, False, opts, 0.0)),     # Python's bool, either value
         (ig.initial_state, (u, n, False)),       # continuation (the boundaries' refinement)
     ]
+    if not spec.forced:     # the autonomous orbits' vector field at the period's end (backbones)
+        orbits.append((ig.derivative, (kernel, 0.0, u, p, False, u, np.zeros((n, n)))))
     attractors = [
         (_poincare, (kernel, u, p, opts, 0, 1, 0.0, 0.0)),
         (_benettin, (kernel, u, p, opts, 0, 0, 1.0, 1, 2, 2, 1e-3, 1e-4, True, 0.0, 0.0)),
