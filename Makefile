@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions bench-continuation bench-reductions bench-compile fig13 cascade fold backbone clean
+.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions bench-continuation bench-reductions bench-compile bench-backbone fig13 cascade fold backbone clean
 
 # CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
 CONSTRAINTS ?= constraints.txt
@@ -52,6 +52,9 @@ bench-continuation: $(STAMP)  ## pseudo-arclength continuation vs a scipy peer, 
 
 bench-reductions: $(STAMP)  ## rigid_preloaded reductions (balanced, one frequency, cubic law) vs the fuller model (~1 min) -> docs/benchmarks/reductions.*
 	$(BIN)/python -m workflows.bench.reductions
+
+bench-backbone: $(STAMP)  ## manifold vs continuation backbones: cost and agreement per mode of both 2010 rotors (~1 min) -> docs/benchmarks/backbone.*
+	$(BIN)/python -m workflows.bench.backbone
 
 bench-compile: $(STAMP)  ## cold and warm first point per model, this tree vs 4e517dd (~15 min on 2 cores) -> docs/benchmarks/compile.*
 	$(BIN)/python -m workflows.bench.compile --revision 4e517dd --revision worktree
