@@ -110,3 +110,19 @@ def test_shipped_compile_writeup_is_its_json_rendered():
     from workflows.bench.compile import markdown
 
     assert markdown(json.loads((DOCS / "compile.json").read_text())) == (DOCS / "compile.md").read_text()
+
+
+def test_backbone_bench_on_a_small_grid(tmp_path):
+    """workflows/bench/backbone.py on symmetric4 with 9 amplitudes: every mode's manifold parts from
+    the continuation at the cubic theory's order 4 (+-0.3: the lowest decade holds 5 points of a
+    difference whose next order is (A / z0)^2 <= 1e-2 smaller), the JSON is what it returns, and the
+    shipped write-up is its JSON rendered."""
+    from workflows.bench import backbone as bb
+
+    res = bb.main(["--scenes", "configs/filipkovsky2010_symmetric.toml", "--grid-points", "9", "--repeats", "1",
+                   "--out", str(tmp_path)])
+    assert json.loads((tmp_path / "backbone.json").read_text()) == json.loads(json.dumps(res))
+    assert [r["mode"] for r in res["rows"]] == [1, 2, 3, 4]
+    assert all(abs(r["slope"] - 4.0) < 0.3 and r["continuation_end"] == "left_range" for r in res["rows"])
+    shipped = json.loads((DOCS / "backbone.json").read_text())
+    assert bb.markdown(shipped) == (DOCS / "backbone.md").read_text()
