@@ -58,12 +58,13 @@ def unstable_intervals(cube_or_path):
     return query.unstable_intervals(_dataset(cube_or_path))
 
 
-def make_report(cube_or_path, out_dir, points=None, overwrite=False):
+def make_report(cube_or_path, out_dir, points=None, overwrite=False, over=None):
     """HTML + PNG report of a cube (rotorsweep report); returns the written paths.
     points: grid points to show in detail (orbit, Poincare section, spectrum, table), each a
     dict {axis: value} or "speed=36 clearance=19e-6" (nearest grid point). A directory holding
     the report of another cube is refused unless overwrite; the report is built next to it and
-    then takes its place, so no file of the earlier report is left."""
+    then takes its place, so no file of the earlier report is left. over: for a backbone result,
+    a continuation result (path) of a forced response to draw the backbones over."""
     from pipeline import backbone, continuation, fileio, report
 
     is_path = isinstance(cube_or_path, (str, bytes)) or hasattr(cube_or_path, "__fspath__")
@@ -78,13 +79,19 @@ def make_report(cube_or_path, out_dir, points=None, overwrite=False):
     kind = ds.attrs.get("result_kind")
     if points and kind in (continuation.RESULT_KIND, backbone.RESULT_KIND):
         raise ValueError(f"--point applies to sweep cubes, not to {kind} results")
+    if over is not None and kind != backbone.RESULT_KIND:
+        raise ValueError("--over applies to backbone results (rotorsweep backbone)")
+    forced = continuation.open_result(over) if over is not None else None
+    if forced is not None:
+        from pipeline.report import backbone_result
+        backbone_result.check_forced(ds, forced)
     with fileio.replaced_dir(out_dir) as tmp:
         if kind == continuation.RESULT_KIND:
             from pipeline.report import branch_result
             files = branch_result.make_report(ds, tmp)
         elif kind == backbone.RESULT_KIND:
             from pipeline.report import backbone_result
-            files = backbone_result.make_report(ds, tmp)
+            files = backbone_result.make_report(ds, tmp, forced=forced)
         else:
             files = report.make_report(ds, tmp, points=points)
         (tmp / fileio.REPORT_MARKER).write_text(json.dumps(identity, indent=2) + "\n")

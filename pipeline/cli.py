@@ -238,7 +238,7 @@ def cmd_query(args):
 def cmd_report(args):
     out = args.output or str(args.cube).rsplit(".", 1)[0] + "_report"
     points = [report_mod.parse_point(items) for items in args.point or []]
-    files = pipeline.make_report(args.cube, out, points=points or None, overwrite=args.overwrite)
+    files = pipeline.make_report(args.cube, out, points=points or None, overwrite=args.overwrite, over=args.over)
     print(f"report: {files['html']}")
     for png in files["png"]:
         print(f"figure: {png}")
@@ -356,6 +356,9 @@ def build_parser():
                          "speed=36 clearance=19e-6 (cube units; nearest grid point); repeatable")
     rp.add_argument("--overwrite", action="store_true",
                     help="replace a report of another cube in the directory")
+    rp.add_argument("--over", metavar="CONTINUATION_NC",
+                    help="backbone results: draw each mode's backbone over this forced response (a "
+                         "`rotorsweep continue` result along a frequency in Hz, e.g. rigid_preloaded, law = cubic)")
     rp.set_defaults(func=cmd_report)
 
     m = sub.add_parser("modes", help="static equilibrium, natural frequencies, whirl, Campbell table (rigid_preloaded)")

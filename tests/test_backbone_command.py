@@ -103,3 +103,32 @@ def test_a_forced_model_has_no_backbone_and_a_conservative_one_no_sweep():
     done = subprocess.run([sys.executable, "-m", "pipeline.cli", "run", AXIAL, "-o", "/nonexistent/x.nc"],
                           capture_output=True, text=True)
     assert done.returncode == 2 and "asymmetric5 is conservative" in done.stderr
+
+
+def _forced_response(path, unit="Hz"):
+    """A continuation result of the shape `rotorsweep continue` writes: one branch through the
+    axial mode's frequency (the overlay's input; its physics is not what is tested here)."""
+    import xarray as xr
+
+    f = np.linspace(380.0, 410.0, 31)
+    amp = np.zeros((1, f.size, 5))
+    amp[0, :, 4] = 1e-6 / (1 + ((f - 395.0) / 3.0) ** 2)
+    stable = np.where(np.abs(f - 395.0) < 2.0, 0, 1).astype("int8")[None]
+    ds = xr.Dataset({"parameter": (("branch", "point"), f[None], {"units": unit}),
+                     "amplitude_half_pp": (("branch", "point", "observable"), amp, {"units": "m"}),
+                     "stable": (("branch", "point"), stable)},
+                    coords={"observable": ["x_A", "y_A", "x_B", "y_B", "z"]},
+                    attrs={"result_kind": "continuation", "parameter": "support_frequency"})
+    ds.to_netcdf(path)
+    return path
+
+
+def test_backbones_drawn_over_a_forced_response(axial_result, tmp_path):
+    import pipeline
+
+    nc, _ = axial_result
+    files = pipeline.make_report(nc, tmp_path / "over", over=_forced_response(tmp_path / "forced.nc"))
+    assert "over the forced response" in files["html"].read_text()
+    assert (tmp_path / "over" / "backbones.png").stat().st_size > 0
+    with pytest.raises(ValueError, match="--over: the forced response must be continued along a frequency in Hz"):
+        pipeline.make_report(nc, tmp_path / "bad", over=_forced_response(tmp_path / "bad.nc", unit="m"))

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from pipeline import backbone, query
-from pipeline.report import page, style
+from pipeline.report import branches, page, style
 
 UM = 1e6
 
@@ -33,7 +33,44 @@ def _mode_title(ds, k, sel):
             f"{float(line['linear_frequency'].values[k]):.5g} Hz")
 
 
-def _backbone_panel(hv, ds, k, backend, show):
+FORCED_WINDOW = 0.1     # the forced response drawn within +-10 % of the mode's linear frequency
+
+
+def check_forced(ds, forced):
+    """ValueError unless `forced` is a continuation along a frequency in Hz with an observable for
+    every backbone master (observable j is coordinate j: the models order their positions alike)."""
+    unit = forced["parameter"].attrs.get("units")
+    if unit != "Hz":
+        raise ValueError(f"--over: the forced response must be continued along a frequency in Hz; "
+                         f"{forced.attrs.get('parameter')!r} is in {unit!r}")
+    masters = ds["master"].values.ravel()
+    if masters.size and masters.max() >= forced.sizes["observable"]:
+        raise ValueError(f"--over: the forced model has {forced.sizes['observable']} observables, fewer than the "
+                         f"backbone's coordinates ({int(masters.max()) + 1})")
+
+
+def _forced_elements(hv, ds, forced, k, backend, dims):
+    """The forced response's branches (half peak-to-peak of the observable matching mode k's
+    master, stable solid, unstable dashed, grey) within FORCED_WINDOW of the mode's frequency."""
+    line = ds.isel(_lines(ds)[0][1])
+    j = int(line["master"].values[k])
+    f0 = float(line["linear_frequency"].values[k])
+    out = []
+    for b in range(forced.sizes["branch"]):
+        x = forced["parameter"].values[b]
+        y = forced["amplitude_half_pp"].values[b, :, j] * UM
+        near = np.abs(x - f0) <= FORCED_WINDOW * f0
+        if near.sum() < 2:
+            continue
+        name = f"forced response, {forced['observable'].values[j]} half p-p"
+        out += branches.branch_elements(np.where(near, x, np.nan), np.where(near, y, np.nan),
+                                        forced["stable"].values[b] == 1, (), backend, dims,
+                                        ("frequency [Hz]", "amplitude [µm]"), "#999999", name if b == 0 else "",
+                                        legend_unstable=False, width=1.2)
+    return out
+
+
+def _backbone_panel(hv, ds, k, backend, show, forced=None):
     dims = (hv.Dimension("frequency", label="frequency [Hz]"), hv.Dimension("amplitude", label="master amplitude [µm]"))
     elements = []
     for j, (label, sel) in enumerate(_lines(ds)):
@@ -47,18 +84,20 @@ def _backbone_panel(hv, ds, k, backend, show):
                         .opts(color=colour, **style.line_style(backend, 1.2, alpha=0.8), backend=backend))
         elements.append(style.legend_points(hv, f, a, list(dims), f"continued orbits{suffix}")
                         .opts(**style.marker_style(backend, colour, 4), backend=backend))
+    if forced is not None:
+        elements = _forced_elements(hv, ds, forced, k, backend, dims) + elements
     show_x, show_y = show
     return hv.Overlay(elements).opts(title=_mode_title(ds, k, _lines(ds)[0][1]), show_grid=True, xlabel="frequency [Hz]"
                                      if show_x else "", ylabel="master amplitude [µm]" if show_y else "",
                                      backend=backend)
 
 
-def _backbones(hv, ds, backend):
+def _backbones(hv, ds, backend, forced=None):
     n = ds.sizes["mode"]
     columns = style.ncols(n)
     panels = []
     for k in range(n):
-        panel = _backbone_panel(hv, ds, k, backend, style.grid_opts(k, n, backend, columns))
+        panel = _backbone_panel(hv, ds, k, backend, style.grid_opts(k, n, backend, columns), forced)
         size = {"width": 520, "height": 340} if backend == "bokeh" else {}
         panels.append(panel.opts(legend_position="bottom_left", show_legend=k == 0, **size, backend=backend))
     rows = -(-n // columns)
@@ -123,10 +162,12 @@ def _surface(hv, ds, backend):
                         "Invariant manifold and an orbit of the full system on it", fig_inches=(13, 4.6))
 
 
-def figures(ds, backend):
-    """(caption, filename, figure) of each figure."""
+def figures(ds, backend, forced=None):
+    """(caption, filename, figure) of each figure; forced: a continuation result to draw the
+    backbones over."""
     hv = style.holoviews()
-    out = [("Backbone curves of every mode", "backbones.png", _backbones(hv, ds, backend)),
+    caption = "Backbone curves of every mode" + (" over the forced response" if forced is not None else "")
+    out = [(caption, "backbones.png", _backbones(hv, ds, backend, forced)),
            ("Manifold vs continuation: relative frequency difference", "backbone_difference.png",
             _difference(hv, ds, backend))]
     if "surface_info" in ds:
@@ -155,9 +196,10 @@ def _header_html(ds, title):
             "in the amplitude. Continuation: periodic orbits of the full conservative model.</p>")
 
 
-def make_report(ds, out_dir, title=None):
+def make_report(ds, out_dir, title=None, forced=None):
     """report.html, one PNG per figure and modes.csv into out_dir; returns the paths as
-    pipeline.report.make_report does."""
+    pipeline.report.make_report does. forced: a continuation result of a forced response along a
+    frequency (the backbones are drawn over it; `check_forced` first)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     title = title or f"Backbone report: {ds.attrs.get('scene', '')}"
@@ -165,11 +207,11 @@ def make_report(ds, out_dir, title=None):
     csv_path.write_text(query._render(backbone.table(ds), "csv") + "\n")
     pngs = []
     with style.backend("matplotlib") as hv:
-        for _, filename, fig in figures(ds, "matplotlib"):
+        for _, filename, fig in figures(ds, "matplotlib", forced):
             hv.save(fig, out / filename, backend="matplotlib", dpi=style.DPI)
             pngs.append(out / filename)
     html_path = out / "report.html"
     with style.backend("bokeh"):
-        figs = [(caption, fig) for caption, _, fig in figures(ds, "bokeh")]
+        figs = [(caption, fig) for caption, _, fig in figures(ds, "bokeh", forced)]
         page.save_html(html_path, title, _header_html(ds, title), figs, _modes_html(ds), ds.attrs.get("config_toml", ""))
     return {"html": html_path, "png": pngs, "csv": csv_path, "points": []}
