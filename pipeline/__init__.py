@@ -68,7 +68,7 @@ def make_report(cube_or_path, out_dir, points=None, overwrite=False, over=None):
     from pipeline import backbone, continuation, fileio, report
 
     is_path = isinstance(cube_or_path, (str, bytes)) or hasattr(cube_or_path, "__fspath__")
-    if is_path and continuation.is_continuation_file(cube_or_path):
+    if is_path and continuation.is_result_file(cube_or_path):
         ds = continuation.open_result(cube_or_path)
     elif is_path and backbone.is_backbone_file(cube_or_path):
         ds = backbone.open_result(cube_or_path)

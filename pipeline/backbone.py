@@ -19,7 +19,6 @@ plane holding the manifold's planar mode (the model module's PLANAR_SUBSPACES).
 The continuation frequency on the grid interpolates the continued points by a cubic spline in A^2
 (omega is a smooth function of A^2: omega_0 + kappa A^2 + O(A^4)), inside the amplitudes reached.
 """
-import functools
 import importlib
 import itertools
 import json
@@ -32,9 +31,8 @@ import numpy as np
 import xarray as xr
 from scipy.interpolate import CubicSpline
 
-from pipeline import compute, cube, fileio
+from pipeline import compute, continuation, cube, fileio
 from pipeline.config import ConfigError
-from pipeline.continuation import write
 from rotorkernels import nnm
 from rotorkernels.continuation import backbone as cb
 from rotorkernels.continuation.arclength import Settings
@@ -395,29 +393,18 @@ def _surface_variables(lines, pl, shape, names):
 
 def open_result(path):
     """Open a backbone result into memory; CubeError if the file is not one."""
-    try:
-        with xr.open_dataset(path, engine="netcdf4", mask_and_scale=False) as ds:
-            ds = ds.load()
-    except (OSError, ValueError) as exc:
-        raise cube.CubeError(f"{path}: cannot be read as netCDF ({exc})") from None
-    if ds.attrs.get("result_kind") != RESULT_KIND:
-        raise cube.CubeError(f"{path}: not a backbone result (no result_kind = {RESULT_KIND!r})")
-    return ds
+    return continuation.open_result(path, RESULT_KIND)
 
 
 def is_backbone_file(path):
-    try:
-        with xr.open_dataset(path, engine="netcdf4", mask_and_scale=False) as ds:
-            return ds.attrs.get("result_kind") == RESULT_KIND
-    except (OSError, ValueError):
-        return False
+    return continuation.is_result_file(path, RESULT_KIND)
 
 
 # --- running -------------------------------------------------------------------------------------
 
 def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr):
     """Compute the backbones a config asks for into a netCDF result at `output`; returns its path."""
-    from pipeline import sweep, warmup
+    from pipeline import sweep
 
     pl = plan(cfg.data)
     output = os.path.abspath(output)
@@ -426,38 +413,12 @@ def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.s
     with fileio.output_lock(output, cfg.path or "<default scene>"):
         if scheduler:
             sweep.check_scheduler(scheduler)
-        if pl.continuation:
-            warmup.compile_scene(cfg.data, lambda text: _say(stream, text))
-        lines = _run_lines(cfg, pl, workers, scheduler, stream)
+        if stream:
+            print(f"backbones of {cfg.data['scene']['model']} on {len(pl.lines)} line(s)"
+                  f"{'' if pl.continuation else ' (manifold only)'}", file=stream, flush=True)
+        lines = continuation.run_lines(cfg, backbone_line, pl.lines, workers, scheduler, stream, _line_summary)
         provenance = {**sweep._provenance(cfg), "title": f"rotorsweep backbones: {cfg.data['scene']['name']}"}
-        return write(to_dataset(cfg.data, pl, lines, provenance), output)
-
-
-def _run_lines(cfg, pl, workers, scheduler, stream):
-    from dask.distributed import as_completed
-
-    from pipeline import sweep
-
-    _say(stream, f"backbones of {cfg.data['scene']['model']} on {len(pl.lines)} line(s)"
-                 f"{'' if pl.continuation else ' (manifold only)'}")
-    client, cluster = sweep._client(workers, scheduler)
-    try:
-        submit = functools.partial(client.submit, backbone_line, cfg.data, pure=False)
-        futures = {submit(where): k for k, where in enumerate(pl.lines)}
-        results = [None] * len(pl.lines)
-        for done, future in enumerate(as_completed(futures), 1):
-            k = futures[future]
-            results[k] = future.result()
-            label = ", ".join(f"{a}={v:g}" for a, v in pl.lines[k].items()) or "the scene"
-            _say(stream, f"[{done}/{len(pl.lines)}] {label}: {_line_summary(results[k])}")
-    finally:
-        sweep._close(client, cluster)
-    return results
-
-
-def _say(stream, text):
-    if stream:
-        print(text, file=stream, flush=True)
+        return continuation.write(to_dataset(cfg.data, pl, lines, provenance), output)
 
 
 def _line_summary(line):

@@ -46,32 +46,30 @@ def cmd_run(args):
     return 0
 
 
-def cmd_backbone(args):
-    from pipeline import backbone
-
+def _run_result(args, module, suffix, label):
+    """`continue` / `backbone`: module.run(config) into out/<scene>_<suffix>.nc (or -o), then
+    the report when asked."""
     cfg = pipeline._config(args.config)
-    out = args.output or f"out/{cfg.data['scene']['name']}_backbone.nc"
-    path = backbone.run(cfg, out, workers=args.workers, scheduler=args.scheduler, overwrite=args.overwrite,
-                        stream=None if args.quiet else sys.stderr)
-    print(f"backbones: {path}")
+    out = args.output or f"out/{cfg.data['scene']['name']}_{suffix}.nc"
+    path = module.run(cfg, out, workers=args.workers, scheduler=args.scheduler, overwrite=args.overwrite,
+                      stream=None if args.quiet else sys.stderr)
+    print(f"{label}: {path}")
     if args.report:
         files = pipeline.make_report(path, args.report, overwrite=args.overwrite)
         print(f"report: {files['html']}")
     return 0
+
+
+def cmd_backbone(args):
+    from pipeline import backbone
+
+    return _run_result(args, backbone, "backbone", "backbones")
 
 
 def cmd_continue(args):
     from pipeline import continuation
 
-    cfg = pipeline._config(args.config)
-    out = args.output or f"out/{cfg.data['scene']['name']}_continuation.nc"
-    path = continuation.run(cfg, out, workers=args.workers, scheduler=args.scheduler, overwrite=args.overwrite,
-                            stream=None if args.quiet else sys.stderr)
-    print(f"continuation: {path}")
-    if args.report:
-        files = pipeline.make_report(path, args.report, overwrite=args.overwrite)
-        print(f"report: {files['html']}")
-    return 0
+    return _run_result(args, continuation, "continuation", "continuation")
 
 
 def _attractor_row(args):
@@ -221,7 +219,7 @@ def cmd_query(args):
     if backbone.is_backbone_file(args.cube):
         print(query._render(backbone.table(backbone.open_result(args.cube)), args.format))
         return 0
-    if continuation.is_continuation_file(args.cube):
+    if continuation.is_result_file(args.cube):
         print(query._render(continuation.events_table(continuation.open_result(args.cube)), args.format))
         return 0
     ds = cube.open_cube(args.cube)
@@ -250,7 +248,7 @@ def cmd_info(args):
 
     if backbone.is_backbone_file(args.cube):
         print(backbone.describe(backbone.open_result(args.cube)))
-    elif continuation.is_continuation_file(args.cube):
+    elif continuation.is_result_file(args.cube):
         print(continuation.describe(continuation.open_result(args.cube)))
     else:
         print(cube.describe(cube.open_cube(args.cube)))

@@ -386,15 +386,16 @@ def write(ds, path):
     return path
 
 
-def open_result(path):
-    """Open a continuation result into memory; CubeError if the file is not one."""
+def open_result(path, kind=RESULT_KIND):
+    """Open a result file of `kind` (continuation, backbone) into memory; CubeError if the file
+    is not one."""
     try:
         with xr.open_dataset(path, engine="netcdf4", mask_and_scale=False) as ds:
             ds = ds.load()
     except (OSError, ValueError) as exc:
         raise cube.CubeError(f"{path}: cannot be read as netCDF ({exc})") from None
-    if not is_continuation(ds):
-        raise cube.CubeError(f"{path}: not a continuation result (no result_kind = {RESULT_KIND!r})")
+    if ds.attrs.get("result_kind") != kind:
+        raise cube.CubeError(f"{path}: not a {kind} result (no result_kind = {kind!r})")
     return ds
 
 
@@ -402,11 +403,11 @@ def is_continuation(ds):
     return ds.attrs.get("result_kind") == RESULT_KIND
 
 
-def is_continuation_file(path):
-    """A quick look at the global attributes (no data read)."""
+def is_result_file(path, kind=RESULT_KIND):
+    """A quick look at the global attributes (no data read): is `path` a result of `kind`?"""
     try:
         with xr.open_dataset(path, engine="netcdf4", mask_and_scale=False) as ds:
-            return is_continuation(ds)
+            return ds.attrs.get("result_kind") == kind
     except (OSError, ValueError):
         return False
 
@@ -430,24 +431,32 @@ def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.s
 
 
 def _run_lines(cfg, pl, workers, scheduler, stream):
+    _say(stream, f"continuing {pl.parameter} from {pl.start:g} to {pl.stop:g} on {len(pl.lines)} line(s)")
+    results = run_lines(cfg, continue_line, pl.lines, workers, scheduler, stream, _line_summary)
+    return list(zip(pl.lines, results))
+
+
+def run_lines(cfg, task, lines, workers, scheduler, stream, summary):
+    """task(cfg.data, where) for every line {axis: value} as Dask tasks, after compiling the
+    scene's kernels in the driver (workers load them from the cache); a progress line per line
+    done (`summary(result)`); the results in line order."""
     from dask.distributed import as_completed
 
     from pipeline import sweep
 
-    _say(stream, f"continuing {pl.parameter} from {pl.start:g} to {pl.stop:g} on {len(pl.lines)} line(s)")
     client, cluster = sweep._client(workers, scheduler)
     try:
         warmup.compile_scene(cfg.data, lambda text: _say(stream, text))
-        submit = functools.partial(client.submit, continue_line, cfg.data, pure=False)
-        futures = {submit(where): k for k, where in enumerate(pl.lines)}
-        results = [None] * len(pl.lines)
+        submit = functools.partial(client.submit, task, cfg.data, pure=False)
+        futures = {submit(where): k for k, where in enumerate(lines)}
+        results = [None] * len(lines)
         for done, future in enumerate(as_completed(futures), 1):
             k = futures[future]
             results[k] = future.result()
-            _say(stream, f"[{done}/{len(pl.lines)}] {_line_label(pl.lines[k])}: {_line_summary(results[k])}")
+            _say(stream, f"[{done}/{len(lines)}] {_line_label(lines[k])}: {summary(results[k])}")
     finally:
         sweep._close(client, cluster)
-    return list(zip(pl.lines, results))
+    return results
 
 
 def _say(stream, text):

@@ -6,7 +6,6 @@ of one mode as a map of a slave coordinate over the master's (p, p') plane with 
 orbit started on it (the papers' check: the orbit stays on the surface)."""
 import html
 import json
-from pathlib import Path
 
 import numpy as np
 
@@ -176,18 +175,6 @@ def figures(ds, backend, forced=None):
     return out
 
 
-def _modes_html(ds):
-    cols = backbone.table(ds)
-    head = "".join(f"<th>{html.escape(k)}</th>" for k in cols)
-    rows = "\n".join("<tr>" + "".join(f"<td>{html.escape(_cell(v))}</td>" for v in vals) + "</tr>"
-                     for vals in zip(*cols.values()))
-    return f'<h2>Modes</h2><table class="intervals"><thead><tr>{head}</tr></thead>\n<tbody>{rows}</tbody></table>'
-
-
-def _cell(v):
-    return f"{v:.6g}" if isinstance(v, float) else str(v)
-
-
 def _header_html(ds, title):
     lines = backbone.describe(ds).splitlines()
     return (f"<h1>{html.escape(title)}</h1><p>{html.escape(lines[0])}<br>{html.escape(lines[1])}</p>"
@@ -200,18 +187,8 @@ def make_report(ds, out_dir, title=None, forced=None):
     """report.html, one PNG per figure and modes.csv into out_dir; returns the paths as
     pipeline.report.make_report does. forced: a continuation result of a forced response along a
     frequency (the backbones are drawn over it; `check_forced` first)."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     title = title or f"Backbone report: {ds.attrs.get('scene', '')}"
-    csv_path = out / "modes.csv"
-    csv_path.write_text(query._render(backbone.table(ds), "csv") + "\n")
-    pngs = []
-    with style.backend("matplotlib") as hv:
-        for _, filename, fig in figures(ds, "matplotlib", forced):
-            hv.save(fig, out / filename, backend="matplotlib", dpi=style.DPI)
-            pngs.append(out / filename)
-    html_path = out / "report.html"
-    with style.backend("bokeh"):
-        figs = [(caption, fig) for caption, _, fig in figures(ds, "bokeh", forced)]
-        page.save_html(html_path, title, _header_html(ds, title), figs, _modes_html(ds), ds.attrs.get("config_toml", ""))
-    return {"html": html_path, "png": pngs, "csv": csv_path, "points": []}
+    cols = backbone.table(ds)
+    return page.write_result_report(out_dir, title, _header_html(ds, title),
+                                    lambda backend: figures(ds, backend, forced), page.columns_html("Modes", cols, 6),
+                                    ds.attrs.get("config_toml", ""), "modes.csv", query._render(cols, "csv"))

@@ -7,7 +7,6 @@ A branch that turns back at a fold is not a function of the parameter: it is dra
 order (runs of one stability along the branch, pipeline.report.branches), never sorted by the
 parameter."""
 import html
-from pathlib import Path
 
 import numpy as np
 
@@ -182,23 +181,14 @@ def _bistable_html(ds):
     rows = continuation.bistable_intervals(ds)
     if not rows:
         return "<h2>Coexisting stable orbits</h2><p>none on the computed branches</p>"
-    head = "".join(f"<th>{html.escape(k)}</th>" for k in rows[0])
-    body = "\n".join("<tr>" + "".join(f"<td>{html.escape(_cell(v))}</td>" for v in r.values()) + "</tr>" for r in rows)
-    return f'<h2>Coexisting stable orbits</h2><table class="intervals"><thead><tr>{head}</tr></thead>\n<tbody>{body}</tbody></table>'
+    return page.columns_html("Coexisting stable orbits", {k: [r[k] for r in rows] for k in rows[0]})
 
 
 def _events_html(ds):
     cols = continuation.events_table(ds)
     if not cols["type"]:
         return "<h2>Located points</h2><p>no fold, period doubling or Neimark-Sacker point on the branches</p>"
-    head = "".join(f"<th>{html.escape(k)}</th>" for k in cols)
-    rows = "\n".join("<tr>" + "".join(f"<td>{html.escape(_cell(v))}</td>" for v in vals) + "</tr>"
-                     for vals in zip(*cols.values()))
-    return f'<h2>Located points</h2><table class="intervals"><thead><tr>{head}</tr></thead>\n<tbody>{rows}</tbody></table>'
-
-
-def _cell(v):
-    return f"{v:.10g}" if isinstance(v, float) else str(v)
+    return page.columns_html("Located points", cols)
 
 
 def _header_html(ds, title):
@@ -212,19 +202,7 @@ def _header_html(ds, title):
 def make_report(ds, out_dir, title=None):
     """report.html, one PNG per figure and events.csv into out_dir; returns the paths as
     pipeline.report.make_report does."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     title = title or f"Continuation report: {ds.attrs.get('scene', '')}"
-    csv_path = out / "events.csv"
-    csv_path.write_text(query._render(continuation.events_table(ds), "csv") + "\n")
-    pngs = []
-    with style.backend("matplotlib") as hv:
-        for _, filename, fig in figures(ds, "matplotlib"):
-            hv.save(fig, out / filename, backend="matplotlib", dpi=style.DPI)
-            pngs.append(out / filename)
-    html_path = out / "report.html"
-    with style.backend("bokeh"):
-        figs = [(caption, fig) for caption, _, fig in figures(ds, "bokeh")]
-        page.save_html(html_path, title, _header_html(ds, title), figs, _events_html(ds) + _bistable_html(ds),
-                       ds.attrs.get("config_toml", ""))
-    return {"html": html_path, "png": pngs, "csv": csv_path, "points": []}
+    return page.write_result_report(out_dir, title, _header_html(ds, title), lambda backend: figures(ds, backend),
+                                    _events_html(ds) + _bistable_html(ds), ds.attrs.get("config_toml", ""),
+                                    "events.csv", query._render(continuation.events_table(ds), "csv"))

@@ -117,3 +117,35 @@ def save_html(path, title, header, figs, intervals, config_toml, points=()):
             f"<title>{html.escape(title)}</title>\n{resources}\n{_CSS}\n</head>\n"
             "<body>\n" + "\n".join(body) + f"\n{script}\n</body>\n</html>\n")
     Path(path).write_text(page, encoding="utf-8")
+
+
+def columns_html(title, cols, digits=10):
+    """<h2>title</h2> and a table of columns {name: values} (floats to `digits` significant digits)."""
+    def cell(v):
+        return f"{v:.{digits}g}" if isinstance(v, float) else str(v)
+    head = "".join(f"<th>{html.escape(k)}</th>" for k in cols)
+    rows = "\n".join("<tr>" + "".join(f"<td>{html.escape(cell(v))}</td>" for v in vals) + "</tr>"
+                     for vals in zip(*cols.values()))
+    return f'<h2>{html.escape(title)}</h2><table class="intervals"><thead><tr>{head}</tr></thead>\n<tbody>{rows}</tbody></table>'
+
+
+def write_result_report(out_dir, title, header, figures, tables, config_toml, csv_name, csv_text):
+    """A result's report (continuation, backbone): one PNG per figure (matplotlib), report.html
+    (bokeh figures, header, tables, config) and a CSV; figures(backend) -> [(caption, file, fig)].
+    Returns the paths as pipeline.report.make_report does."""
+    from pipeline.report import style
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    csv_path = out / csv_name
+    csv_path.write_text(csv_text + "\n")
+    pngs = []
+    with style.backend("matplotlib") as hv:
+        for _, filename, fig in figures("matplotlib"):
+            hv.save(fig, out / filename, backend="matplotlib", dpi=style.DPI)
+            pngs.append(out / filename)
+    html_path = out / "report.html"
+    with style.backend("bokeh"):
+        figs = [(caption, fig) for caption, _, fig in figures("bokeh")]
+        save_html(html_path, title, header, figs, tables, config_toml)
+    return {"html": html_path, "png": pngs, "csv": csv_path, "points": []}
