@@ -22,7 +22,6 @@ The continuation frequency on the grid interpolates the continued points by a cu
 import importlib
 import itertools
 import json
-import os
 import re
 import sys
 from dataclasses import dataclass
@@ -31,7 +30,7 @@ import numpy as np
 import xarray as xr
 from scipy.interpolate import CubicSpline
 
-from pipeline import compute, continuation, cube, fileio
+from pipeline import compute, continuation
 from pipeline.config import ConfigError
 from rotorkernels import nnm
 from rotorkernels.continuation import backbone as cb
@@ -407,12 +406,7 @@ def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.s
     from pipeline import sweep
 
     pl = plan(cfg.data)
-    output = os.path.abspath(output)
-    if os.path.exists(output) and not overwrite:
-        raise cube.CubeError(f"{output} exists; pass --overwrite to replace it")
-    with fileio.output_lock(output, cfg.path or "<default scene>"):
-        if scheduler:
-            sweep.check_scheduler(scheduler)
+    with continuation.result_output(cfg, output, overwrite, scheduler) as output:
         if stream:
             print(f"backbones of {cfg.data['scene']['model']} on {len(pl.lines)} line(s)"
                   f"{'' if pl.continuation else ' (manifold only)'}", file=stream, flush=True)

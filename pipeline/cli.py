@@ -294,27 +294,22 @@ def build_parser():
     r.add_argument("-q", "--quiet", action="store_true", help="no phase lines and no progress bar")
     r.set_defaults(func=cmd_run)
 
-    c = sub.add_parser("continue", help="pseudo-arclength branches (folds, period doublings, branch "
-                                         "switching) of a config's [continuation] into a netCDF result")
-    c.add_argument("config", nargs="?", help="scene TOML with a [continuation] section (default: the demo scene, along speed)")
-    c.add_argument("-o", "--output", help="result path (default out/<scene name>_continuation.nc)")
-    c.add_argument("--workers", type=_positive_int, help="local Dask worker processes (default: one per core, at least 2)")
-    c.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
-    c.add_argument("--overwrite", action="store_true", help="replace an existing result (and --report DIR)")
-    c.add_argument("--report", metavar="DIR", help="also write the report into DIR")
-    c.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
-    c.set_defaults(func=cmd_continue)
-
-    b = sub.add_parser("backbone", help="nonlinear normal modes and backbone curves of a conservative model "
-                                         "(invariant manifold and continuation) into a netCDF result")
-    b.add_argument("config", help="scene TOML of symmetric4 or asymmetric5, [backbone] section optional")
-    b.add_argument("-o", "--output", help="result path (default out/<scene name>_backbone.nc)")
-    b.add_argument("--workers", type=_positive_int, help="local Dask worker processes (default: one per core, at least 2)")
-    b.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
-    b.add_argument("--overwrite", action="store_true", help="replace an existing result (and --report DIR)")
-    b.add_argument("--report", metavar="DIR", help="also write the report into DIR")
-    b.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
-    b.set_defaults(func=cmd_backbone)
+    for name, func, help_text, config_help in (
+            ("continue", cmd_continue, "pseudo-arclength branches (folds, period doublings, branch switching) of a "
+             "config's [continuation] into a netCDF result",
+             "scene TOML with a [continuation] section (default: the demo scene, along speed)"),
+            ("backbone", cmd_backbone, "nonlinear normal modes and backbone curves of a conservative model "
+             "(invariant manifold and continuation) into a netCDF result",
+             "scene TOML of symmetric4 or asymmetric5, [backbone] section optional")):
+        c = sub.add_parser(name, help=help_text)
+        c.add_argument("config", nargs="?" if name == "continue" else None, help=config_help)
+        c.add_argument("-o", "--output", help=f"result path (default out/<scene name>_{name.replace('continue', 'continuation')}.nc)")
+        c.add_argument("--workers", type=_positive_int, help="local Dask worker processes (default: one per core, at least 2)")
+        c.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
+        c.add_argument("--overwrite", action="store_true", help="replace an existing result (and --report DIR)")
+        c.add_argument("--report", metavar="DIR", help="also write the report into DIR")
+        c.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+        c.set_defaults(func=func)
 
     p = sub.add_parser("point", help="periodic orbit and Floquet multipliers at one point")
     p.add_argument("--config", help="scene TOML (default: Bai 2006, 209 bearing, the paper's constant)")

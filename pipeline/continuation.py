@@ -10,6 +10,7 @@ of the range, and each period doubling met spawns the period-2k branch (branch s
 dimension (its points along `point`, padded with NaN / INT_FILL), its located fold / period
 doubling / Neimark-Sacker points entries of the `event` dimension.
 """
+import contextlib
 import functools
 import itertools
 import json
@@ -414,17 +415,27 @@ def is_result_file(path, kind=RESULT_KIND):
 
 # --- running -------------------------------------------------------------------------------------
 
-def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr):
-    """Run the continuation a config asks for into a netCDF result at `output`; returns its path."""
+@contextlib.contextmanager
+def result_output(cfg, output, overwrite, scheduler):
+    """The absolute output path, locked for the run (refused if it exists without `overwrite`;
+    the scheduler checked first)."""
     from pipeline import sweep
 
-    pl = plan(cfg.data)
     output = os.path.abspath(output)
     if os.path.exists(output) and not overwrite:
         raise cube.CubeError(f"{output} exists; pass --overwrite to replace it")
     with fileio.output_lock(output, cfg.path or "<default scene>"):
         if scheduler:
             sweep.check_scheduler(scheduler)
+        yield output
+
+
+def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr):
+    """Run the continuation a config asks for into a netCDF result at `output`; returns its path."""
+    from pipeline import sweep
+
+    pl = plan(cfg.data)
+    with result_output(cfg, output, overwrite, scheduler) as output:
         lines = _run_lines(cfg, pl, workers, scheduler, stream)
         ds = to_dataset(cfg.data, pl, lines, {**sweep._provenance(cfg), "title": f"rotorsweep continuation: {cfg.data['scene']['name']}"})
         return write(ds, output)
