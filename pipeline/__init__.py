@@ -65,10 +65,10 @@ def make_report(cube_or_path, out_dir, points=None, overwrite=False, over=None):
     the report of another cube is refused unless overwrite; the report is built next to it and
     then takes its place, so no file of the earlier report is left. over: for a backbone result,
     a continuation result (path) of a forced response to draw the backbones over."""
-    from pipeline import backbone, continuation, fileio, report
+    from pipeline import backbone, continuation, fileio, report, results
 
     is_path = isinstance(cube_or_path, (str, bytes)) or hasattr(cube_or_path, "__fspath__")
-    if is_path and continuation.is_result_file(cube_or_path):
+    if is_path and results.is_result_file(cube_or_path, continuation.RESULT_KIND):
         ds = continuation.open_result(cube_or_path)
     elif is_path and backbone.is_backbone_file(cube_or_path):
         ds = backbone.open_result(cube_or_path)

@@ -30,7 +30,7 @@ import numpy as np
 import xarray as xr
 from scipy.interpolate import CubicSpline
 
-from pipeline import compute, continuation
+from pipeline import compute, results
 from pipeline.config import ConfigError
 from rotorkernels import nnm
 from rotorkernels.continuation import backbone as cb
@@ -392,11 +392,11 @@ def _surface_variables(lines, pl, shape, names):
 
 def open_result(path):
     """Open a backbone result into memory; CubeError if the file is not one."""
-    return continuation.open_result(path, RESULT_KIND)
+    return results.open_result(path, RESULT_KIND)
 
 
 def is_backbone_file(path):
-    return continuation.is_result_file(path, RESULT_KIND)
+    return results.is_result_file(path, RESULT_KIND)
 
 
 # --- running -------------------------------------------------------------------------------------
@@ -406,13 +406,12 @@ def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.s
     from pipeline import sweep
 
     pl = plan(cfg.data)
-    with continuation.result_output(cfg, output, overwrite, scheduler) as output:
-        if stream:
-            print(f"backbones of {cfg.data['scene']['model']} on {len(pl.lines)} line(s)"
-                  f"{'' if pl.continuation else ' (manifold only)'}", file=stream, flush=True)
-        lines = continuation.run_lines(cfg, backbone_line, pl.lines, workers, scheduler, stream, _line_summary)
+    with results.result_output(cfg, output, overwrite, scheduler) as output:
+        results.say(stream, f"backbones of {cfg.data['scene']['model']} on {len(pl.lines)} line(s)"
+                            f"{'' if pl.continuation else ' (manifold only)'}")
+        lines = results.run_lines(cfg, backbone_line, pl.lines, workers, scheduler, stream, _line_summary)
         provenance = {**sweep._provenance(cfg), "title": f"rotorsweep backbones: {cfg.data['scene']['name']}"}
-        return continuation.write(to_dataset(cfg.data, pl, lines, provenance), output)
+        return results.write(to_dataset(cfg.data, pl, lines, provenance), output)
 
 
 def _line_summary(line):

@@ -214,12 +214,12 @@ def _point_text(r):
 
 
 def cmd_query(args):
-    from pipeline import backbone, continuation
+    from pipeline import backbone, continuation, results
 
     if backbone.is_backbone_file(args.cube):
         print(query._render(backbone.table(backbone.open_result(args.cube)), args.format))
         return 0
-    if continuation.is_result_file(args.cube):
+    if results.is_result_file(args.cube, continuation.RESULT_KIND):
         print(query._render(continuation.events_table(continuation.open_result(args.cube)), args.format))
         return 0
     ds = cube.open_cube(args.cube)
@@ -244,11 +244,11 @@ def cmd_report(args):
 
 
 def cmd_info(args):
-    from pipeline import backbone, continuation
+    from pipeline import backbone, continuation, results
 
     if backbone.is_backbone_file(args.cube):
         print(backbone.describe(backbone.open_result(args.cube)))
-    elif continuation.is_result_file(args.cube):
+    elif results.is_result_file(args.cube, continuation.RESULT_KIND):
         print(continuation.describe(continuation.open_result(args.cube)))
     else:
         print(cube.describe(cube.open_cube(args.cube)))

@@ -1,0 +1,96 @@
+"""What `rotorsweep continue` and `rotorsweep backbone` share: their result files (netCDF with a
+`result_kind` attribute) and running a task per line of the swept axes on a Dask cluster, the
+scene's kernels compiled first in the driver."""
+import contextlib
+import functools
+import os
+
+import xarray as xr
+
+from pipeline import cube, fileio, warmup
+
+
+def write(ds, path):
+    """Atomic netCDF write: compressed numbers, integers without a fill value (so a plain
+    xarray.open_dataset keeps the flags integer; padding has its own flag value), text
+    uncompressed (HDF5 filters do not apply to variable-length strings)."""
+    enc = {name: {"_FillValue": None} for name in ds.coords}
+    for name, var in ds.data_vars.items():
+        if var.dtype.kind == "O":
+            enc[name] = {}
+        else:
+            enc[name] = {**cube.COMPRESSION, **({"_FillValue": None} if var.dtype.kind in "iu" else {})}
+    with fileio.atomic_path(path) as tmp:
+        ds.to_netcdf(tmp, engine="netcdf4", encoding=enc)
+    return path
+
+
+def open_result(path, kind):
+    """Open a result file of `kind` (continuation, backbone) into memory; CubeError if the file
+    is not one."""
+    try:
+        with xr.open_dataset(path, engine="netcdf4", mask_and_scale=False) as ds:
+            ds = ds.load()
+    except (OSError, ValueError) as exc:
+        raise cube.CubeError(f"{path}: cannot be read as netCDF ({exc})") from None
+    if ds.attrs.get("result_kind") != kind:
+        raise cube.CubeError(f"{path}: not a {kind} result (no result_kind = {kind!r})")
+    return ds
+
+
+def is_result_file(path, kind):
+    """A quick look at the global attributes (no data read): is `path` a result of `kind`?"""
+    try:
+        with xr.open_dataset(path, engine="netcdf4", mask_and_scale=False) as ds:
+            return ds.attrs.get("result_kind") == kind
+    except (OSError, ValueError):
+        return False
+
+
+@contextlib.contextmanager
+def result_output(cfg, output, overwrite, scheduler):
+    """The absolute output path, locked for the run (refused if it exists without `overwrite`;
+    the scheduler checked first)."""
+    from pipeline import sweep
+
+    output = os.path.abspath(output)
+    if os.path.exists(output) and not overwrite:
+        raise cube.CubeError(f"{output} exists; pass --overwrite to replace it")
+    with fileio.output_lock(output, cfg.path or "<default scene>"):
+        if scheduler:
+            sweep.check_scheduler(scheduler)
+        yield output
+
+
+def run_lines(cfg, task, lines, workers, scheduler, stream, summary):
+    """task(cfg.data, where) for every line {axis: value} as Dask tasks, after compiling the
+    scene's kernels in the driver (workers load them from the cache); a progress line per line
+    done (`summary(result)`); the results in line order."""
+    from dask.distributed import as_completed
+
+    from pipeline import sweep
+
+    client, cluster = sweep._client(workers, scheduler)
+    try:
+        warmup.compile_scene(cfg.data, lambda text: say(stream, text))
+        submit = functools.partial(client.submit, task, cfg.data, pure=False)
+        futures = {submit(where): k for k, where in enumerate(lines)}
+        results = [None] * len(lines)
+        for done, future in enumerate(as_completed(futures), 1):
+            k = futures[future]
+            results[k] = future.result()
+            say(stream, f"[{done}/{len(lines)}] {_line_label(lines[k])}: {summary(results[k])}")
+    finally:
+        sweep._close(client, cluster)
+    return results
+
+
+def say(stream, text):
+    if stream:
+        print(text, file=stream, flush=True)
+
+
+def _line_label(where):
+    return ", ".join(f"{k}={v:g}" for k, v in where.items()) or "the scene"
+
+
