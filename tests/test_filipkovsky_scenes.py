@@ -233,6 +233,7 @@ preload = [200.0, 300.0]
 """
 
 
+@pytest.mark.slow    # 17-41 s: the default suite stays under 15 min on 2 cores (make test-slow)
 def test_sweep_report_maps_stability_over_contact_angle_and_preload(tmp_path):
     """A rigid_preloaded sweep with the contact angle and the preload as the other axes: the
     stability map has one band per nominal angle (y) and one panel per preload (facet), the

@@ -71,6 +71,7 @@ def assert_same_cube(reference, other):
         np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
 
 
+@pytest.mark.slow    # 17-41 s: the default suite stays under 15 min on 2 cores (make test-slow)
 def test_a_sweep_on_a_dask_cli_cluster_survives_a_killed_worker(tmp_path):
     cfg = grid_config(tmp_path, "{start = 60.0, stop = 250.0, step = 4.0}", "[7.6e-6, 19.0e-6]", 4)
     local = tmp_path / "local.nc"

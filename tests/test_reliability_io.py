@@ -247,6 +247,7 @@ def _files(directory):
     return sorted(p.name for p in directory.iterdir())
 
 
+@pytest.mark.slow    # 17-41 s: the default suite stays under 15 min on 2 cores (make test-slow)
 def test_a_report_of_another_cube_is_refused_then_replaced_cleanly(two_cubes, tmp_path):
     import pipeline
 

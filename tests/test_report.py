@@ -513,6 +513,7 @@ def test_multiplier_panels_are_square_with_units_on_the_colour_bar():
         assert set(tips) == {"Re λ", "Im λ", "shaft speed [Hz]"}
 
 
+@pytest.mark.slow    # 17-41 s: the default suite stays under 15 min on 2 cores (make test-slow)
 def test_every_line_plot_has_a_hover_with_the_parameter_and_the_value():
     ds = attractor_cube()
     from pipeline.report.figures import branch_diagram, campbell, response
