@@ -44,7 +44,8 @@ def mode_rows(path, repeats, grid_points=None):
         bb = pb._continued(spec, values, modes, k, grid, pl, opts)
         cont_s = time.perf_counter() - start
         man_s, f_man = best_time(lambda: nnm.backbone(nnm.manifold(system, k, master=bb.coordinate), grid), repeats)
-        rel = (pb._on_grid(bb, grid) - f_man) / pb._on_grid(bb, grid)
+        f_cont = pb._on_grid(bb, grid)
+        rel = (f_cont - f_man) / f_cont
         rows.append({"scene": spec.name, "mode": k + 1, "label": f"{modes[k].label} {modes[k].whirl}",
                      "linear_frequency_hz": modes[k].frequency, "manifold_s": man_s, "continuation_s": cont_s,
                      "continuation_points": int(bb.frequency.size), "continuation_rhs": int(bb.n_rhs),
