@@ -49,6 +49,45 @@ def _return_map(kernel, s, p, periods, opts, h):
 
 
 @njit(cache=True, nogil=True)
+def _newton_step(mono, r):
+    """(x, ok): x solves (M - I) x = -r by Gaussian elimination with partial pivoting (LAPACK's
+    gesv algorithm; written out because numba's np.linalg.solve compiles its error formatting,
+    about 3 s of a first point); ok is False for a singular or non-finite matrix, where gesv
+    fails."""
+    n = r.size
+    a = np.empty((n, n))
+    x = np.empty(n)
+    for i in range(n):
+        x[i] = -r[i]
+        for j in range(n):
+            a[i, j] = mono[i, j] - (1.0 if i == j else 0.0)
+            if not np.isfinite(a[i, j]):
+                return x, False
+    for k in range(n):
+        piv = k
+        for i in range(k + 1, n):
+            if abs(a[i, k]) > abs(a[piv, k]):
+                piv = i
+        if a[piv, k] == 0.0:
+            return x, False
+        if piv != k:
+            for j in range(n):
+                a[k, j], a[piv, j] = a[piv, j], a[k, j]
+            x[k], x[piv] = x[piv], x[k]
+        for i in range(k + 1, n):
+            f = a[i, k] / a[k, k]
+            for j in range(k + 1, n):
+                a[i, j] -= f * a[k, j]
+            x[i] -= f * x[k]
+    for i in range(n - 1, -1, -1):
+        acc = x[i]
+        for j in range(i + 1, n):
+            acc -= a[i, j] * x[j]
+        x[i] = acc / a[i, i]
+    return x, True
+
+
+@njit(cache=True, nogil=True)
 def shoot(kernel, guess, p, periods, opts, tol, max_iter):
     """Newton shooting for an orbit of period `periods` (scaled time) from `guess`.
 
@@ -60,15 +99,13 @@ def shoot(kernel, guess, p, periods, opts, tol, max_iter):
         status, reason = _failure(fstat)
         return s, mono, status, reason, 0, np.inf, n_rhs
     res = _residual_norm(r, s)
-    eye = np.eye(kernel[1])
     for it in range(max_iter + 1):
         if res <= tol:
             return s, mono, CONVERGED, R_OK, it, res, n_rhs
         if it == max_iter:
             break
-        try:
-            step = np.linalg.solve(mono - eye, -r)
-        except Exception:  # noqa: BLE001 - numba raises a generic error for a singular matrix
+        step, ok = _newton_step(mono, r)
+        if not ok:
             return s, mono, NOT_CONVERGED, R_SINGULAR, it, res, n_rhs
         lam = 1.0
         accepted = False
@@ -108,11 +145,17 @@ def sample_orbit(kernel, u0, p, periods, n_samples, opts):
     z = u0.copy()
     h = 0.0
     dt = periods / n_samples
+    n = kernel[1]
     for i in range(n_samples):
-        out[i] = z
+        # element loops, not out[i] = z and out[i + 1:] = nan: the slice assignments' shape
+        # checks compile Numba's error formatting (~2 s of a first point)
+        for j in range(n):
+            out[i, j] = z[j]
         z, status, _, h = ig.flow(kernel, i * dt, (i + 1) * dt, z, p, False, opts, h)
         if status != ig.STATUS_OK:
-            out[i + 1:] = np.nan
+            for k in range(i + 1, n_samples):
+                for j in range(n):
+                    out[k, j] = np.nan
             break
     return out
 

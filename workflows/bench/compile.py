@@ -24,12 +24,18 @@ from workflows.bench import render
 from workflows.bench.common import DOCS, ROOT, loadavg, log, provenance
 
 # The first point of each model's scene: linear_oscillator and damped_mathieu have no scene and
-# share duffing's kernels (the validation group), so duffing's times are theirs.
+# share duffing's kernels (the validation group), so duffing's times are theirs. A conservative
+# model has no `point` (no forcing period): symmetric4's first result is its scene's backbones
+# (`rotorsweep backbone`, every mode by manifold and continuation, one Dask worker), which
+# asymmetric5 shares the kernels of (the series_rotor group); {out} is a file in the run's cache
+# directory.
 POINTS = {
     "jeffcott_clearance": ["point", "--speed", "100", "--clearance", "7.6e-6", "--json"],
     "duffing": ["point", "--config", "configs/duffing_resonance.toml", "--at", "omega=1.0", "--json"],
     "rigid_preloaded": ["point", "--config", "configs/filipkovsky2016_quick.toml", "--at", "speed=250",
                         "--at", "support_frequency=150", "--json"],
+    "symmetric4": ["backbone", "configs/filipkovsky2010_symmetric.toml", "--workers", "1", "-q", "--overwrite",
+                   "-o", "{out}"],
 }
 WORKTREE = "worktree"
 
@@ -63,6 +69,7 @@ def run_point(tree, cache, args):
         env.pop(name, None)
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
+    args = [a.replace("{out}", str(Path(cache) / "result.nc")) for a in args]
     subprocess.run([sys.executable, "-m", "pipeline.cli", *args], cwd=tree, env=env, check=True,
                    capture_output=True, text=True)
     wall = time.perf_counter() - start
