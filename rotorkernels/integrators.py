@@ -19,7 +19,7 @@ sums; with the variational equations the model's right-hand side and Jacobian co
 contact sum (`rhs_jac`) and J Phi uses the block form [[0, I], [A, B]] of the models. The
 results are those of the straightforward formulation, operation by operation.
 """
-from typing import NamedTuple
+from collections import namedtuple
 
 import numpy as np
 from numba import njit
@@ -252,24 +252,9 @@ METHOD_DOP853, METHOD_RK4 = 0, 1
 S_METHOD, S_RTOL, S_ATOL, S_STEPS_PER_UNIT, S_MAX_STEPS, S_AMPLITUDE = range(6)
 
 
-class Dop853Settings(NamedTuple):
-    """`settings("dop853", ...)`: adaptive Dormand-Prince 8(5,3)."""
-    method: float
-    rtol: float
-    atol: float
-    steps_per_unit: float
-    max_steps: float
-    amplitude_limit: float
-
-
-class RK4Settings(NamedTuple):
-    """`settings("rk4", ...)`: classical RK4, fixed steps."""
-    method: float
-    rtol: float
-    atol: float
-    steps_per_unit: float
-    max_steps: float
-    amplitude_limit: float
+_FIELDS = ("method", "rtol", "atol", "steps_per_unit", "max_steps", "amplitude_limit")
+Dop853Settings = namedtuple("Dop853Settings", _FIELDS)    # adaptive Dormand-Prince 8(5,3)
+RK4Settings = namedtuple("RK4Settings", _FIELDS)          # classical RK4, fixed steps
 
 
 _SETTINGS = {"dop853": (METHOD_DOP853, Dop853Settings), "rk4": (METHOD_RK4, RK4Settings)}

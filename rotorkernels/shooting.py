@@ -31,10 +31,21 @@ def _failure(flow_status):
     return NOT_CONVERGED, R_STEP_UNDERFLOW
 
 
-@njit(cache=True, nogil=True)
+# Element loops below rather than array expressions (z[:n] - s, np.max(np.abs(r)), s + lam * step):
+# the same arithmetic, without compiling Numba's broadcasting and reduction kernels for a
+# first point (about 1 s).
+@njit(cache=True, nogil=True, inline="always")
 def _residual_norm(r, s):
     """Infinity norm of the residual relative to the orbit's size (scaled units, floor 1)."""
-    return np.max(np.abs(r)) / max(1.0, np.max(np.abs(s)))
+    r_max = 0.0
+    s_max = 1.0
+    for i in range(r.size):
+        a, b = abs(r[i]), abs(s[i])
+        if a != a or b != b:        # NaN, as np.max would give
+            return np.nan
+        r_max = max(r_max, a)
+        s_max = max(s_max, b)
+    return r_max / s_max
 
 
 @njit(cache=True, nogil=True)
@@ -43,8 +54,12 @@ def _return_map(kernel, s, p, periods, opts, h):
     n = kernel[1]
     z0 = ig.initial_state(s, n, True)
     z, status, n_rhs, h = ig.flow(kernel, 0.0, periods, z0, p, True, opts, h)
-    r = z[:n] - s
-    mono = z[n:].copy().reshape((n, n))
+    r = np.empty(n)
+    mono = np.empty((n, n))
+    for i in range(n):
+        r[i] = z[i] - s[i]
+        for j in range(n):
+            mono[i, j] = z[n + i * n + j]
     return r, mono, status, n_rhs, h
 
 
@@ -111,7 +126,9 @@ def shoot(kernel, guess, p, periods, opts, tol, max_iter):
         accepted = False
         last_fail = ig.STATUS_OK
         for _ in range(_MAX_HALVINGS):
-            trial = s + lam * step
+            trial = np.empty(s.size)
+            for i in range(s.size):
+                trial[i] = s[i] + lam * step[i]
             r_t, mono_t, fstat, nr, h_t = _return_map(kernel, trial, p, periods, opts, h)
             n_rhs += nr
             if fstat == ig.STATUS_OK:
