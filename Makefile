@@ -56,8 +56,8 @@ bench-reductions: $(STAMP)  ## rigid_preloaded reductions (balanced, one frequen
 bench-backbone: $(STAMP)  ## manifold vs continuation backbones: cost and agreement per mode of both 2010 rotors (~1 min) -> docs/benchmarks/backbone.*
 	$(BIN)/python -m workflows.bench.backbone
 
-bench-compile: $(STAMP)  ## cold and warm first point per model, this tree vs 4e517dd (~15 min on 2 cores) -> docs/benchmarks/compile.*
-	$(BIN)/python -m workflows.bench.compile --revision 4e517dd --revision worktree
+bench-compile: $(STAMP)  ## cold and warm first result per model, this tree (added to the revisions in compile.json; ~5 min on 2 cores) -> docs/benchmarks/compile.*
+	$(BIN)/python -m workflows.bench.compile --keep
 
 clean:
 	rm -rf out .pytest_cache

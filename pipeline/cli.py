@@ -11,10 +11,16 @@ import numpy as np
 
 import pipeline
 from pipeline import config as config_mod
-from pipeline import cube, fileio, query, schema
-from pipeline import report as report_mod
+from pipeline import fileio, schema
 
 EXIT_USAGE = 2
+
+# The user errors of the modules a command may import, by module: a command that did not import
+# a module cannot raise its error, so `point` never imports xarray, pandas or Dask (cube, query,
+# sweep) only to name their errors (a warm one-point command is mostly its imports).
+USER_ERRORS = (("pipeline.config", "ConfigError"), ("pipeline.cube", "CubeError"), ("pipeline.query", "QueryError"),
+               ("pipeline.sweep", "SweepError"), ("rotorkernels.continuation.events", "BoundaryError"),
+               ("pipeline.fileio", "FileIOError"))
 
 
 def _confirm_large(args):
@@ -214,7 +220,7 @@ def _point_text(r):
 
 
 def cmd_query(args):
-    from pipeline import backbone, continuation, results
+    from pipeline import backbone, continuation, cube, query, results
 
     if backbone.is_backbone_file(args.cube):
         print(query._render(backbone.table(backbone.open_result(args.cube)), args.format))
@@ -234,6 +240,8 @@ def cmd_query(args):
 
 
 def cmd_report(args):
+    from pipeline import report as report_mod
+
     out = args.output or str(args.cube).rsplit(".", 1)[0] + "_report"
     points = [report_mod.parse_point(items) for items in args.point or []]
     files = pipeline.make_report(args.cube, out, points=points or None, overwrite=args.overwrite, over=args.over)
@@ -244,7 +252,7 @@ def cmd_report(args):
 
 
 def cmd_info(args):
-    from pipeline import backbone, continuation, results
+    from pipeline import backbone, continuation, cube, results
 
     if backbone.is_backbone_file(args.cube):
         print(backbone.describe(backbone.open_result(args.cube)))
@@ -272,7 +280,7 @@ def cmd_warmup(args):
     from pipeline import warmup
 
     print(f"Numba cache: {numba.config.CACHE_DIR}")
-    warmup.warmup(args.models)
+    warmup.warmup(args.models, integrators=args.integrator or warmup.INTEGRATORS)
     return 0
 
 
@@ -364,6 +372,8 @@ def build_parser():
     w = sub.add_parser("warmup", help="compile the kernels of models into the Numba cache (a cluster "
                                       "image, before the first run); idempotent")
     w.add_argument("models", nargs="*", metavar="MODEL", help="model names (default: every registered model)")
+    w.add_argument("--integrator", action="append", choices=("dop853", "rk4"),
+                   help="compile for this integrator only, repeatable (default: both; a scene compiles only its own)")
     w.set_defaults(func=cmd_warmup)
 
     i = sub.add_parser("info", help="what a cube holds")
@@ -376,29 +386,33 @@ def _version():
     """The installed package's version, else the one cubes record (a source checkout)."""
     from importlib import metadata
 
-    from pipeline import sweep
     try:
         return metadata.version("rotorsweep")
     except metadata.PackageNotFoundError:
+        from pipeline import sweep
+
         return sweep.VERSION
 
 
-def main(argv=None):
-    from pipeline.sweep import SweepError
-    from rotorkernels.continuation.events import BoundaryError
+def user_errors():
+    """The exception classes that mean a user mistake, of the modules imported so far."""
+    found = [getattr(sys.modules[module], name) for module, name in USER_ERRORS if module in sys.modules]
+    return (ValueError, *found)
 
+
+def main(argv=None):
     args = build_parser().parse_args(argv)
-    user_errors = (config_mod.ConfigError, cube.CubeError, query.QueryError, SweepError,
-                   BoundaryError, ValueError, fileio.FileIOError)
     try:
         return args.func(args)
-    except user_errors as exc:
-        return _error(args, exc)
-    except BrokenPipeError:      # output piped into head & co.
-        sys.stdout = open(os.devnull, "w")
-        return 0
-    except OSError as exc:       # read-only directory, disk full, a file where a directory goes
-        return _error(args, fileio.os_error_text(exc))
+    except Exception as exc:
+        if isinstance(exc, user_errors()):
+            return _error(args, exc)
+        if isinstance(exc, BrokenPipeError):      # output piped into head & co.
+            sys.stdout = open(os.devnull, "w")
+            return 0
+        if isinstance(exc, OSError):       # read-only directory, disk full, a file where a directory goes
+            return _error(args, fileio.os_error_text(exc))
+        raise
     except KeyboardInterrupt:
         print("rotorsweep: interrupted; finished chunks are kept, rerun with --resume", file=sys.stderr)
         return 130

@@ -2,7 +2,8 @@
 any: `rotorsweep warmup [MODEL...]`, once in a cluster image or before a sweep fans out.
 
 Kernels are compiled per kernel group (`ModelSpec.group`), so warming one model warms the other
-models of its group. Each entry point below is compiled for the argument types the Python
+models of its group, and per integrator (the class of `integrators.settings()`): a scene compiles
+only its own; `rotorsweep warmup` compiles both unless told one (`--integrator`). Each entry point below is compiled for the argument types the Python
 orchestration passes it (`Dispatcher.compile(signature)`, which loads a cached compilation when
 there is one); the values are never used.
 
@@ -26,12 +27,15 @@ from rotorkernels.attractor.period import _detect_period
 from rotorkernels.attractor.poincare import _poincare
 
 
-def entry_points(spec, attractor=True):
-    """(jitted function, example arguments) of each kernel that Python code calls for `spec`,
-    with the types of those calls (rotorkernels.orbits, attractor.diagnosis, pipeline.compute);
-    without `attractor`, only those of periodic orbits."""
+INTEGRATORS = ig.METHODS
+
+
+def entry_points(spec, attractor=True, integrator="dop853"):
+    """(jitted function, example arguments) of each kernel that Python code calls for `spec`
+    with `integrator`, with the types of those calls (rotorkernels.orbits, attractor.diagnosis,
+    pipeline.compute); without `attractor`, only those of periodic orbits."""
     kernel, n = spec.kernel, spec.n_state
-    u, p, opts = np.zeros(n), np.zeros(1), ig.settings()
+    u, p, opts = np.zeros(n), np.zeros(1), ig.settings(integrator)
     orbits = [
         (shooting.shoot, (kernel, u, p, 1.0, opts, 1e-9, 1)),
         (shooting.settle, (kernel, u, p, 1.0, opts)),
@@ -61,12 +65,13 @@ def cache_lock():
         os.close(fd)
 
 
-def compile_model(spec, attractor=True):
-    """Compile (or load) the kernels of `spec`'s group; returns the seconds it took."""
+def compile_model(spec, attractor=True, integrators=INTEGRATORS):
+    """Compile (or load) the kernels of `spec`'s group for `integrators`; returns the seconds it took."""
     start = time.perf_counter()
     with cache_lock():
-        for function, args in entry_points(spec, attractor):
-            function.compile(tuple(numba.typeof(a) for a in args))
+        for integrator in integrators:
+            for function, args in entry_points(spec, attractor, integrator):
+                function.compile(tuple(numba.typeof(a) for a in args))
     return time.perf_counter() - start
 
 
@@ -76,17 +81,18 @@ def compile_scene(data, say):
     model = compute.model_of(data)
     say(f"compiling the kernels of {model.name}: under a minute the first time on a machine, then "
         f"loaded from the cache ({numba.config.CACHE_DIR})")
-    seconds = compile_model(model, attractor=data["analysis"]["attractor"])
+    seconds = compile_model(model, attractor=data["analysis"]["attractor"],
+                            integrators=(data["numerics"]["integrator"],))
     say(f"kernels ready ({seconds:.1f} s)")
 
 
-def warmup(names=None, say=print):
-    """Compile the kernels of the named models (default: all registered), one group at a time;
-    {model: seconds}, 0 for a model whose group was compiled just before."""
+def warmup(names=None, say=print, integrators=INTEGRATORS):
+    """Compile the kernels of the named models (default: all registered) for `integrators`, one
+    group at a time; {model: seconds}, 0 for a model whose group was compiled just before."""
     specs = [models.get(name) for name in names] if names else list(models.REGISTRY.values())
     done, seconds = set(), {}
     for spec in specs:
-        seconds[spec.name] = 0.0 if spec.group in done else compile_model(spec)
+        seconds[spec.name] = 0.0 if spec.group in done else compile_model(spec, integrators=integrators)
         done.add(spec.group)
         say(f"{spec.name} (kernel group {spec.group}): {seconds[spec.name]:.1f} s")
     return seconds

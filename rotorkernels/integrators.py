@@ -19,8 +19,12 @@ sums; with the variational equations the model's right-hand side and Jacobian co
 contact sum (`rhs_jac`) and J Phi uses the block form [[0, I], [A, B]] of the models. The
 results are those of the straightforward formulation, operation by operation.
 """
+from collections import namedtuple
+
 import numpy as np
 from numba import njit
+from numba.core.errors import TypingError
+from numba.extending import overload
 
 from rotorkernels import dop853_tableau as _dop
 from rotorkernels.models import dispatch
@@ -88,7 +92,8 @@ def initial_state(u0, n, variational):
     """z0 = u0, or [u0, I] with the variational equations."""
     m = n + n * n if variational else n
     z = np.zeros(m)
-    z[:n] = u0
+    for i in range(n):      # not z[:n] = u0: the slice assignment's shape check compiles Numba's error formatting (~2 s)
+        z[i] = u0[i]
     if variational:
         for i in range(n):
             z[n + i * n + i] = 1.0
@@ -240,32 +245,62 @@ def _rk4_steps(kernel, t0, z, p, variational, n_steps, h, amplitude_limit, work,
     return STATUS_OK, 4 * n_steps
 
 
-# Integrator settings travel as one float vector so that every caller passes the same thing.
+# Integrator settings travel as one named tuple of floats so that every caller passes the same
+# thing; its class is the method, so each compiled caller holds only the integrator its scene
+# uses (as a kernel tag picks the model): a dop853 scene never compiles rk4, and the other way round.
 METHOD_DOP853, METHOD_RK4 = 0, 1
 S_METHOD, S_RTOL, S_ATOL, S_STEPS_PER_UNIT, S_MAX_STEPS, S_AMPLITUDE = range(6)
 
 
+_FIELDS = ("method", "rtol", "atol", "steps_per_unit", "max_steps", "amplitude_limit")
+Dop853Settings = namedtuple("Dop853Settings", _FIELDS)    # adaptive Dormand-Prince 8(5,3)
+RK4Settings = namedtuple("RK4Settings", _FIELDS)          # classical RK4, fixed steps
+
+
+_SETTINGS = {"dop853": (METHOD_DOP853, Dop853Settings), "rk4": (METHOD_RK4, RK4Settings)}
+METHODS = tuple(_SETTINGS)
+
+
 def settings(method="dop853", rtol=1e-10, atol=1e-12, steps_per_unit=512, max_steps=200_000,
              amplitude_limit=1e3):
-    """Integrator settings vector. steps_per_unit: RK4 steps per unit of (scaled) time, i.e. per
-    forcing period; amplitude_limit: largest displacement (scaled) before a state counts as
-    diverged."""
-    codes = {"dop853": METHOD_DOP853, "rk4": METHOD_RK4}
-    if method not in codes:
-        raise ValueError(f"integrator must be one of {sorted(codes)}, got {method!r}")
-    return np.array([codes[method], rtol, atol, steps_per_unit, max_steps, amplitude_limit], float)
+    """Integrator settings (indexed by the S_* constants). steps_per_unit: RK4 steps per unit of
+    (scaled) time, i.e. per forcing period; amplitude_limit: largest displacement (scaled) before
+    a state counts as diverged."""
+    if method not in _SETTINGS:
+        raise ValueError(f"integrator must be one of {sorted(_SETTINGS)}, got {method!r}")
+    code, cls = _SETTINGS[method]
+    return cls(*(float(v) for v in (code, rtol, atol, steps_per_unit, max_steps, amplitude_limit)))
 
 
-@njit(cache=True, nogil=True)
+def _flow_dop853(kernel, t0, t1, z0, p, variational, opts, h0):
+    return dop853(kernel, t0, t1, z0, p, variational, opts[S_RTOL], opts[S_ATOL], h0,
+                  int(opts[S_MAX_STEPS]), opts[S_AMPLITUDE])
+
+
+def _flow_rk4(kernel, t0, t1, z0, p, variational, opts, h0):
+    n_steps = max(1, int(round(opts[S_STEPS_PER_UNIT] * (t1 - t0))))
+    return rk4(kernel, t0, t1, z0, p, variational, n_steps, opts[S_AMPLITUDE])
+
+
+def _integrate(kernel, t0, t1, z0, p, variational, opts, h0):
+    raise TypeError("jitted code only: the overload below picks the method")
+
+
+@overload(_integrate, inline="always")
+def _integrate_by_method(kernel, t0, t1, z0, p, variational, opts, h0):
+    method = getattr(opts, "instance_class", None)
+    if method is RK4Settings:
+        return _flow_rk4
+    if method is Dop853Settings:
+        return _flow_dop853
+    raise TypingError(f"integrator settings must come from integrators.settings(), got {opts}")
+
+
+@njit(cache=True, nogil=True, inline="always")
 def flow(kernel, t0, t1, z0, p, variational, opts, h0):
     """Integrate with the method and tolerances in `opts` (see `settings`).
 
-    kernel: the model's identity (tag, n_state, n_position, velocity form), `ModelSpec.kernel`."""
-    # A literal True or False from a jitted caller would compile both integrators once per value
-    # (and once more for Python's plain bool): one compilation of each serves all three.
-    tangents = bool(variational)
-    if opts[S_METHOD] == METHOD_RK4:
-        n_steps = max(1, int(round(opts[S_STEPS_PER_UNIT] * (t1 - t0))))
-        return rk4(kernel, t0, t1, z0, p, tangents, n_steps, opts[S_AMPLITUDE])
-    return dop853(kernel, t0, t1, z0, p, tangents, opts[S_RTOL], opts[S_ATOL], h0,
-                  int(opts[S_MAX_STEPS]), opts[S_AMPLITUDE])
+    kernel: the model's identity (tag, n_state, n_position, velocity form), `ModelSpec.kernel`.
+    Inlined into its jitted callers, so that a literal True or False there becomes a plain bool
+    before it reaches the integrator: one compilation of the integrator serves every caller."""
+    return _integrate(kernel, t0, t1, z0, p, bool(variational), opts, h0)

@@ -31,10 +31,21 @@ def _failure(flow_status):
     return NOT_CONVERGED, R_STEP_UNDERFLOW
 
 
-@njit(cache=True, nogil=True)
+# Element loops below rather than array expressions (z[:n] - s, np.max(np.abs(r)), s + lam * step):
+# the same arithmetic, without compiling Numba's broadcasting and reduction kernels for a
+# first point (about 1 s).
+@njit(cache=True, nogil=True, inline="always")
 def _residual_norm(r, s):
     """Infinity norm of the residual relative to the orbit's size (scaled units, floor 1)."""
-    return np.max(np.abs(r)) / max(1.0, np.max(np.abs(s)))
+    r_max = 0.0
+    s_max = 1.0
+    for i in range(r.size):
+        a, b = abs(r[i]), abs(s[i])
+        if a != a or b != b:        # NaN, as np.max would give
+            return np.nan
+        r_max = max(r_max, a)
+        s_max = max(s_max, b)
+    return r_max / s_max
 
 
 @njit(cache=True, nogil=True)
@@ -43,9 +54,52 @@ def _return_map(kernel, s, p, periods, opts, h):
     n = kernel[1]
     z0 = ig.initial_state(s, n, True)
     z, status, n_rhs, h = ig.flow(kernel, 0.0, periods, z0, p, True, opts, h)
-    r = z[:n] - s
-    mono = z[n:].copy().reshape((n, n))
+    r = np.empty(n)
+    mono = np.empty((n, n))
+    for i in range(n):
+        r[i] = z[i] - s[i]
+        for j in range(n):
+            mono[i, j] = z[n + i * n + j]
     return r, mono, status, n_rhs, h
+
+
+@njit(cache=True, nogil=True)
+def _newton_step(mono, r):
+    """(x, ok): x solves (M - I) x = -r by Gaussian elimination with partial pivoting (LAPACK's
+    gesv algorithm; written out because numba's np.linalg.solve compiles its error formatting,
+    about 3 s of a first point); ok is False for a singular or non-finite matrix, where gesv
+    fails."""
+    n = r.size
+    a = np.empty((n, n))
+    x = np.empty(n)
+    for i in range(n):
+        x[i] = -r[i]
+        for j in range(n):
+            a[i, j] = mono[i, j] - (1.0 if i == j else 0.0)
+            if not np.isfinite(a[i, j]):
+                return x, False
+    for k in range(n):
+        piv = k
+        for i in range(k + 1, n):
+            if abs(a[i, k]) > abs(a[piv, k]):
+                piv = i
+        if a[piv, k] == 0.0:
+            return x, False
+        if piv != k:
+            for j in range(n):
+                a[k, j], a[piv, j] = a[piv, j], a[k, j]
+            x[k], x[piv] = x[piv], x[k]
+        for i in range(k + 1, n):
+            f = a[i, k] / a[k, k]
+            for j in range(k + 1, n):
+                a[i, j] -= f * a[k, j]
+            x[i] -= f * x[k]
+    for i in range(n - 1, -1, -1):
+        acc = x[i]
+        for j in range(i + 1, n):
+            acc -= a[i, j] * x[j]
+        x[i] = acc / a[i, i]
+    return x, True
 
 
 @njit(cache=True, nogil=True)
@@ -60,21 +114,21 @@ def shoot(kernel, guess, p, periods, opts, tol, max_iter):
         status, reason = _failure(fstat)
         return s, mono, status, reason, 0, np.inf, n_rhs
     res = _residual_norm(r, s)
-    eye = np.eye(kernel[1])
     for it in range(max_iter + 1):
         if res <= tol:
             return s, mono, CONVERGED, R_OK, it, res, n_rhs
         if it == max_iter:
             break
-        try:
-            step = np.linalg.solve(mono - eye, -r)
-        except Exception:  # noqa: BLE001 - numba raises a generic error for a singular matrix
+        step, ok = _newton_step(mono, r)
+        if not ok:
             return s, mono, NOT_CONVERGED, R_SINGULAR, it, res, n_rhs
         lam = 1.0
         accepted = False
         last_fail = ig.STATUS_OK
         for _ in range(_MAX_HALVINGS):
-            trial = s + lam * step
+            trial = np.empty(s.size)
+            for i in range(s.size):
+                trial[i] = s[i] + lam * step[i]
             r_t, mono_t, fstat, nr, h_t = _return_map(kernel, trial, p, periods, opts, h)
             n_rhs += nr
             if fstat == ig.STATUS_OK:
@@ -108,11 +162,17 @@ def sample_orbit(kernel, u0, p, periods, n_samples, opts):
     z = u0.copy()
     h = 0.0
     dt = periods / n_samples
+    n = kernel[1]
     for i in range(n_samples):
-        out[i] = z
+        # element loops, not out[i] = z and out[i + 1:] = nan: the slice assignments' shape
+        # checks compile Numba's error formatting (~2 s of a first point)
+        for j in range(n):
+            out[i, j] = z[j]
         z, status, _, h = ig.flow(kernel, i * dt, (i + 1) * dt, z, p, False, opts, h)
         if status != ig.STATUS_OK:
-            out[i + 1:] = np.nan
+            for k in range(i + 1, n_samples):
+                for j in range(n):
+                    out[k, j] = np.nan
             break
     return out
 

@@ -223,14 +223,15 @@ def test_python_only_modules_hold_no_compiled_code_and_no_kernel_reads_them():
 
 
 def test_warmup_compiles_what_a_point_with_attractor_then_runs(capsys):
-    """`rotorsweep warmup duffing` compiles the validation group's entry points for the types the
-    pipeline passes: a Duffing point with its attractor afterwards compiles nothing."""
+    """`rotorsweep warmup duffing --integrator dop853` compiles the validation group's entry points
+    for the types the pipeline passes: a Duffing point (dop853) with its attractor afterwards
+    compiles nothing."""
     from numba.core import event
 
     import pipeline
     from pipeline import cli, compute
 
-    assert cli.main(["warmup", "duffing"]) == 0
+    assert cli.main(["warmup", "duffing", "--integrator", "dop853"]) == 0
     assert "duffing (kernel group validation)" in capsys.readouterr().out
     cfg = pipeline._config(str(ROOT / "configs" / "duffing_resonance.toml"))
     data = {**cfg.data, "analysis": {**cfg.data["analysis"], "attractor": True}}

@@ -91,3 +91,48 @@ def test_follow_returns_a_branch_with_a_status_per_step():
         np.testing.assert_allclose(sol.state, [X.real, -2 * np.pi * X.imag], atol=1e-9)
     with pytest.raises(ValueError, match="unknown continuation strategy 'palc'; known: natural"):
         continuation.follow(DUFFING, params, TIGHT, strategy="palc", cold_guess=DUFFING.cold_guess)
+
+
+def test_newton_step_is_lapacks_solve_and_flags_singular_matrices():
+    """shooting._newton_step (pivoted elimination, written out to keep numba's np.linalg.solve out
+    of a first point's compilation) against numpy's LAPACK gesv: two backward-stable solvers agree
+    to about n eps cond(M - I) relative to |x|; 10x that is the bound. A zero column, NaN or inf
+    in M is refused (gesv's failure, R_SINGULAR in shoot)."""
+    rng = np.random.default_rng(7)
+    eps = np.finfo(float).eps
+    for n in (2, 4, 10):
+        mono = rng.normal(size=(n, n))
+        r = rng.normal(size=n)
+        a = mono - np.eye(n)
+        x, ok = shooting._newton_step(mono, r)
+        ref = np.linalg.solve(a, -r)
+        assert ok
+        assert np.abs(x - ref).max() <= 10 * n * eps * np.linalg.cond(a) * np.abs(ref).max()
+    singular = 2.0 * np.eye(3)
+    singular[:, 1] = [0.0, 1.0, 0.0]        # M - I has a zero column
+    assert not shooting._newton_step(singular, np.ones(3))[1]
+    for bad in (np.nan, np.inf):
+        mono = np.eye(3) * 2.0
+        mono[1, 2] = bad
+        assert not shooting._newton_step(mono, np.ones(3))[1]
+
+
+@pytest.mark.slow
+def test_a_dop853_first_point_compiles_no_rk4_and_one_integrator(tmp_path):
+    """The integrator is chosen by the settings' type at compile time: a cold dop853 point (fresh
+    process, empty cache) compiles dop853 once (literal True and False callers share its bool
+    signature) and RK4 never."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = ("import pipeline\nfrom rotorkernels import integrators as ig\n"
+            "pipeline.point(speed=100, clearance=7.6e-6)\n"
+            "print(len(ig.dop853.signatures), len(ig._dop853_steps.signatures), len(ig.rk4.signatures))\n")
+    root = Path(__file__).resolve().parents[1]
+    env = {**os.environ, "ROTORSWEEP_CACHE": str(tmp_path), "PYTHONPATH": str(root)}
+    for name in ("NUMBA_CACHE_DIR", "ROTORSWEEP_NUMBA_CACHE_DIR"):
+        env.pop(name, None)
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["1", "1", "0"]

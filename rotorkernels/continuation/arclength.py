@@ -34,7 +34,6 @@ from dataclasses import dataclass, replace
 from typing import Callable, NamedTuple
 
 import numpy as np
-from scipy.optimize import brentq
 
 from rotorkernels import floquet, integrators as ig
 from rotorkernels.orbits import ForcedOrbitProblem
@@ -307,6 +306,8 @@ def locate(family, a, b, kind, settings, counter):
     """The event of `kind` between points a and b, by Brent's method on the arclength sigma from a
     (sigma -> the corrected point with t_a . (X - X_a) = sigma). Returns (Point, evaluations) or
     None when the branch cannot be followed between them."""
+    from scipy.optimize import brentq  # here, not at the top: `rotorsweep point` imports no scipy
+
     which = 0 if kind in (FOLD, BRANCH_POINT) else (1 if kind == PERIOD_DOUBLING else 2)
     sigma_b = float(a.tangent @ (b.X - a.X))
     found = {}

@@ -7,7 +7,6 @@ Newton solve and the branch followed is the one the grid saw.
 from collections import namedtuple
 
 import numpy as np
-from scipy.optimize import brentq
 
 Boundary = namedtuple("Boundary", "value solution evaluations")
 
@@ -22,6 +21,8 @@ def locate_boundary(solve, a, b, state_a, state_b=None, xtol_rel=1e-8):
     solve(value, guess) -> a continuation.PointSolution; the solutions at a and b must lie on
     opposite sides of max|lambda| = 1. Returns Boundary(value, solution nearest the crossing,
     number of orbit solves). The crossing is located to xtol_rel relative to max(|a|, |b|)."""
+    from scipy.optimize import brentq  # here, not at the top: `rotorsweep point` imports no scipy
+
     known = [(a, state_a)] + ([(b, state_b)] if state_b is not None else [])
     solutions = {}
 

@@ -5,7 +5,8 @@ what compiling costs a user before the first answer.
         # -> docs/benchmarks/compile.{json,md}
 
 Each measurement is a fresh process running the model's first point through the CLI
-(`rotorsweep point`), with its own empty cache directory ($ROTORSWEEP_CACHE) for the cold run
+(`rotorsweep point`, by compile_probe.py, which also records the compile seconds per function),
+with its own empty cache directory ($ROTORSWEEP_CACHE) for the cold run
 and the same directory again for the warm run. CPU time (user + sys of the child) is recorded
 beside wall time: on a shared machine the wall time moves with the load, the compile work does
 not. A revision other than the working tree is exported (`git archive`) under build/compile/."""
@@ -24,12 +25,18 @@ from workflows.bench import render
 from workflows.bench.common import DOCS, ROOT, loadavg, log, provenance
 
 # The first point of each model's scene: linear_oscillator and damped_mathieu have no scene and
-# share duffing's kernels (the validation group), so duffing's times are theirs.
+# share duffing's kernels (the validation group), so duffing's times are theirs. A conservative
+# model has no `point` (no forcing period): symmetric4's first result is its scene's backbones
+# (`rotorsweep backbone`, every mode by manifold and continuation, one Dask worker), which
+# asymmetric5 shares the kernels of (the series_rotor group); {out} is a file in the run's cache
+# directory.
 POINTS = {
     "jeffcott_clearance": ["point", "--speed", "100", "--clearance", "7.6e-6", "--json"],
     "duffing": ["point", "--config", "configs/duffing_resonance.toml", "--at", "omega=1.0", "--json"],
     "rigid_preloaded": ["point", "--config", "configs/filipkovsky2016_quick.toml", "--at", "speed=250",
                         "--at", "support_frequency=150", "--json"],
+    "symmetric4": ["backbone", "configs/filipkovsky2010_symmetric.toml", "--workers", "1", "-q", "--overwrite",
+                   "-o", "{out}"],
 }
 WORKTREE = "worktree"
 
@@ -56,34 +63,62 @@ def label(revision):
     return f"{sha}+" if dirty.strip() else sha
 
 
+PROBE = Path(__file__).with_name("compile_probe.py")
+# functions whose exclusive compile time is at least this are listed by name (the rest summed)
+LISTED_S = 0.3
+
+
 def run_point(tree, cache, args):
-    """(wall s, CPU s of the child) of one `rotorsweep point` in a fresh process."""
+    """(wall s, CPU s of the child, {function: exclusive compile CPU s}) of one `rotorsweep` command
+    in a fresh process (through compile_probe)."""
     env = {**os.environ, "PYTHONPATH": str(tree), "ROTORSWEEP_CACHE": str(cache), "NUMBA_NUM_THREADS": "1"}
     for name in ("NUMBA_CACHE_DIR", "ROTORSWEEP_NUMBA_CACHE_DIR", "ROTORSWEEP_MODELS"):
         env.pop(name, None)
+    args = [a.replace("{out}", str(Path(cache) / "result.nc")) for a in args]
+    probe = Path(cache) / "compile_times.json"
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "pipeline.cli", *args], cwd=tree, env=env, check=True,
+    subprocess.run([sys.executable, str(PROBE), str(probe), *args], cwd=tree, env=env, check=True,
                    capture_output=True, text=True)
     wall = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return round(wall, 2), round(cpu, 2)
+    return round(wall, 2), round(cpu, 2), json.loads(probe.read_text())
 
 
 def measure_model(tree, model):
-    """Cold then warm first point of `model`, with the load average before each."""
+    """Cold then warm first point of `model`, with the load average before each; the cold run's
+    compile seconds per function."""
     cache = Path(tempfile.mkdtemp(prefix="rotorsweep_bench_compile_"))
     try:
         record = {}
         for kind in ("cold", "warm"):
             load = loadavg()
-            wall, cpu = run_point(tree, cache, POINTS[model])
-            record[kind] = {"wall_s": wall, "cpu_s": cpu, "load_before": load}
-            log(f"{model} {kind}: {wall:.1f} s wall, {cpu:.1f} s CPU, load {load}")
+            wall, cpu, compiled = run_point(tree, cache, POINTS[model])
+            record[kind] = {"wall_s": wall, "cpu_s": cpu, "load_before": load,
+                            "compile_s": round(sum(compiled.values()), 2)}
+            if kind == "cold":
+                record[kind]["by_function"] = compiled
+            log(f"{model} {kind}: {wall:.1f} s wall, {cpu:.1f} s CPU ({record[kind]['compile_s']:.1f} s compiling), "
+                f"load {load}")
         return record
     finally:
         shutil.rmtree(cache, ignore_errors=True)
+
+
+def breakdown(result):
+    """Where each model's cold compile time went, for the revisions measured with compile_probe."""
+    rows = []
+    for rev, per_model in result["results"].items():
+        for model, r in per_model.items():
+            by_function = r["cold"].get("by_function")
+            if not by_function:
+                continue
+            top = sorted(((s, f) for f, s in by_function.items() if s >= LISTED_S), reverse=True)
+            rest = sum(by_function.values()) - sum(s for s, _ in top)
+            listed = ", ".join(f"`{f}` {s:.1f}" for s, f in top)
+            rows.append([f"`{rev}`", model, f"{r['cold']['compile_s']:.1f}", f"{listed}, other {rest:.1f}"])
+    return render.table(["revision", "model", "compiling [CPU s]", "by function (exclusive CPU s)"], rows)
 
 
 def markdown(result):
@@ -96,7 +131,8 @@ def markdown(result):
                           "warm wall [s]", "warm CPU [s]"], rows)
     runs = "\n".join(f"- `{run['command']}` on {run['date']}, load {run['load']}" for run in result["runs"])
     machines = {json.dumps(run["machine"]) for run in result["runs"]}
-    return render.fill("compile", table=table, runs=runs, machine="; ".join(sorted(machines)))
+    return render.fill("compile", table=table, runs=runs, machine="; ".join(sorted(machines)),
+                       breakdown=breakdown(result))
 
 
 def main(argv=None):
