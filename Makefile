@@ -56,7 +56,7 @@ bench-reductions: $(STAMP)  ## rigid_preloaded reductions (balanced, one frequen
 bench-backbone: $(STAMP)  ## manifold vs continuation backbones: cost and agreement per mode of both 2010 rotors (~1 min) -> docs/benchmarks/backbone.*
 	$(BIN)/python -m workflows.bench.backbone
 
-bench-models: $(STAMP)  ## rigid_preloaded, symmetric4, asymmetric5: a point vs scipy DOP853, right-hand side vs C -O3 (~5 min) -> docs/benchmarks/models.*
+bench-models: $(STAMP)  ## rigid_preloaded, symmetric4, asymmetric5: a point vs scipy DOP853, right-hand side vs C -O3 (~3 min) -> docs/benchmarks/models.*
 	$(BIN)/python -m workflows.bench.models
 
 bench-compile: $(STAMP)  ## cold and warm first point per model, this tree vs 4e517dd (~15 min on 2 cores) -> docs/benchmarks/compile.*

@@ -154,6 +154,36 @@ def test_models_c_floor_equals_the_kernels():
             assert max(diff["rhs"], diff["var_f"], diff["var_tangent"]) < 1e-12, (point["name"], diff)
 
 
+def test_models_scipy_peers_compute_the_kernels_equations():
+    """The scipy peers of `make bench-models` (numpy ball sums from the balls' contact directions;
+    the polynomial form's tensors) give the kernels' right-hand side and variational derivative at
+    random states: "equal tolerance on the same equations" needs the same equations. Different
+    summation orders and, for the series rotors, the tensors' M^-1 contractions cost a few ulps of
+    the largest term; 1e-11 relative to each vector's largest component bounds that with room for
+    cancellation."""
+    import numpy as np
+
+    from rotorkernels import integrators as ig, models
+    from workflows.bench.models import POINTS
+    from workflows.bench.models_points import prepare_peer
+
+    for point in POINTS[1:]:
+        spec = models.get(point["model"])
+        peer, p = prepare_peer(spec, point)
+        n = spec.n_state
+        rng = np.random.default_rng(5)
+        for u in rng.normal(scale=5.0, size=(10, n)):
+            tau = rng.uniform()
+            du, z = np.empty(n), np.concatenate([u, rng.normal(size=n * n)])
+            models.dispatch.rhs(spec.kernel[0], tau, u, p, du)
+            np.testing.assert_allclose(peer.rhs(tau, u), du, rtol=0, atol=1e-11 * np.abs(du).max())
+            dz = np.empty(n + n * n)
+            ig.derivative(spec.kernel, tau, z, p, True, dz, np.empty((n, n)))
+            got = peer.augmented(tau, z)
+            np.testing.assert_allclose(got[:n], du, rtol=0, atol=1e-11 * np.abs(du).max())
+            np.testing.assert_allclose(got[n:], dz[n:], rtol=0, atol=1e-11 * np.abs(dz[n:]).max())
+
+
 def test_shipped_models_writeup_is_its_json_rendered():
     """docs/benchmarks/models.md is models.json rendered, with a row per point and rtol, and the C
     check recorded in the run below 1e-12."""

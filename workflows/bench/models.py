@@ -1,7 +1,7 @@
 """Per-point cost of every rotor model against scipy and C (issue 17, item 3): the same measurement
 as the Jeffcott benchmark (`make bench`) for rigid_preloaded, symmetric4 and asymmetric5.
 
-    python -m workflows.bench.models                 # -> docs/benchmarks/models.{json,md} (~5 min)
+    python -m workflows.bench.models                 # -> docs/benchmarks/models.{json,md} (~3 min)
     python -m workflows.bench.models --quick         # one rtol, fewer repeats -> build/bench_models_quick/
     python -m workflows.bench.models --render-only   # models.md again from models.json
 
@@ -60,7 +60,7 @@ def measure(quick, repeats, passes, command_argv):
         log(f"  {point['name']}: reference ready (error estimate {ref['error_state']:.1e} / {ref['error_mult']:.1e})")
         rtols = point["rtols"][-1:] if quick else point["rtols"]
         rows = solve_rows(ref, rtols, 2 if quick else repeats)
-        floor = floor_costs(point, ref, 4000 if quick else 20_000, passes, 3 if quick else repeats)
+        floor = floor_costs(point, ref, 2000 if quick else 5000, passes)
         log(f"  {point['name']}: {rows[-1]['ratio']:.0f}x scipy; rhs {floor['numba_rhs_ns'] / floor['c_rhs_ns']:.2f}x C")
         points.append(dict(name=point["name"], model=point["model"], kind=point["kind"],
                            reference=record(ref),
@@ -74,8 +74,9 @@ def main(argv=None):
     ap = argparse.ArgumentParser(prog="python -m workflows.bench.models", description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help=f"one rtol, fewer repeats, to {QUICK_OUT.relative_to(ROOT)}/")
     ap.add_argument("--out", type=Path, default=None, help="output directory (default docs/benchmarks/)")
-    ap.add_argument("--repeats", type=int, default=5, help="best-of-N repeats (scipy calls and Numba loops)")
-    ap.add_argument("--passes", type=int, default=50, help="passes of the C loops over the states (best taken)")
+    ap.add_argument("--repeats", type=int, default=5, help="best-of-N scipy calls (each followed by 10 of ours)")
+    ap.add_argument("--passes", type=int, default=50,
+                    help="passes of the C and Numba loops over the states, and flow calls (best taken)")
     add_render_options(ap, f"{NAME}.md", f"{NAME}.json", QUICK_OUT)
     args = ap.parse_args(argv)
     from workflows.bench.models_md import markdown

@@ -1,9 +1,12 @@
 """The C floor of the models benchmark: cost per right-hand side and per variational derivative
 in C (-O3), in Numba loops and inside `flow`, over states along the reference orbit; and the C
 values checked against the kernels' at orbit and random states (see `workflows.bench.models`)."""
-import numpy as np
+from functools import lru_cache
 
-from rotorkernels import integrators as ig, models, shooting
+import numpy as np
+from numba import njit
+
+from rotorkernels import integrators as ig, models, shooting, stages
 from workflows.bench import jeffcott as jc
 from workflows.bench.cfloor import flow_ns
 from workflows.bench.common import best_time
@@ -50,6 +53,34 @@ def check_c(cf, spec, p, states, taus, period, rng):
                 var_tangent=_rel_diff(c_var[:, n:], k_var[:, n:]), n_states=len(st)), phi
 
 
+@lru_cache(maxsize=None)
+def _constant_size_loop(n):
+    """The variational derivative loop of `jeffcott.variational_loop` (rhs_jac + J Phi) with the
+    tangent product at the constant size n (a closure constant: LLVM unrolls it), which the
+    models' dispatch generates only up to 4 states (`models.generate.FAST_PATH_MAX_STATE`): what
+    the derivative would cost with a constant-size copy for this model. Compiled per run (a
+    closure is not cached)."""
+    @njit(nogil=True, _nrt=False)
+    def loop(tag, taus, states, p, z, dz, jbuf):
+        acc = 0.0
+        for i in range(taus.size):
+            for k in range(n):
+                z[k] = states[i, k]
+            models.dispatch.rhs_jac(tag, taus[i], z, p, dz, jbuf)
+            stages.tangent_product(True, z, n, jbuf, dz)
+            for k in range(2, n + n * n):
+                acc += dz[k]
+        return acc
+    return loop
+
+
+def constant_size_var(spec, taus, states, p):
+    n = spec.n_state
+    z = np.zeros(n + n * n)
+    z[n::n + 1] = 1.0
+    return _constant_size_loop(n)(spec.kernel[0], taus, states, p, z, np.empty(n + n * n), np.empty((n, n)))
+
+
 def _keep_min(row, values):
     for key, v in values.items():
         row[key] = min(row.get(key, np.inf), v)
@@ -63,10 +94,12 @@ def _python_costs(peer, taus, states, n=500):
     return dict(python_rhs_ns=t_rhs / n * 1e9, python_aug_ns=t_aug / n * 1e9)
 
 
-def floor_costs(point, ref, n_states, passes, repeats):
+def floor_costs(point, ref, n_states, passes):
     """ns per evaluation: C, Numba loops (rhs: the dispatch's rhs; var: integrators._derivative
-    with the variational equations) and `flow` / n_rhs over one orbit period, best of two
-    interleaved rounds; plus the C-vs-kernel check and the peer's numpy costs."""
+    with the variational equations) and `flow` / n_rhs over one orbit period, each the best of
+    `passes` (the same number for C and Numba: on a loaded machine the chance of an undisturbed
+    pass grows with the number of passes), in two interleaved rounds; plus the C-vs-kernel check
+    and the peer's numpy costs."""
     spec, p, period = ref["spec"], ref["p"], ref["period"]
     states = shooting.sample_orbit(spec.kernel, ref["state"], p, period, n_states, dop853(1e-12))
     taus = np.arange(n_states) / n_states * period
@@ -79,10 +112,12 @@ def floor_costs(point, ref, n_states, passes, repeats):
             if cf.compiler:
                 c_rhs, _, c_var, _ = cf.measure(spec.name, p, taus, states, phi, passes)
                 _keep_min(row, dict(c_rhs_ns=c_rhs, c_var_ns=c_var))
-            t_rhs, _ = best_time(lambda: jc.rhs_loop(taus, states, p, model=spec), repeats)
-            t_var, _ = best_time(lambda: jc.variational_loop(taus, states, p, model=spec), repeats)
-            _keep_min(row, dict(numba_rhs_ns=t_rhs / n_states * 1e9, numba_var_ns=t_var / n_states * 1e9))
-            _keep_min(row, flow_ns(p, ref["state"], repeats, model=spec, periods=period))
+            t_rhs, _ = best_time(lambda: jc.rhs_loop(taus, states, p, model=spec), passes)
+            t_var, _ = best_time(lambda: jc.variational_loop(taus, states, p, model=spec), passes)
+            t_const, _ = best_time(lambda: constant_size_var(spec, taus, states, p), passes)
+            _keep_min(row, dict(numba_rhs_ns=t_rhs / n_states * 1e9, numba_var_ns=t_var / n_states * 1e9,
+                                numba_var_const_ns=t_const / n_states * 1e9))
+            _keep_min(row, flow_ns(p, ref["state"], passes, model=spec, periods=period))
     if not row["compiler"]:
         row.update(c_rhs_ns=np.nan, c_var_ns=np.nan)
     row.update(_python_costs(ref["peer"], taus, states))

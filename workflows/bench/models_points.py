@@ -101,20 +101,27 @@ def _backbone_start(spec, point, built):
     return bb.states[k] / scale, bb.period[k] / built.period, bb.coordinate, point["amplitude"] / spec.length_scale
 
 
+def prepare_peer(spec, point):
+    """(the point's scipy peer, its kernel parameter vector)."""
+    v = point_values(spec, point)
+    built = spec.build(v)
+    if spec.forced:
+        return RigidPreloadedPeer(_rigid_params(built.p)), built.p
+    return SeriesRotorPeer(spec.polynomial(v), built.period, spec.length_scale), built.p
+
+
 def prepare(point, ref_rtol, check_rtol):
     """The point's kernel inputs, its peer and its reference solution (our solver at ref_rtol),
     with two estimates of the reference's error: ours at check_rtol, scipy at ref_rtol."""
     spec = models.get(point["model"])
     built = spec.build(point_values(spec, point))
     forced = spec.forced
-    ref = dict(spec=spec, p=built.p, forced=forced, period_s=built.period)
+    ref = dict(spec=spec, p=built.p, forced=forced, period_s=built.period, peer=prepare_peer(spec, point)[0])
     if forced:
         s0, period, ref["j"], ref["amplitude"] = _forced_start(spec, point)
-        ref["peer"] = RigidPreloadedPeer(_rigid_params(built.p))
         ours, peer = ours_forced, peer_forced
     else:
         s0, period, ref["j"], ref["amplitude"] = _backbone_start(spec, point, built)
-        ref["peer"] = SeriesRotorPeer(spec.polynomial(point_values(spec, point)), built.period, spec.length_scale)
         ours, peer = ours_autonomous, peer_autonomous
     ref["period_guess"] = period
     out = ours(ref, ref_rtol, s0, ref_rtol * 10)
@@ -147,9 +154,9 @@ def solve_rows(ref, rtols, repeats):
     for rtol in rtols:
         tol = rtol / 10
         counted = ours(ref, rtol, guess, tol) if ref["forced"] else ours(ref, rtol, guess, tol, _Counting)
-        t_peer, t_cpu, t_ours = time_pair(lambda: peer(ref, rtol, guess, tol), lambda: ours(ref, rtol, guess, tol),
-                                          repeats)
+        t_peer, t_cpu, t_ours, t_ours_cpu = time_pair(lambda: peer(ref, rtol, guess, tol),
+                                                      lambda: ours(ref, rtol, guess, tol), repeats)
         rows.append(dict(rtol=rtol, atol=rtol * 1e-2, newton_tol=tol, t_scipy=t_peer, t_scipy_cpu=t_cpu,
-                         t_ours=t_ours, ratio=t_peer / t_ours, ratio_cpu=t_cpu / t_ours,
+                         t_ours=t_ours, t_ours_cpu=t_ours_cpu, ratio=t_peer / t_ours, ratio_cpu=t_cpu / t_ours_cpu,
                          ours=_errors(ref, counted), scipy=_errors(ref, peer(ref, rtol, guess, tol))))
     return rows

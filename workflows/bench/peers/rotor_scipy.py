@@ -8,7 +8,13 @@
   M, G, K, Q2, Q3 in SI, contracted with einsum), the autonomous orbit at a given amplitude by
   the same Gauss-Newton as `rotorkernels.orbits.AutonomousOrbitProblem`, with `solve_ivp`.
 
-Neither shares code with the kernels (the ball sum in contact.py, the series in cubic_law.py)."""
+Neither shares code with the kernels (the ball sum in contact.py, the series in cubic_law.py);
+tests/test_bench_smoke.py checks that they compute the kernels' equations. Why these equations are
+written again: a peer is the user's own numpy code, so it must not call the kernels. The tests'
+other numpy writings serve other checks and stay where they are: tests/test_rigid_preloaded.py's
+ball sum is the paper's eq. 1 in SI with loops (it checks the kernel's scaling and M^-1), and the
+series rotors' polynomial form used here is itself tested against the kernel in
+tests/test_nnm_models.py."""
 import numpy as np
 from scipy.integrate import solve_ivp
 
