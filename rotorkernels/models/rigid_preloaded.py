@@ -142,7 +142,7 @@ def _force(x, y, z, p):
                       1.0, 0.0, p[P_COS_D], p[P_SIN_D])
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def rhs(tau, u, p, du):
     velocity_rows(u, du, N_POS)
     fxa, fya, fza = _force(u[0], u[1], u[4], p)
@@ -150,12 +150,12 @@ def rhs(tau, u, p, du):
     _accelerations(tau, u, p, fxa, fya, fxb, fyb, fza - fzb, du)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def jac(tau, u, p, out):
     _jacobian(out, p, _load(u[0], u[1], u[4], p), _load(u[2], u[3], -u[4], p))
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def rhs_jac(tau, u, p, du, out):
     """rhs and jac from one ball sum per bearing."""
     a = _load(u[0], u[1], u[4], p)
