@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions bench-continuation bench-reductions bench-compile bench-backbone fig13 cascade fold backbone clean
+.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions bench-continuation bench-reductions bench-compile bench-backbone bench-models fig13 cascade fold backbone clean
 
 # CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
 CONSTRAINTS ?= constraints.txt
@@ -55,6 +55,9 @@ bench-reductions: $(STAMP)  ## rigid_preloaded reductions (balanced, one frequen
 
 bench-backbone: $(STAMP)  ## manifold vs continuation backbones: cost and agreement per mode of both 2010 rotors (~1 min) -> docs/benchmarks/backbone.*
 	$(BIN)/python -m workflows.bench.backbone
+
+bench-models: $(STAMP)  ## rigid_preloaded, symmetric4, asymmetric5: a point vs scipy DOP853, right-hand side vs C -O3 (~3 min) -> docs/benchmarks/models.*
+	$(BIN)/python -m workflows.bench.models
 
 bench-compile: $(STAMP)  ## cold and warm first result per model, this tree (added to the revisions in compile.json; ~5 min on 2 cores) -> docs/benchmarks/compile.*
 	$(BIN)/python -m workflows.bench.compile --keep

@@ -126,3 +126,75 @@ def test_backbone_bench_on_a_small_grid(tmp_path):
     assert all(abs(r["slope"] - 4.0) < 0.3 and r["continuation_end"] == "left_range" for r in res["rows"])
     shipped = json.loads((DOCS / "backbone.json").read_text())
     assert bb.markdown(shipped) == (DOCS / "backbone.md").read_text()
+
+
+def test_models_c_floor_equals_the_kernels():
+    """rotor_rhs.c (the C floor of `make bench-models`) computes the kernels' right-hand side and
+    variational derivative at each benchmark point's parameters, at random states (rigid_preloaded:
+    many balls unloaded) and a random tangent matrix. Both do the same floating-point operations up
+    to the order of short sums (~10 terms, a few ulps of the largest); 1e-12 relative to the state's
+    largest component leaves 1000x for cancellation between bearing force and forcing."""
+    import numpy as np
+
+    from rotorkernels import models
+    from workflows.bench.models import POINTS
+    from workflows.bench.models_floor import check_c
+    from workflows.bench.models_points import point_values
+    from workflows.bench.peers.rotor_c import RotorCFloor
+
+    with RotorCFloor() as cf:
+        if cf.compiler is None:
+            pytest.skip(cf.skipped)
+        for point in POINTS[1:]:        # one point per model
+            spec = models.get(point["model"])
+            p = spec.build(point_values(spec, point)).p
+            rng = np.random.default_rng(3)
+            states = rng.normal(scale=5.0, size=(50, spec.n_state))
+            diff, _ = check_c(cf, spec, p, states, rng.uniform(0, 1, 50), 1.0, rng)
+            assert max(diff["rhs"], diff["var_f"], diff["var_tangent"]) < 1e-12, (point["name"], diff)
+
+
+def test_models_scipy_peers_compute_the_kernels_equations():
+    """The scipy peers of `make bench-models` (numpy ball sums from the balls' contact directions;
+    the polynomial form's tensors) give the kernels' right-hand side and variational derivative at
+    random states: "equal tolerance on the same equations" needs the same equations. Different
+    summation orders and, for the series rotors, the tensors' M^-1 contractions cost a few ulps of
+    the largest term; 1e-11 relative to each vector's largest component bounds that with room for
+    cancellation."""
+    import numpy as np
+
+    from rotorkernels import integrators as ig, models
+    from workflows.bench.models import POINTS
+    from workflows.bench.models_points import prepare_peer
+
+    for point in POINTS[1:]:
+        spec = models.get(point["model"])
+        peer, p = prepare_peer(spec, point)
+        n = spec.n_state
+        rng = np.random.default_rng(5)
+        for u in rng.normal(scale=5.0, size=(10, n)):
+            tau = rng.uniform()
+            du, z = np.empty(n), np.concatenate([u, rng.normal(size=n * n)])
+            models.dispatch.rhs(spec.kernel[0], tau, u, p, du)
+            np.testing.assert_allclose(peer.rhs(tau, u), du, rtol=0, atol=1e-11 * np.abs(du).max())
+            dz = np.empty(n + n * n)
+            ig.derivative(spec.kernel, tau, z, p, True, dz, np.empty((n, n)))
+            got = peer.augmented(tau, z)
+            np.testing.assert_allclose(got[:n], du, rtol=0, atol=1e-11 * np.abs(du).max())
+            np.testing.assert_allclose(got[n:], dz[n:], rtol=0, atol=1e-11 * np.abs(dz[n:]).max())
+
+
+def test_shipped_models_writeup_is_its_json_rendered():
+    """docs/benchmarks/models.md is models.json rendered, with a row per point and rtol, and the C
+    check recorded in the run below 1e-12."""
+    from workflows.bench.models import POINTS
+    from workflows.bench.models_md import markdown
+
+    data = json.loads((DOCS / "models.json").read_text())
+    assert markdown(data) == (DOCS / "models.md").read_text()
+    assert [pt["name"] for pt in data["points"]] == [p["name"] for p in POINTS]
+    for pt, point in zip(data["points"], POINTS):
+        assert [r["rtol"] for r in pt["rows"]] == list(point["rtols"])
+        assert all(r["ours"]["converged"] and r["scipy"]["converged"] for r in pt["rows"])
+        assert max(pt["floor"]["check"][k] for k in ("rhs", "var_f", "var_tangent")) < 1e-12
+    assert {"date", "machine", "load", "command"} <= set(data)

@@ -19,7 +19,7 @@ def _ns_per_call(fn, n_calls, repeats):
     return t / n_calls * 1e9, result
 
 
-def _flow_ns(p, u0, repeats, model=jc.JEFF, periods=None):
+def flow_ns(p, u0, repeats, model=jc.JEFF, periods=None):
     """{FLOW_COSTS key: ns per evaluation}: time of `flow` divided by its n_rhs (over `periods`
     instead of the FLOW_COSTS periods when given)."""
     out = {}
@@ -60,7 +60,7 @@ def _point_costs(cf, e, n_states, passes, repeats):
         numba["numba_var_ns"], sums["numba_var"] = _ns_per_call(
             lambda: jc.variational_loop(taus, states, p), n_states, repeats)
         _keep_min(row, numba)
-        _keep_min(row, _flow_ns(p, s_ref, repeats))
+        _keep_min(row, flow_ns(p, s_ref, repeats))
     if cf.compiler:
         row["checksum_rel_diff_rhs"] = abs(sums["c_rhs"] - sums["numba_rhs"]) / abs(sums["numba_rhs"])
         row["checksum_rel_diff_var"] = abs(sums["c_var"] - sums["numba_var"]) / abs(sums["numba_var"])
@@ -78,7 +78,7 @@ def integrator_overhead(taus, states, repeats):
     u0 = np.array([1.0, -2.0, 0.5, 0.3])
     out = {}
     for _ in range(3):      # three interleaved rounds, best of each: the machine is shared
-        _keep_min(out, _flow_ns(p, u0, repeats, model=jc.LINEAR, periods=1.0))
+        _keep_min(out, flow_ns(p, u0, repeats, model=jc.LINEAR, periods=1.0))
         t, _ = best_time(lambda: jc.variational_loop(taus, states, p, model=jc.LINEAR), repeats)
         _keep_min(out, dict(derivative_var_ns=t / taus.size * 1e9))
     return out

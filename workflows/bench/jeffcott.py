@@ -162,12 +162,14 @@ def locate(opts, tol, states, xtol_rel, bracket=None):
 
 @njit(cache=True)
 def _rhs_loop(tag, taus, states, p):
-    """The model dispatch's rhs over many states, the way an integrator calls it (array arguments)."""
-    du = np.empty(states.shape[1])
+    """The model dispatch's rhs over many states, the way an integrator calls it (array arguments);
+    the checksum adds the first and last acceleration (du[n / 2] and du[n - 1])."""
+    n = states.shape[1]
+    du = np.empty(n)
     acc = 0.0
     for i in range(taus.size):
         models.dispatch.rhs(tag, taus[i], states[i], p, du)
-        acc += du[2] + du[3]
+        acc += du[n // 2] + du[n - 1]
     return acc
 
 
@@ -212,8 +214,8 @@ def _variational_loop(kernel, taus, states, p):
     return _variational_steps(kernel, taus, states, p, z, np.empty(n + n * n), np.empty((n, n)))
 
 
-def rhs_loop(taus, states, p):
-    return _rhs_loop(JEFF.kernel[0], taus, states, p)
+def rhs_loop(taus, states, p, model=JEFF):
+    return _rhs_loop(model.kernel[0], taus, states, p)
 
 
 def force_loop(taus, states, p):

@@ -30,20 +30,21 @@ def _peer_point(peer, guess, method, rtol, tol):
     return out, jc.multipliers(out[1])
 
 
-def _time_pair(peer_call, ours_call, repeats):
-    """(best wall, best CPU seconds of the peer call, best wall of ours): each peer call is
-    followed by 10 of ours, so that both see the same machine state."""
-    t = t_cpu = t_ours = np.inf
+def time_pair(peer_call, ours_call, repeats):
+    """(best wall, best CPU seconds of the peer call, best wall, best CPU seconds of ours): each
+    peer call is followed by 10 of ours, so that both see the same machine state."""
+    t = t_cpu = t_ours = t_ours_cpu = np.inf
     for _ in range(repeats):
         w0, c0 = time.perf_counter(), time.process_time()
         peer_call()
         t = min(t, time.perf_counter() - w0)
         t_cpu = min(t_cpu, time.process_time() - c0)
         for _ in range(10):
-            w0 = time.perf_counter()
+            w0, c0 = time.perf_counter(), time.process_time()
             ours_call()
             t_ours = min(t_ours, time.perf_counter() - w0)
-    return t, t_cpu, t_ours
+            t_ours_cpu = min(t_ours_cpu, time.process_time() - c0)
+    return t, t_cpu, t_ours, t_ours_cpu
 
 
 def _peer_row(e, peer, ours, method, rtol, repeats):
@@ -53,7 +54,7 @@ def _peer_row(e, peer, ours, method, rtol, repeats):
     ours_opts = jc.dop853(rtol, rtol * ATOL_OVER_RTOL)
     (s, mono, its, nfev, conv), _ = _peer_point(peer, guess, method, rtol, tol)
     jc.point(p, guess, ours_opts, tol)
-    t, t_cpu, t_adj = _time_pair(lambda: _peer_point(peer, guess, method, rtol, tol),
+    t, t_cpu, t_adj, _ = time_pair(lambda: _peer_point(peer, guess, method, rtol, tol),
                                  lambda: jc.point(p, guess, ours_opts, tol), repeats)
     err_o, err_m = state_error(s, s_ref), match(jc.multipliers(mono), from_complex_list(e["multipliers"]))
     same = next((r for r in ours if r["method"] == "dop853" and r["value"] == rtol), None)

@@ -13,7 +13,11 @@ FLAGS = ("-O3", "-march=native", "-std=c11")
 
 class CFloor:
     """The compiled C program in a temporary directory (a context manager). `compiler` is the
-    command line when it compiled, else None and `skipped` says why."""
+    command line when it compiled, else None and `skipped` says why. `source`: the C file (the
+    Jeffcott one by default; `rotor_c` compiles another with this class)."""
+
+    def __init__(self, source=SOURCE):
+        self.source = source
 
     def __enter__(self):
         self._tmp = tempfile.TemporaryDirectory(prefix="rotorsweep-bench-")
@@ -24,7 +28,7 @@ class CFloor:
         if gcc is None:
             self.skipped = "gcc not found: C floor skipped"
             return self
-        proc = subprocess.run([gcc, *FLAGS, "-o", str(self.exe), str(SOURCE), "-lm"],
+        proc = subprocess.run([gcc, *FLAGS, "-o", str(self.exe), str(self.source), "-lm"],
                               capture_output=True, text=True)
         if proc.returncode != 0:
             self.skipped = f"gcc failed: {proc.stderr.strip()[:300]}"

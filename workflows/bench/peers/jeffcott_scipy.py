@@ -3,6 +3,23 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 
+def newton(period_map, guess, tol, max_iter):
+    """(state, monodromy, iterations, nfev, converged) of plain Newton s <- s - (M - I)^-1 r on
+    the return map (period_map(s) -> (end state, monodromy, nfev)), converged when
+    max|r| / max(1, max|s|) <= tol (the kernels' test)."""
+    s = np.array(guess, float)
+    nfev = 0
+    for it in range(max_iter + 1):
+        end, mono, n = period_map(s)
+        nfev += n
+        r = end - s
+        if np.max(np.abs(r)) / max(1.0, np.max(np.abs(s))) <= tol:
+            return s, mono, it, nfev, True
+        if it < max_iter:
+            s = s + np.linalg.solve(mono - np.eye(s.size), -r)
+    return s, mono, max_iter, nfev, False
+
+
 class ScipyPeer:
     """Periodic orbit + monodromy the way a scipy user writes it: the same scaled equations in
     numpy (vectorised over the balls), the analytic 4x4 Jacobian, the augmented 20-dim system
@@ -65,24 +82,10 @@ class ScipyPeer:
             mono[:, j] = (sol.y[:, -1] - base.y[:, -1]) / h
         return base.y[:, -1], mono, nfev
 
-    def _newton(self, period_map, guess, tol, max_iter):
-        """(state, monodromy, iterations, nfev, converged) of plain Newton on the return map."""
-        s = np.array(guess, float)
-        nfev = 0
-        for it in range(max_iter + 1):
-            end, mono, n = period_map(s)
-            nfev += n
-            r = end - s
-            if np.max(np.abs(r)) / max(1.0, np.max(np.abs(s))) <= tol:
-                return s, mono, it, nfev, True
-            if it < max_iter:
-                s = s + np.linalg.solve(mono - np.eye(4), -r)
-        return s, mono, max_iter, nfev, False
-
     def shoot(self, guess, method, rtol, atol, tol, max_iter=30):
         """(state, monodromy, iterations, nfev, converged), monodromy from the augmented system."""
-        return self._newton(lambda s: self._monodromy_aug(s, method, rtol, atol), guess, tol, max_iter)
+        return newton(lambda s: self._monodromy_aug(s, method, rtol, atol), guess, tol, max_iter)
 
     def shoot_fd(self, guess, method, rtol, atol, tol, max_iter=30):
         """As shoot, monodromy by forward finite differences."""
-        return self._newton(lambda s: self._monodromy_fd(s, method, rtol, atol), guess, tol, max_iter)
+        return newton(lambda s: self._monodromy_fd(s, method, rtol, atol), guess, tol, max_iter)
