@@ -56,28 +56,30 @@ def segments(cfg):
     return out
 
 
-CHUNKS_PER_WORKER = 32
 MIN_CHUNK_POINTS = 64
 # Default chunks shrink towards the end (guided self-scheduling): each takes about a
-# 1 / (GUIDED_SHARE * workers) share of the points still unplanned, at least MIN_CHUNK_POINTS.
+# 1 / (GUIDED_SHARE * workers) share of the points still unplanned, at least MIN_CHUNK_POINTS
+# and at most MAX_CHUNK_POINTS (seconds of work orbits-only, a minute with attractors: progress
+# lines, part files and what a lost worker takes with it stay small on a 768k-point atlas).
 GUIDED_SHARE = 4
+MAX_CHUNK_POINTS = 4096
 
 
 def plan_chunks(segs, n_workers, chunk_points=None):
     """Group segments into chunks: of about chunk_points points each when given, else guided
-    chunks that shrink from about total / (GUIDED_SHARE * n_workers) to MIN_CHUNK_POINTS (so
-    Dask's ~1 ms per task stays noise). Point costs vary 100-fold (a stable orbit ~5 ms, a
-    chaotic attractor ~400 ms) and cluster along speed, so the last chunks must be small for
-    balance: Fig. 13 with attractors on 2 workers took 115 s with 8 equal chunks per worker (one
-    chunk held a quarter of the work) and 93 s with 47; large first chunks save tasks (scheduler
-    and driver time) where balance does not need them."""
+    chunks that shrink from about total / (GUIDED_SHARE * n_workers) (at most MAX_CHUNK_POINTS)
+    to MIN_CHUNK_POINTS (so Dask's ~1 ms per task stays noise). Point costs vary 100-fold (a
+    stable orbit ~5 ms, a chaotic attractor ~400 ms) and cluster along speed, so the last chunks
+    must be small for balance: Fig. 13 with attractors on 2 workers took 115 s with 8 equal
+    chunks per worker (one chunk held a quarter of the work) and 93 s with 47; large first chunks
+    save tasks (scheduler and driver time) where balance does not need them."""
     workers = max(1, n_workers)
     remaining = sum(len(s.points) for s in segs)
     chunks, current, size = [], [], 0
     for seg in segs:
         current.append(seg)
         size += len(seg.points)
-        target = chunk_points or max(MIN_CHUNK_POINTS, remaining // (GUIDED_SHARE * workers))
+        target = chunk_points or min(MAX_CHUNK_POINTS, max(MIN_CHUNK_POINTS, remaining // (GUIDED_SHARE * workers)))
         if size >= target:
             chunks.append(current)
             remaining -= size
