@@ -15,7 +15,7 @@ def test_bench_kernels_imports():
 
 
 def test_shipped_writeups_are_their_json_rendered():
-    """docs/benchmarks/README.md and scaling.md are what the templates make of the JSON beside
+    """docs/benchmarks/README.md, scaling.md and atlas.md are what the templates make of the JSON beside
     them (`--render-only`), so a template edit shows up as a diff of the docs."""
     from workflows.bench.kernels_md import render_readme
     from workflows.bench.scaling_md import markdown
@@ -25,6 +25,8 @@ def test_shipped_writeups_are_their_json_rendered():
     assert render_readme(data, refs) == (DOCS / "README.md").read_text()
     scaling = json.loads((DOCS / "scaling.json").read_text())
     assert markdown(scaling, DOCS / "scaling.png") == (DOCS / "scaling.md").read_text()
+    from workflows.bench import atlas
+    assert atlas.markdown(json.loads((DOCS / "atlas.json").read_text())) == (DOCS / "atlas.md").read_text()
 
 
 @pytest.mark.timeout(180)
