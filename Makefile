@@ -68,5 +68,5 @@ upgrade:  ## newest allowed versions: fresh venv without constraints, the tests,
 	(head -2 constraints.txt; $(BIN)/python -m pip freeze --exclude-editable) > constraints.txt.new
 	mv constraints.txt.new constraints.txt
 
-bench-atlas: $(STAMP)  ## the 4-D atlas (768,320 points): phases, cube size, write and read times, memory (>= 10 min on 2 quiet cores) -> docs/benchmarks/atlas.*
+bench-atlas: $(STAMP)  ## the 4-D atlas (768,320 points): phases, cube size, write and read times, memory (~5 min on 2 quiet cores, 10.5 min under load) -> docs/benchmarks/atlas.*
 	$(BIN)/python -m workflows.bench.atlas

@@ -1,8 +1,8 @@
 """The 4-D atlas benchmark: configs/atlas4d_fig13.toml (2401 speeds x 5 clearances x 8 contact
 angles x 8 preloads = 768,320 points, orbits + Floquet multipliers) on a local 2-worker cluster.
 
-    python -m workflows.bench.atlas                      # the full atlas (>= 10 min on 2 quiet
-                                                         #   cores) -> docs/benchmarks/atlas.*
+    python -m workflows.bench.atlas                      # the full atlas (~5 min on 2 quiet
+                                                         #   cores, 10.5 min under load) -> docs/benchmarks/atlas.*
     python -m workflows.bench.atlas --clearances 1 --angles 2 --preloads 3 --out build/bench_atlas
                                                          # a reduced grid (every speed, n values of
                                                          #   each other axis, spread evenly), with

@@ -107,10 +107,11 @@ def _heat_figure(ds, backend, values, head, label, fmt_cell):
     columns = style.ncols(len(panels))
     if backend == "bokeh":
         panels = [p.opts(width=430, height=340, backend=backend) for p in panels]
-    else:
-        panels = [p.opts(aspect=1.25, backend=backend) for p in panels]
+    else:       # the y label on the first column only: a colour bar sits where the next would go
+        panels = [p.opts(aspect=1.25, backend=backend, **({"ylabel": ""} if k % columns else {}))
+                  for k, p in enumerate(panels)]
     rows = -(-len(panels) // columns)
-    return style.layout(hv, panels, backend, columns, head, fig_inches=(4.2 * columns, 3.6 * rows + 0.6))
+    return style.layout(hv, panels, backend, columns, head, fig_inches=(5.6 * columns, 3.9 * rows + 0.6))
 
 
 def _cell(decimals):
@@ -144,7 +145,7 @@ def fig_boundary_surfaces(ds, backend="bokeh"):
     factor, unit, name = axis_display(ds, along)
     table = {k: ds[f"boundary_{k}"].values for k in (along, x, y, "status")} if ds.sizes.get("boundary") else {}
     panels = []
-    for where in wheres:
+    for k, where in enumerate(wheres):
         ok = np.ones(len(table.get(along, [])), bool) if table else np.zeros(0, bool)
         if table:
             ok &= table["status"] == 0
@@ -164,7 +165,7 @@ def fig_boundary_surfaces(ds, backend="bokeh"):
         panels.append(hv.Overlay(elements).opts(
             title=where_label(ds, where, short=True) or "boundaries", xticks=ticks, xlim=(-0.5, ds.sizes[y] - 0.5),
             xlabel=axis_label(ds, y),
-            ylabel=f"boundary {name} [{unit}]", show_legend=True, legend_position="right",
+            ylabel=f"boundary {name} [{unit}]", show_legend=backend == "bokeh" or k == 0, legend_position="right",
             fontsize=style.fonts(backend), backend=backend))
     columns = 1 if len(panels) == 1 else 2
     if backend == "bokeh":
