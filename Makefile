@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions bench-continuation bench-reductions bench-compile bench-backbone bench-models fig13 cascade fold backbone clean
+.PHONY: demo test test-slow upgrade bench bench-scaling bench-atlas bench-revisions bench-continuation bench-reductions bench-compile bench-backbone bench-models fig13 cascade fold backbone clean
 
 # CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
 CONSTRAINTS ?= constraints.txt
@@ -70,3 +70,6 @@ upgrade:  ## newest allowed versions: fresh venv without constraints, the tests,
 	$(MAKE) CONSTRAINTS= test
 	(head -2 constraints.txt; $(BIN)/python -m pip freeze --exclude-editable) > constraints.txt.new
 	mv constraints.txt.new constraints.txt
+
+bench-atlas: $(STAMP)  ## the 4-D atlas (768,320 points): phases, cube size, write and read times, memory (~5 min on 2 quiet cores, 10.5 min under load) -> docs/benchmarks/atlas.*
+	$(BIN)/python -m workflows.bench.atlas

@@ -64,20 +64,45 @@ def _crossings(line):
     return [i for i in range(len(ok) - 1) if ok[i] and ok[i + 1] and stable[i] != stable[i + 1]]
 
 
-def boundary_rows(data, ds):
-    """One dict per stability change in the cube, refined where possible."""
-    axis = schema.continued_axis(ds)
-    fixed = compute.fixed_values(data)
+# What a line's refinement reads: the grid and these variables (a few kB per line, shipped to a
+# worker as one task per line).
+_LINE_VARS = ("orbit_status", "stable", "orbit_state", "multiplier_real", "multiplier_imag")
+
+
+def line_rows(data, where, line):
+    """One dict per stability change on one line (`where`: values of the other axes; `line`: the
+    cube along the continued axis there), refined where possible."""
+    axis = schema.continued_axis(line)
+    solvers = _solver(data, {**compute.fixed_values(data), **where}, axis)
+    grid = line[axis].values
     rows = []
-    for where, line in _lines(ds, axis):
-        solvers = _solver(data, {**fixed, **where}, axis)
-        grid = line[axis].values
-        for i in _crossings(line):
-            row = {**{f"boundary_{k}": v for k, v in where.items()},
-                   "boundary_grid_low": grid[i], "boundary_grid_high": grid[i + 1],
-                   "boundary_direction": 0 if line["stable"].values[i] == 1 else 1}
-            rows.append({**row, **_refine(solvers, line, axis, i)})
+    for i in _crossings(line):
+        row = {**{f"boundary_{k}": v for k, v in where.items()},
+               "boundary_grid_low": grid[i], "boundary_grid_high": grid[i + 1],
+               "boundary_direction": 0 if line["stable"].values[i] == 1 else 1}
+        rows.append({**row, **_refine(solvers, line, axis, i)})
     return rows
+
+
+def line_tasks(ds):
+    """(where, line) per line of the cube, each line holding only what line_rows reads."""
+    axis = schema.continued_axis(ds)
+    keep = ds[[v for v in _LINE_VARS if v in ds]]
+    return [(where, line.drop_vars([c for c in line.coords if c not in line.dims and c != axis]))
+            for where, line in _lines(keep, axis)]
+
+
+def boundary_rows(data, ds, map_lines=None):
+    """One dict per stability change in the cube, line by line. map_lines(data, tasks) -> the
+    rows of each task in order (default: here, one line after the other; a sweep passes one that
+    spreads the lines over its Dask workers)."""
+    tasks = line_tasks(ds)
+    per_line = (map_lines or _serial)(data, tasks)
+    return [row for rows in per_line for row in rows]
+
+
+def _serial(data, tasks):
+    return [line_rows(data, where, line) for where, line in tasks]
 
 
 def _refine(solvers, line, axis, i):
@@ -110,9 +135,10 @@ def _first_event_on_branch(family, line, axis, i):
     return next((e for e in branch.events if e.kind in _EVENT_TYPE), None)
 
 
-def add_boundary_table(data, ds):
-    """ds with the boundary variables (dimension `boundary`, possibly of length 0)."""
-    rows = boundary_rows(data, ds)
+def add_boundary_table(data, ds, map_lines=None):
+    """ds with the boundary variables (dimension `boundary`, possibly of length 0); map_lines as
+    in boundary_rows."""
+    rows = boundary_rows(data, ds, map_lines)
     axis = schema.continued_axis(ds)
     out = ds.copy()
     coord = ds[axis].attrs

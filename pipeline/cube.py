@@ -14,7 +14,13 @@ import xarray as xr
 from pipeline import fileio, schema
 
 CONVENTIONS = "CF-1.10"
-COMPRESSION = {"zlib": True, "complevel": 4}
+# zlib level 1 after the byte shuffle: on an atlas cube as small as level 4 without shuffle (the
+# float mantissas do not compress either way) at a seventh of the write time (docs/benchmarks/atlas.md).
+COMPRESSION = {"zlib": True, "complevel": 1, "shuffle": True}
+# A netCDF chunk of a per-point variable is one line along the continued axis (all of its extra
+# dims), at most CHUNK_BYTES: reading a line, or a slice across the other axes, then decompresses
+# only the lines it needs (an atlas slice over contact angle x preload reads 64 line chunks).
+CHUNK_BYTES = 4 << 20
 # An axis parameter that is neither swept nor fixed (given as NaN) is derived per point: it gets no
 # coordinate (CF: no NaN coordinates) but a line in the global attribute DERIVED_ATTR saying where
 # its per-point value comes from.
@@ -52,7 +58,7 @@ def build_dataset(axes, fixed, results, attrs, extra_attrs=None):
         data = np.asarray(data)
         extra, dtype, var_attrs = _variable_spec(name, data, variables, extra_attrs or {})
         _check_shape(name, data, shape, extra)
-        ds[name] = (dims + extra, data.astype(dtype), var_attrs)
+        ds[name] = (dims + extra, data.astype(dtype, copy=False), var_attrs)
         for dim, n in zip(extra, data.shape[len(dims):]):
             ds.coords[dim] = (dim, np.arange(n), {"long_name": f"{dim} index", "units": "1"})
     ds.attrs = {"Conventions": CONVENTIONS, "title": "rotorsweep result cube", **attrs,
@@ -123,12 +129,23 @@ def write_cube(ds, path, overwrite=False):
 
 
 def _encoding(ds):
-    """Compressed data variables; no fill value on coordinates and integers (schema.INT_FILL_COMMENT),
-    NaN on floats."""
+    """Compressed data variables chunked by line (_chunks); no fill value on coordinates and
+    integers (schema.INT_FILL_COMMENT), NaN on floats."""
     enc = {name: {"_FillValue": None} for name in ds.coords}
+    points = schema.point_axes(ds) if "orbit_status" in ds else []
+    along = ds.attrs.get("continued_axis") or (points[0] if points else None)
     for name, var in ds.data_vars.items():
         enc[name] = {**COMPRESSION, **({"_FillValue": None} if var.dtype.kind in "iu" else {})}
+        if along in var.dims and set(points) <= set(var.dims):
+            enc[name]["chunksizes"] = _chunks(var, points, along)
     return enc
+
+
+def _chunks(var, points, along):
+    """One line along `along` (capped at CHUNK_BYTES) x 1 on the other point axes x whole extra dims."""
+    extra = int(np.prod([n for d, n in var.sizes.items() if d not in points]))
+    cap = max(1, CHUNK_BYTES // (var.dtype.itemsize * extra))
+    return tuple(min(n, cap) if d == along else 1 if d in points else n for d, n in var.sizes.items())
 
 
 def open_cube(path):
@@ -260,10 +277,30 @@ def write_part(parts_dir, chunk_id, index, results, meta):
 
 def read_parts(parts_dir):
     """All part files of a directory as (chunk_id, index, results, meta), in chunk-id order."""
+    return list(iter_parts(parts_dir))
+
+
+def iter_parts(parts_dir):
+    """read_parts one part at a time (assembling a 768k-point atlas holds one part in memory, not
+    all of them next to the full arrays)."""
+    return (_read_part(path) for path in _part_paths(parts_dir))
+
+
+def part_metas(parts_dir):
+    """The meta dict of every part file, in chunk-id order, without reading their arrays."""
+    metas = []
+    for path in _part_paths(parts_dir):
+        try:
+            with np.load(path, allow_pickle=False) as f:
+                metas.append(json.loads(str(f["meta"])))
+        except (OSError, ValueError, KeyError) as exc:
+            raise CubeError(f"{path}: unreadable part file ({exc}); delete it to recompute its points") from None
+    return metas
+
+
+def _part_paths(parts_dir):
     parts_dir = Path(parts_dir)
-    if not parts_dir.is_dir():
-        return []
-    return [_read_part(path) for path in sorted(parts_dir.glob("[!.]*.npz"))]
+    return sorted(parts_dir.glob("[!.]*.npz")) if parts_dir.is_dir() else []
 
 
 def _read_part(path):
@@ -279,32 +316,31 @@ def assemble(axes, fixed, parts, attrs, n_multipliers, allow_missing=False, conf
     """The cube of a sweep from its parts: full-grid arrays (NaN / INT_FILL where no part has
     the point). A point no part holds is an error unless allow_missing. With config_hash, a part
     of another config (another run writing into the same directory) is an error, never mixed in."""
-    if config_hash is not None:
-        _check_part_hashes(parts, config_hash)
     shape = tuple(len(v) for v in axes.values())
     variables = schema.variables_of(schema.model_of(attrs))
     have = np.zeros(shape, bool)
     full = {}
-    for _, index, results, _ in parts:
+    seen, foreign = 0, []
+    for chunk_id, index, results, meta in parts:
+        seen += 1
+        if config_hash is not None and (meta or {}).get("config_hash") != config_hash:
+            foreign.append(chunk_id)
+            continue
         at = tuple(np.asarray(index).T)
         have[at] = True
         for name, values in results.items():
             if name not in full:
                 full[name] = _empty(name, shape, values, n_multipliers, variables)
             full[name][at] = values
+    if foreign:
+        raise CubeError(f"{len(foreign)} of {seen} part files (first: {foreign[0]}.npz) belong to "
+                        f"another config than this run's (hash {config_hash[:12]}); their results are "
+                        "not mixed into the cube: rerun with --overwrite into a path no other run uses")
     missing = int((~have).sum())
     if missing and not allow_missing:
         raise CubeError(f"{missing} of {have.size} grid points have no result in the part files "
                         f"(first: {_point(axes, np.argwhere(~have)[0])})")
     return build_dataset(axes, fixed, full, attrs)
-
-
-def _check_part_hashes(parts, config_hash):
-    foreign = [chunk_id for chunk_id, _, _, meta in parts if (meta or {}).get("config_hash") != config_hash]
-    if foreign:
-        raise CubeError(f"{len(foreign)} of {len(parts)} part files (first: {foreign[0]}.npz) belong to "
-                        f"another config than this run's (hash {config_hash[:12]}); their results are "
-                        "not mixed into the cube: rerun with --overwrite into a path no other run uses")
 
 
 def _empty(name, shape, values, n_multipliers, variables):

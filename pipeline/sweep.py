@@ -56,24 +56,33 @@ def segments(cfg):
     return out
 
 
-CHUNKS_PER_WORKER = 32
+MIN_CHUNK_POINTS = 64
+# Default chunks shrink towards the end (guided self-scheduling): each takes about a
+# 1 / (GUIDED_SHARE * workers) share of the points still unplanned, at least MIN_CHUNK_POINTS
+# and at most MAX_CHUNK_POINTS (seconds of work orbits-only, a minute with attractors: progress
+# lines, part files and what a lost worker takes with it stay small on a 768k-point atlas).
+GUIDED_SHARE = 4
+MAX_CHUNK_POINTS = 4096
 
 
 def plan_chunks(segs, n_workers, chunk_points=None):
-    """Group segments into chunks of about chunk_points points (default: about CHUNKS_PER_WORKER
-    per worker, at least 64 points each so that Dask's ~1 ms per task stays noise). Point costs
-    vary 100-fold (a stable orbit ~5 ms, a chaotic attractor ~400 ms) and cluster along speed, so
-    many chunks are needed for balance: Fig. 13 with attractors on 2 workers took 115 s with 8
-    chunks per worker (one chunk held a quarter of the work) and 93 s with 47."""
-    total = sum(len(s.points) for s in segs)
-    if chunk_points is None:
-        chunk_points = max(64, total // max(1, CHUNKS_PER_WORKER * n_workers))
+    """Group segments into chunks: of about chunk_points points each when given, else guided
+    chunks that shrink from about total / (GUIDED_SHARE * n_workers) (at most MAX_CHUNK_POINTS)
+    to MIN_CHUNK_POINTS (so Dask's ~1 ms per task stays noise). Point costs vary 100-fold (a
+    stable orbit ~5 ms, a chaotic attractor ~400 ms) and cluster along speed, so the last chunks
+    must be small for balance: Fig. 13 with attractors on 2 workers took 115 s with 8 equal
+    chunks per worker (one chunk held a quarter of the work) and 93 s with 47; large first chunks
+    save tasks (scheduler and driver time) where balance does not need them."""
+    workers = max(1, n_workers)
+    remaining = sum(len(s.points) for s in segs)
     chunks, current, size = [], [], 0
     for seg in segs:
         current.append(seg)
         size += len(seg.points)
-        if size >= chunk_points:
+        target = chunk_points or min(MAX_CHUNK_POINTS, max(MIN_CHUNK_POINTS, remaining // (GUIDED_SHARE * workers)))
+        if size >= target:
             chunks.append(current)
+            remaining -= size
             current, size = [], 0
     if current:
         chunks.append(current)
@@ -131,7 +140,7 @@ def _fmt_seconds(s):
 def _done_segments(parts_dir, config_hash):
     """Segment ids already held by part files of the same config; refuse parts of another."""
     done = set()
-    for _, _, _, meta in cube.read_parts(parts_dir):
+    for meta in cube.part_metas(parts_dir):
         if meta.get("config_hash") != config_hash:
             raise SweepError(
                 f"{parts_dir} holds partial results of a different config (hash "
@@ -239,18 +248,44 @@ def _run_locked(cfg, output, parts, workers, scheduler, chunk_points, stream):
     segs = segments(cfg)
     done = _done_segments(parts, config_hash)
     todo = [s for s in segs if s.id not in done]
-    if todo:
-        total = sum(len(s.points) for s in segs)
-        bar = Progress(total, total - sum(len(s.points) for s in todo), stream) if stream else None
-        _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points, bar, say)
-    say("refining the stability boundaries and assembling the cube")
-    ds = cube.assemble(cfg.axes, _fixed_coords(cfg), cube.read_parts(parts), _provenance(cfg),
-                       n_multipliers=compute.model_of(cfg.data).n_state, config_hash=config_hash)
-    ds = boundaries.add_boundary_table(cfg.data, ds)
+    client = cluster = None
+    try:
+        if todo:
+            client, cluster = _connect(cfg, workers, scheduler, say)
+            total = sum(len(s.points) for s in segs)
+            bar = Progress(total, total - sum(len(s.points) for s in todo), stream) if stream else None
+            _run_chunks(client, cfg, todo, parts, config_hash, chunk_points, bar, say)
+        say("refining the stability boundaries and assembling the cube")
+        ds = cube.assemble(cfg.axes, _fixed_coords(cfg), cube.iter_parts(parts), _provenance(cfg),
+                           n_multipliers=compute.model_of(cfg.data).n_state, config_hash=config_hash)
+        ds = boundaries.add_boundary_table(cfg.data, ds, _map_lines_on(client) if client else None)
+    finally:
+        if client is not None:
+            _close(client, cluster)
     say(f"writing the cube: {output}")
     path = cube.write_cube(ds, output, overwrite=True)
     _remove_parts(parts)
     return path
+
+
+def _map_lines_on(client):
+    """boundaries' map_lines on the sweep's workers: one task per line (~0.25 s of refinement
+    each on the atlas, 320 lines: 80 s serial in the driver). A line whose task keeps killing
+    workers is refined here instead."""
+    from dask.distributed import KilledWorker
+
+    def map_lines(data, tasks):
+        if not client.scheduler_info()["workers"]:      # an external cluster scaled to nothing
+            return [boundaries.line_rows(data, where, line) for where, line in tasks]
+        futures = [client.submit(boundaries.line_rows, data, where, line, pure=False) for where, line in tasks]
+        out = []
+        for (where, line), future in zip(tasks, futures):
+            try:
+                out.append(future.result())
+            except KilledWorker:
+                out.append(boundaries.line_rows(data, where, line))
+        return out
+    return map_lines
 
 
 def _count(n, noun):
@@ -288,9 +323,8 @@ def check_scheduler(address, timeout=SCHEDULER_TIMEOUT_S):
 RESUBMITS = 3
 
 
-def _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points, bar, say):
-    from dask.distributed import KilledWorker, as_completed
-
+def _connect(cfg, workers, scheduler, say):
+    """(client, local cluster or None), with the scene's kernels compiled (or loaded) here."""
     say(f"connecting to the Dask scheduler at {scheduler}" if scheduler else
         f"starting {_count(_local_workers(workers), 'local Dask worker')} (127.0.0.1)")
     client, cluster = _client(workers, scheduler)
@@ -298,33 +332,41 @@ def _run_chunks(cfg, todo, parts, config_hash, workers, scheduler, chunk_points,
         n_workers = max(1, len(client.scheduler_info()["workers"]))
         say(f"{_count(n_workers, 'worker')}; Dask dashboard: {client.dashboard_link}")
         warmup.compile_scene(cfg.data, say)
-        chunks = plan_chunks(todo, n_workers, chunk_points)
-        say(f"sweeping {_count(sum(len(s.points) for s in todo), 'point')} in {_count(len(chunks), 'chunk')}")
-        if bar:
-            bar.restart()
-        # The config goes with every task (a few kB), not scattered: a scattered copy lives only
-        # on workers and is lost for good once every worker holding it has died.
-        submit = functools.partial(client.submit, compute_chunk, cfg.data, pure=False)
-        futures = {submit(chunk): (chunk, 0) for chunk in chunks}
-        pending = as_completed(futures)
-        for future in pending:
-            chunk, resubmits = futures.pop(future)
-            try:
-                seg_ids, index, results = future.result()
-            except KilledWorker:
-                if resubmits == RESUBMITS:
-                    raise SweepError(_killed_chunk(chunk, parts)) from None
-                retry = submit(chunk)
-                futures[retry] = (chunk, resubmits + 1)
-                pending.add(retry)
-                continue
-            cube.write_part(parts, f"seg{seg_ids[0]:06d}", index, results,
-                            {"config_hash": config_hash, "segments": seg_ids})
-            if bar:
-                bar.update(len(index))
-            future.release()
-    finally:
+    except BaseException:
         _close(client, cluster)
+        raise
+    return client, cluster
+
+
+def _run_chunks(client, cfg, todo, parts, config_hash, chunk_points, bar, say):
+    from dask.distributed import KilledWorker, as_completed
+
+    n_workers = max(1, len(client.scheduler_info()["workers"]))
+    chunks = plan_chunks(todo, n_workers, chunk_points)
+    say(f"sweeping {_count(sum(len(s.points) for s in todo), 'point')} in {_count(len(chunks), 'chunk')}")
+    if bar:
+        bar.restart()
+    # The config goes with every task (a few kB), not scattered: a scattered copy lives only
+    # on workers and is lost for good once every worker holding it has died.
+    submit = functools.partial(client.submit, compute_chunk, cfg.data, pure=False)
+    futures = {submit(chunk): (chunk, 0) for chunk in chunks}
+    pending = as_completed(futures)
+    for future in pending:
+        chunk, resubmits = futures.pop(future)
+        try:
+            seg_ids, index, results = future.result()
+        except KilledWorker:
+            if resubmits == RESUBMITS:
+                raise SweepError(_killed_chunk(chunk, parts)) from None
+            retry = submit(chunk)
+            futures[retry] = (chunk, resubmits + 1)
+            pending.add(retry)
+            continue
+        cube.write_part(parts, f"seg{seg_ids[0]:06d}", index, results,
+                        {"config_hash": config_hash, "segments": seg_ids})
+        if bar:
+            bar.update(len(index))
+        future.release()
 
 
 def _killed_chunk(chunk, parts):

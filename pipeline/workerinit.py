@@ -10,5 +10,8 @@ import signal
 
 def dask_setup(worker):
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # the chunk tasks' module (numpy, xarray, the kernels: ~1 s), imported while the cluster
+    # starts and the driver loads the kernels, not when the first task arrives
+    import pipeline.sweep  # noqa: F401
     # its warnings at close are about the tasks the driver cancels; task errors reach the driver
     logging.getLogger("distributed.worker.state_machine").setLevel(logging.ERROR)

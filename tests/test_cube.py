@@ -39,6 +39,21 @@ def four_d():
     return cube.build_dataset(AXES4, {}, random_results((3, 2, 2, 2)), PROVENANCE)
 
 
+def test_a_netcdf_chunk_is_one_line_along_the_continued_axis(tmp_path, monkeypatch):
+    """Line chunks: a speed line is one chunk, an (angle, preload) slice one chunk per line; a
+    line longer than CHUNK_BYTES is cut (here 2 float64 speeds of 4 multipliers = 64 B)."""
+    path = cube.write_cube(four_d(), tmp_path / "c.nc")
+    with netCDF4.Dataset(path) as nc:
+        assert nc["max_abs_multiplier"].chunking() == [3, 1, 1, 1]
+        assert nc["multiplier_real"].chunking() == [3, 1, 1, 1, 4]
+        assert nc["orbit_status"].chunking() == [3, 1, 1, 1]
+    monkeypatch.setattr(cube, "CHUNK_BYTES", 64)
+    path = cube.write_cube(four_d(), tmp_path / "d.nc")
+    with netCDF4.Dataset(path) as nc:
+        assert nc["multiplier_real"].chunking() == [2, 1, 1, 1, 4]
+    xr.testing.assert_identical(cube.open_cube(path), cube.open_cube(tmp_path / "c.nc"))
+
+
 def from_synthetic():
     """The synthetic cube rebuilt through build_dataset (a NaN fixed contact angle included)."""
     syn = synthetic_cube()
@@ -86,7 +101,8 @@ def test_cf_attributes_and_compression_on_disk(tmp_path):
     for name, var in ds.data_vars.items():
         assert var.attrs["long_name"]
         assert "units" in var.attrs or {"flag_values", "flag_meanings"} <= set(var.attrs), name
-        assert var.encoding["zlib"] and var.encoding["complevel"] == 4, name
+        assert var.encoding["zlib"] and var.encoding["shuffle"], name
+        assert var.encoding["complevel"] == cube.COMPRESSION["complevel"], name
     flags = ds["bifurcation"].attrs
     assert flags["flag_meanings"].split() == list(schema.BIFURCATION)
     assert flags["flag_values"].dtype == np.int8

@@ -138,6 +138,11 @@ def test_boundary_table_refines_each_stability_change(small_cube):
     intervals = json.loads(rotorsweep("query", small_cube, "--unstable", "--format", "json").stdout)
     onsets = [iv["onset"] for iv in intervals if iv["onset"] is not None]
     assert any(abs(o - table[0]["speed"]) < 1e-12 for o in onsets)
+    # refined on the workers (one task per line) as the driver would refine it alone
+    from pipeline import config
+    plain = ds.drop_dims("boundary")
+    serial = boundaries.add_boundary_table(config.parse_config(ds.attrs["config_toml"]).data, plain)
+    assert boundaries.boundary_frame(serial) == table
 
 
 PHASES = ("starting 1 local Dask worker (127.0.0.1)", "1 worker; Dask dashboard: http://127.0.0.1:",

@@ -79,10 +79,21 @@ def _colour_pixels(img, hex_colour, tol=0.02):
     return int((np.abs(img[..., :3] - rgb).max(axis=-1) < tol).sum())
 
 
+ATLAS_PNGS = ("atlas_onset.png", "atlas_stable_fraction.png", "atlas_boundaries.png")
+
+
+def expected_pngs(name):
+    """The report's figures: the base set, the attractor figures after it, the atlas summaries
+    (cubes with more than two varying axes) right after the stability map."""
+    if name == "4d":
+        return [BASE_PNGS[0], *ATLAS_PNGS, *BASE_PNGS[1:]]
+    return list(BASE_PNGS) + (["bifurcation.png", "lle.png"] if name == "attractor" else [])
+
+
 def test_writes_all_files(made):
     for name, (ds, res) in made.items():
         assert res["html"].name == "report.html" and res["html"].stat().st_size > 100_000
-        pngs = list(BASE_PNGS) + (["bifurcation.png", "lle.png"] if name == "attractor" else [])
+        pngs = expected_pngs(name)
         assert [p.name for p in res["png"]] == pngs
         assert [f.filename for f in report.figures_for(ds)] == pngs
         assert res["csv"].name == "unstable_intervals.csv"
@@ -94,7 +105,7 @@ def test_cubes_without_attractor_variables_keep_the_old_figure_set(made):
     for name in ("base", "stable", "4d"):
         ds, res = made[name]
         assert not report.has_attractor(ds)
-        assert [p.name for p in res["png"]] == list(BASE_PNGS)
+        assert [p.name for p in res["png"]] == expected_pngs(name)
         text = _read_html(res)
         assert "Bifurcation diagram" not in text and "Lyapunov" not in text
         assert "attractor (" not in text

@@ -25,10 +25,15 @@ scheduler=<address>, chunk_points=..., overwrite=True)` on a fresh
 * points per second, the sum of the per-point compute times stored in the cube;
 * peak memory: max RSS (ru_maxrss, KiB on Linux) of each worker process after the sweep and of
   the driver process (a high-water mark over the whole benchmark, as the driver runs them all);
-* CPU seconds of the driver and the workers during the sweep, load average before and after.
+* CPU seconds of the driver and the workers during the sweep, load average before and after;
+  from them the speed-up in CPU time, which other load on a shared machine does not inflate;
+* what a task carries: pickled size and (de)serialization time of the median chunk's arguments,
+  its result's size;
+* tasks per second through a scheduler started with the distributed CLI on 127.0.0.1
+  (workflows.bench.scheduler_throughput) and the cluster size at which it would saturate.
 
 Runs: 1 worker and 2 workers with the pipeline's default chunking (speed-up, efficiency; target:
-2 workers >= 1.8x faster than 1), then 2 workers with other chunk sizes, from one continuation
+2 workers >= 1.85x faster than 1), then 2 workers with other chunk sizes, from one continuation
 segment per chunk to one chunk per worker (`scaling_analysis`). Numba compilation is excluded: a
 tiny warm-up sweep fills the on-disk cache and imports everything in the driver before any timed run.
 """
@@ -36,6 +41,7 @@ import argparse
 import datetime
 import json
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -55,7 +61,8 @@ RUN_KEYS = ("label", "workers", "chunk_points", "chunk_points_used", "n_chunks",
             "point_compute_s", "n_not_converged", "worker_max_rss_kib", "worker_rss_before_kib", "driver_max_rss_kib",
             "driver_cpu_s", "worker_cpu_s", "loadavg_before", "loadavg_after")
 RESULT_KEYS = ("benchmark", "mode", "created", "git", "scene", "machine", "load_average",
-               "warmup", "runs", "scaling", "chunk_sensitivity", "limits", "verdict", "command")
+               "warmup", "runs", "scaling", "chunk_sensitivity", "limits", "task_costs", "scheduler",
+               "verdict", "command")
 
 
 def scaling_machine_info():
@@ -104,8 +111,49 @@ def _measure_runs(cfg, work_dir, worker_counts, chunk_sizes, repeats):
     return runs
 
 
+def task_costs(cfg, n_workers=2):
+    """What one task of the default plan carries and costs to (de)serialize in the driver: the
+    pickled arguments (config + chunk of segments) and result of the median chunk, the result
+    measured on one segment solved here and scaled by points."""
+    import pickle
+    import statistics
+
+    from pipeline import sweep
+
+    chunks = sweep.plan_chunks(sweep.segments(cfg), n_workers)
+    chunk = sorted(chunks, key=lambda c: sum(len(s.points) for s in c))[len(chunks) // 2]
+    n = sum(len(s.points) for s in chunk)
+    t0 = time.perf_counter()
+    args = pickle.dumps((cfg.data, chunk), protocol=5)
+    dumps_s = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    pickle.loads(args)
+    loads_s = time.perf_counter() - t0
+    one = sweep.compute_chunk(cfg.data, chunk[:1])
+    result_per_point = len(pickle.dumps(one, protocol=5)) / len(chunk[0].points)
+    sizes = [sum(len(s.points) for s in c) for c in chunks]
+    return dict(n_chunks=len(chunks), chunk_points_first=sizes[0], chunk_points_median=int(statistics.median(sizes)),
+                chunk_points_last=sizes[-1], median_chunk_points=n, args_bytes=len(args),
+                args_dumps_ms=round(1e3 * dumps_s, 3), args_loads_ms=round(1e3 * loads_s, 3),
+                result_bytes=round(result_per_point * n))
+
+
+def scheduler_section(runs, n_tasks):
+    """Tasks per second through a CLI-started scheduler (scheduler_throughput) and the cluster
+    size at which it saturates for the mean chunk of the 2-worker default run."""
+    from workflows.bench import scheduler_throughput
+
+    rates = scheduler_throughput.measure(n_tasks=n_tasks)
+    two = [r for r in runs if r["workers"] == 2 and r["chunk_points"] is None and r["tasks"].get("n_tasks")]
+    chunk_s = (statistics.median(r["tasks"]["busy_total_s"] / r["tasks"]["n_tasks"] for r in two)
+               if two else None)
+    best = max(v["batch_tasks_per_s"] for v in rates.values())
+    return dict(by_workers={str(k): v for k, v in rates.items()}, chunk_compute_s=chunk_s,
+                saturation_workers=None if chunk_s is None else round(scheduler_throughput.saturation(best, chunk_s)))
+
+
 def run_benchmark(cfg, out_dir, *, worker_counts=(1, 2), chunk_sizes="auto", repeats=1,
-                  mode="full", plot=True, work_dir=None, command=None):
+                  mode="full", plot=True, work_dir=None, command=None, scheduler_tasks=2000):
     """Measure cfg's sweep (see the module docstring); write scaling.json and scaling.md (and
     scaling.png when plot) into out_dir. Returns the results dict."""
     out_dir = Path(out_dir)
@@ -121,6 +169,8 @@ def run_benchmark(cfg, out_dir, *, worker_counts=(1, 2), chunk_sizes="auto", rep
         warm = warm_up(work_dir)
         log(f"  warm-up: kernels {warm['driver_kernels_s']:.1f} s, tiny sweep {warm['tiny_sweep_s']:.1f} s")
         runs = _measure_runs(cfg, work_dir, worker_counts, chunk_sizes, repeats)
+        costs = task_costs(cfg)
+        sched = scheduler_section(runs, scheduler_tasks)
     finally:
         if own_work:
             shutil.rmtree(work_dir, ignore_errors=True)
@@ -131,6 +181,7 @@ def run_benchmark(cfg, out_dir, *, worker_counts=(1, 2), chunk_sizes="auto", rep
         git=git_info(), scene=scene_info(cfg), machine=scaling_machine_info(),
         load_average=dict(start=load_start, end=loadavg()),
         warmup=warm, runs=runs, scaling=scaling, chunk_sensitivity=sens, limits=limits,
+        task_costs=costs, scheduler=sched,
         verdict=verdict_text(scaling, limits, sens, mode),
         command=command or "python -m workflows.bench.scaling" + (" --quick" if mode == "quick" else ""),
         total_s=round(time.perf_counter() - t_all, 1),

@@ -4,7 +4,7 @@ import statistics
 
 from workflows.bench.scaling_runs import TOP_PHASES
 
-TARGET_SPEEDUP = 1.8
+TARGET_SPEEDUP = 1.85
 
 
 def median_run(runs, workers, chunk_points):
@@ -22,6 +22,20 @@ def _amdahl(serial, parallel_1):
     if not parallel_1:
         return float("nan")
     return (serial + parallel_1) / (serial + parallel_1 / 2)
+
+
+def cpu_speedup(r1, r2, serial):
+    """The speed-up the two runs would show with a core per worker and no other load: worker CPU
+    seconds (what the workers did, not how long other processes kept them waiting) of the
+    1-worker run against half of the 2-worker run's, plus the serial driver work S outside the
+    boundary table (whose refinement runs on the workers, so its CPU is in theirs):
+    (S + W1) / (S + W2 / 2)."""
+    w1, w2 = sum(r1.get("worker_cpu_s") or []), sum(r2.get("worker_cpu_s") or [])
+    if not (w1 and w2):
+        return {}
+    s = max(0.0, serial - (r2["phases"].get("boundaries") or 0.0))
+    return dict(worker_cpu_1_s=round(w1, 3), worker_cpu_2_s=round(w2, 3), cpu_serial_s=round(s, 3),
+                cpu_speedup=round((s + w1) / (s + w2 / 2), 3))
 
 
 def analyse(runs, worker_counts):
@@ -73,6 +87,7 @@ def analyse(runs, worker_counts):
             utilization_2=r2["tasks"].get("utilization"),
             driver_cpu_2_s=r2["driver_cpu_s"],
         )
+        limits.update(cpu_speedup(r1, r2, limits["serial_s"]))
         known = [limits["serial_cost_s"], limits["tail_cost_s"], limits["slowdown_cost_s"]]
         limits["gaps_cost_s"] = round(limits["excess_s"] - sum(x or 0.0 for x in known), 3)
     sens = []
@@ -93,7 +108,7 @@ def verdict_text(scaling, limits, sens, mode):
         return "No 1- and 2-worker pair was measured: no speed-up to judge."
     s = scaling["speedup"]
     parts = [f"2 workers are {s:.2f}x faster than 1 (efficiency {100 * scaling['efficiency']:.0f} %): "
-             + ("the 1.8x target is met." if scaling["meets_target"] else
+             + (f"the {TARGET_SPEEDUP}x target is met." if scaling["meets_target"] else
                 f"below the {TARGET_SPEEDUP}x target.")]
     if scaling.get("compute_speedup"):
         parts.append(f"The distributed compute phase alone scales {scaling['compute_speedup']:.2f}x; "
@@ -101,6 +116,9 @@ def verdict_text(scaling, limits, sens, mode):
                      f"{limits['amdahl_limit']:.2f}x (Amdahl).")
         if scaling["speedup"] > limits["amdahl_limit"] * 1.02:
             parts.append("The measured speed-up exceeds that cap: the runs were disturbed by other load.")
+    if limits.get("cpu_speedup"):
+        parts.append(f"Counted in CPU seconds (the workers' own work, which other processes on the machine "
+                     f"do not inflate) the speed-up is {limits['cpu_speedup']:.2f}x.")
     best = min(sens, key=lambda d: d["wall_s"]) if sens else None
     if best:
         parts.append(f"Fastest chunking on 2 workers: {best['chunk_points_used']} points per chunk "

@@ -81,6 +81,22 @@ def chunk_section(sens):
     return part("scaling", "chunk_sizes", rows=rows) + "\n\n"
 
 
+def tasks_section(res):
+    """Task size, serialization, the CPU-time speed-up and the scheduler's throughput ('' for a
+    JSON written before they were measured)."""
+    costs, sched, lim = res.get("task_costs"), res.get("scheduler"), res.get("limits") or {}
+    if not (costs and sched):
+        return ""
+    rows = "\n".join(f"| {k} | {v['batch_tasks_per_s']:.0f} | {v['round_trip_ms']:.2f} | {v['loadavg'][0]} |"
+                     for k, v in sched["by_workers"].items())
+    return part("scaling", "tasks", **{k: v for k, v in costs.items()},
+                args_kb=f"{costs['args_bytes'] / 1024:.1f}", result_kb=f"{costs['result_bytes'] / 1024:.1f}",
+                cpu_speedup=fmt(lim.get("cpu_speedup")), worker_cpu_1=fmt(lim.get("worker_cpu_1_s")),
+                worker_cpu_2=fmt(lim.get("worker_cpu_2_s")), cpu_serial=fmt(lim.get("cpu_serial_s")),
+                rows=rows, chunk_ms=fmt(None if sched["chunk_compute_s"] is None else 1e3 * sched["chunk_compute_s"], "{:.0f}"),
+                saturation=fmt(sched["saturation_workers"], "{:.0f}")) + "\n\n"
+
+
 def markdown(res, png=None):
     """The text of scaling.md (png: the plot's path, linked when given)."""
     m, scene, quick = res["machine"], res["scene"], res["mode"] == "quick"
@@ -99,5 +115,5 @@ def markdown(res, png=None):
         distributed=m["distributed"], load_start=res["load_average"]["start"], load_end=res["load_average"]["end"],
         warm_kernels=f"{res['warmup']['driver_kernels_s']:.1f}", warm_sweep=f"{res['warmup']['tiny_sweep_s']:.1f}",
         run_rows=run_rows(res["runs"]), speedup=speedup_section(res),
-        chunk_sizes=chunk_section(res["chunk_sensitivity"]),
+        chunk_sizes=chunk_section(res["chunk_sensitivity"]) + tasks_section(res),
         plot=part("scaling", "plot", png=Path(png).name) + "\n\n" if png else "", verdict=res["verdict"])

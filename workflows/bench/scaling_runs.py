@@ -124,7 +124,7 @@ def _worker_calls():
     """Functions run on the workers; closures so that cloudpickle ships them by value (the
     workers need not import this module)."""
     def warm(data, point):
-        from pipeline import compute
+        from pipeline import compute, sweep  # noqa: F401  (what a real run's worker preload imports)
         compute.solve_segment(data, [point])
         return True
 

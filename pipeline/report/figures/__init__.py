@@ -1,6 +1,7 @@
 """The report's figures. Importing this package registers them; the import order below is the
 order of the figures in the report."""
 from pipeline.report.figures import stability_map  # noqa: F401  (registers itself)
+from pipeline.report.figures import atlas  # noqa: F401
 from pipeline.report.figures import branch_diagram  # noqa: F401
 from pipeline.report.figures import max_multiplier  # noqa: F401
 from pipeline.report.figures import response  # noqa: F401

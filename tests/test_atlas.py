@@ -1,0 +1,125 @@
+"""The 4-D atlas: its config's points are physical, the guided chunk plan, the boundary table's
+per-line map, and the summary figures of cubes with more than two varying axes."""
+import itertools
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline import boundaries, compute, config, cube, schema, sweep
+from pipeline.report.figures import atlas
+
+ROOT = Path(__file__).resolve().parents[1]
+SPEEDS = np.array([10.0, 11.0, 12.0, 13.0, 14.0, 15.0])
+AXES = {"speed": SPEEDS, "clearance": np.array([5e-6, 1e-5]),
+        "contact_angle": np.array([15.0, 25.0, 40.0]), "preload": np.array([0.0, 100.0])}
+
+
+def test_atlas_config_is_the_fig13_grid_and_every_point_builds():
+    """768,320 points; the preload turns the free contact angle towards the axis (loaded angle >
+    free angle, growing with the preload: static equilibrium N K dn^1.5 sin(a) = P0) and every
+    (clearance, angle, preload) builds finite kernel parameters."""
+    cfg = config.parse_config((ROOT / "configs" / "atlas4d_fig13.toml").read_text(), allow_large=True)
+    assert cfg.n_points == 2401 * 5 * 8 * 8 and cfg.data["analysis"]["attractor"] is False
+    build, fixed = compute.builder(cfg.data), compute.fixed_values(cfg.data)
+    for c, a in itertools.product(cfg.axes["clearance"], cfg.axes["contact_angle"]):
+        used = []
+        for p in cfg.axes["preload"]:
+            built = build({**fixed, "speed": 100.0, "clearance": c, "contact_angle": a, "preload": p})
+            assert np.all(np.isfinite(built.p)) and built.period > 0
+            used.append(float(built.derived["contact_angle_used"]))
+        assert used[0] == pytest.approx(a) and np.all(np.diff(used) > 0) and used[-1] < 90.0
+
+
+def _segments(lengths):
+    return [sweep.Segment(i, np.zeros((n, 1), int), tuple({} for _ in range(n))) for i, n in enumerate(lengths)]
+
+
+def test_guided_chunks_shrink_cover_every_segment_once_and_keep_a_floor():
+    segs = _segments([32] * 375 + [5])
+    chunks = sweep.plan_chunks(segs, n_workers=2)
+    sizes = [sum(len(s.points) for s in c) for c in chunks]
+    assert [s.id for c in chunks for s in c] == list(range(len(segs)))
+    total = sum(sizes)
+    assert sizes[0] >= total // (sweep.GUIDED_SHARE * 2)                 # a first chunk of ~1/8
+    assert all(b <= a + 32 for a, b in zip(sizes, sizes[1:]))            # shrinking (to a segment)
+    assert min(sizes[:-1]) >= sweep.MIN_CHUNK_POINTS
+    assert len(chunks) < total // sweep.MIN_CHUNK_POINTS                 # fewer tasks than equal 64s
+    assert [len(c) for c in sweep.plan_chunks(segs, 2, chunk_points=64)][:3] == [2, 2, 2]
+    big = [sum(len(s.points) for s in c) for c in sweep.plan_chunks(_segments([32] * 24010), 2)]
+    assert max(big) <= sweep.MAX_CHUNK_POINTS + 32 and big[0] > sweep.MAX_CHUNK_POINTS - 32
+
+
+def test_boundary_rows_are_the_same_for_any_map_of_the_lines(tiny_cube):
+    """The driver's serial map and any other order of evaluation (here: reversed, as workers
+    may finish) give the same rows in the same order."""
+    ds = cube.open_cube(tiny_cube)
+    data = config.parse_config(ds.attrs["config_toml"]).data
+    plain = ds.drop_dims("boundary")
+
+    def backwards(data, tasks):
+        return [boundaries.line_rows(data, w, line) for w, line in tasks[::-1]][::-1]
+    serial = boundaries.boundary_rows(data, plain)
+    assert serial and boundaries.boundary_rows(data, plain, backwards) == serial
+
+
+def _atlas_cube(onset_index, refined=None):
+    """A 4-D cube whose line (c, a, p) is stable below SPEEDS[onset_index[c, a, p]] (never when
+    the index is len(SPEEDS)) and unstable from there on; refined: {(c, a, p): value} boundary
+    rows of those lines."""
+    shape = tuple(len(v) for v in AXES.values())
+    k = np.arange(len(SPEEDS)).reshape(-1, 1, 1, 1)
+    stable = (k < onset_index[None]).astype("int8")
+    results = {"orbit_status": np.zeros(shape, "int8"), "stable": stable,
+               "bifurcation": np.where(stable == 1, 0, 2).astype("int8")}
+    ds = cube.build_dataset(AXES, {}, results, {"model": "jeffcott_clearance", "continued_axis": "speed"})
+    rows = [dict(speed=v, c=AXES["clearance"][c], a=AXES["contact_angle"][a], p=AXES["preload"][p],
+                 low=SPEEDS[onset_index[c, a, p] - 1], high=SPEEDS[onset_index[c, a, p]])
+            for (c, a, p), v in (refined or {}).items()]
+    table = {"boundary_speed": [r["speed"] for r in rows], "boundary_clearance": [r["c"] for r in rows],
+             "boundary_contact_angle": [r["a"] for r in rows], "boundary_preload": [r["p"] for r in rows],
+             "boundary_grid_low": [r["low"] for r in rows], "boundary_grid_high": [r["high"] for r in rows],
+             "boundary_status": [0] * len(rows), "boundary_direction": [0] * len(rows),
+             "boundary_type": [2] * len(rows)}
+    for name, values in table.items():
+        ds[name] = ("boundary", np.asarray(values))
+    return ds
+
+
+def test_onset_and_stable_share_per_line():
+    """Onset = the refined boundary where the table has one inside the line's first stable ->
+    unstable bracket, else the first unstable grid speed, NaN when stable throughout;
+    stable share = stable points / points."""
+    rng = np.random.default_rng(1)
+    onset_index = rng.integers(0, len(SPEEDS) + 1, size=(2, 3, 2))
+    onset_index[0, 0, 0], onset_index[1, 2, 1], onset_index[0, 1, 1], onset_index[1, 0, 0] = 3, len(SPEEDS), 0, 2
+    ds = _atlas_cube(onset_index, refined={(0, 0, 0): 12.4, (1, 0, 0): 99.0})   # 99: outside [11, 12]
+    onset, share = atlas.line_summary(ds)
+    assert onset.dims == ("clearance", "contact_angle", "preload")
+    for idx in itertools.product(range(2), range(3), range(2)):
+        n = onset_index[idx]
+        expect = 12.4 if idx == (0, 0, 0) else np.nan if n == len(SPEEDS) else SPEEDS[n]
+        np.testing.assert_equal(onset.values[idx], expect)
+        assert share.values[idx] == pytest.approx(n / len(SPEEDS))
+
+
+@pytest.mark.parametrize("builder", [atlas.fig_onset, atlas.fig_stable_fraction, atlas.fig_boundary_surfaces])
+def test_atlas_figures_build_in_both_backends_one_panel_per_clearance(builder):
+    from pipeline.report import style
+
+    ds = _atlas_cube(np.full((2, 3, 2), 3), refined={(1, 2, 0): 12.5})
+    for backend in ("bokeh", "matplotlib"):
+        with style.backend(backend):
+            fig = builder(ds, backend)
+        assert len(fig) == 2            # a layout of one panel per clearance
+
+
+def test_atlas_figures_apply_only_with_more_than_two_varying_axes():
+    from pipeline.report import figures_for
+
+    four = _atlas_cube(np.full((2, 3, 2), 3))
+    names = {f.name for f in figures_for(four)}
+    assert {"atlas_onset", "atlas_stable_fraction", "atlas_boundaries"} <= names
+    two = four.isel(contact_angle=[0], preload=[0])      # size-1 axes do not count
+    assert not atlas.is_atlas(two) and atlas.is_atlas(four.isel(preload=[0]))
+    assert schema.point_axes(two) == list(AXES)
