@@ -76,7 +76,8 @@ def test_scaling_bench_core_on_a_tiny_grid(tmp_path):
 def test_reductions_bench_on_one_repeat(tmp_path):
     """workflows/bench/reductions.py once: the balanced (one-frequency) orbit is the two-frequency
     one to the Newton tolerance (1e-9 on a state of ~1e-6 m: relative errors below 1e-7) and
-    cheaper (the fuller one integrates 5 support periods per step: at least 2x); the cage row and,
+    cheaper: the fuller one shoots over 5 support periods, the reduced one over 1 (the work ratio
+    is checked, not the measured speed-up, which moves with the machine's load); the cage row and,
     without a `law` key, the cubic-law row say why they are skipped; the shipped write-up is its
     JSON rendered."""
     from workflows.bench import reductions as br
@@ -86,7 +87,8 @@ def test_reductions_bench_on_one_repeat(tmp_path):
     balanced, cage, law = res["rows"]
     assert balanced["reduced"]["status"] == balanced["fuller"]["status"] == 0
     assert balanced["state_error"] < 1e-7 and balanced["half_pp_error"] < 1e-7
-    assert balanced["speedup"] > 2.0
+    assert balanced["fuller"]["period_s"] == pytest.approx(5 * balanced["reduced"]["period_s"], rel=1e-12)
+    assert balanced["speedup"] > 0
     assert "no cage rotation" in cage["skipped"]
     if "law" not in [p.name for p in br.SPEC.parameters]:
         assert "no [bearing] law key" in law["skipped"]
