@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions bench-continuation bench-reductions bench-compile bench-backbone fig13 cascade fold backbone clean
+.PHONY: demo test test-slow upgrade bench bench-scaling bench-revisions bench-continuation bench-reductions bench-compile bench-backbone bench-attractor fig13 cascade fold backbone clean
 
 # CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
 CONSTRAINTS ?= constraints.txt
@@ -58,6 +58,9 @@ bench-backbone: $(STAMP)  ## manifold vs continuation backbones: cost and agreem
 
 bench-compile: $(STAMP)  ## cold and warm first point per model, this tree vs 4e517dd (~15 min on 2 cores) -> docs/benchmarks/compile.*
 	$(BIN)/python -m workflows.bench.compile --revision 4e517dd --revision worktree
+
+bench-attractor: $(STAMP)  ## attractor diagnostics on Fig. 13 (full grid) and the cascade: cost and accuracy of each shortcut (~15 min on 2 cores) -> docs/benchmarks/attractor_cost.*
+	$(BIN)/python -m workflows.attractor_cost
 
 clean:
 	rm -rf out .pytest_cache

@@ -180,7 +180,8 @@ def _attractor_chain(model, params, sols, opts, ana, order, seconds):
             n_samples=ana["poincare_samples"], max_period=ana["max_period"],
             lyapunov_always=not ana["derive_when_stable"], stable_orbit=stable_orbit,
             max_periods=ana["lyapunov_max_periods"],
-            min_periods=min(LYAPUNOV_MIN_PERIODS, ana["lyapunov_max_periods"]), periodic=par.periodic)
+            min_periods=min(LYAPUNOV_MIN_PERIODS, ana["lyapunov_max_periods"]), rtol_stop=ana["lyapunov_rtol"],
+            settle_early=ana["stop_when_settled"], periodic=par.periodic)
         # a diverged run leaves no attractor to continue from: the next speed starts afresh
         state = att.end_state if att.code not in (attractor.DIVERGED, attractor.INTEGRATION_FAILED) else None
         seconds[i] += time.perf_counter() - start
