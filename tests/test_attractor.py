@@ -327,17 +327,24 @@ def test_transient_stopped_when_settled_finds_the_long_transients_period_two_att
     assert fast.lle == pytest.approx(long.lle, rel=1e-6)
 
 
-def test_settled_stop_skips_an_unstable_orbit():
+def test_settled_stop_does_not_stop_on_an_unstable_orbit():
     """Started on the unstable period-1 orbit (55 Hz, 19 um), the samples first repeat with
-    period 1; the refined orbit is unstable, so the transient is not stopped there (it runs its
-    full length) and the point is still the stable period-2 attractor."""
+    period 1; the refined orbit is unstable, so the transient goes on, kicked off it, and stops
+    on the stable period-2 attractor -- the one the full transient finds from there (checked
+    against a separate Newton solve at tighter tolerance in the test above it). Without kicks
+    (ESCAPES = 0) the testing ends at the unstable orbit and the transient runs its length."""
     p, period = bai_params(BaiPoint(55.0, 19.0e-6))
     p1 = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=jc.static_guess, tol=1e-10)
     assert p1.status == shooting.CONVERGED and not p1.stable
-    orbit, _, used, _ = at.settle_periodic(JEFF, p1.state, p, OPTS, 300, 32, at.default_period_rtol(OPTS))
+    tol = at.default_period_rtol(OPTS)
+    orbit, _, used, _ = at.settle_periodic(JEFF, p1.state, p, OPTS, 300, 32, tol)
+    assert orbit is not None and orbit[0] == 2 and np.abs(orbit[2]).max() < 1.0 and used < 300
+    long = at.diagnose(JEFF, p1.state, p, period, OPTS, n_transient=300)
+    np.testing.assert_allclose(np.sort_complex(orbit[2]), np.sort_complex(long.multipliers), atol=1e-7)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(at.diagnosis, "ESCAPES", 0)
+        orbit, _, used, _ = at.settle_periodic(JEFF, p1.state, p, OPTS, 300, 32, tol)
     assert orbit is None and used == 300
-    res = at.diagnose(JEFF, p1.state, p, period, OPTS, n_transient=300, settle_early=True)
-    assert (res.code, res.period) == (at.PERIODIC, 2) and np.abs(res.multipliers).max() < 1.0
 
 
 @pytest.mark.parametrize("point, expected", [

@@ -4,14 +4,17 @@ it costs in accuracy (`make bench-attractor`).
     python -m workflows.attractor_cost                    # the full Fig. 13 grid (12005 points) and the cascade
     python -m workflows.attractor_cost --speed-step 0.5 --cascade-step 0.5   # quicker (2405 + 89 points)
     python -m workflows.attractor_cost --render-only      # the markdown again from the JSON
+    python -m workflows.attractor_cost --compare-only     # the accuracy tables again from the cubes in build/
 
 Runs on a local cluster (one process per worker), in this order:
 - Fig. 13 (configs/bai2006_fig13.toml): orbits only; the reference (no early stop of the
   transient, Lyapunov runs to a 2 % standard error or the cap: the diagnostics before these
-  shortcuts); early stop of the transient only; the scene as shipped (early stop and the
-  scene's lyapunov_rtol); with --lyapunov-everywhere also a Lyapunov run at every point (no
-  'derive when stable').
-- the cascade (configs/bai2006_cascade.toml, swept up and down): reference and as shipped.
+  shortcuts); the reference again with one more transient period (its noise floor: how often
+  two equally long runs from slightly different states disagree); early stop of the transient
+  only; the scene as shipped (early stop and the scene's lyapunov_rtol); with
+  --lyapunov-everywhere also a Lyapunov run at every point (no 'derive when stable').
+- the cascade (configs/bai2006_cascade.toml, swept up and down): reference, its noise floor, as
+  shipped, and as shipped with the Fig. 13 scene's lyapunov_rtol.
 Writes docs/benchmarks/attractor_cost.{json,md}: wall and CPU time of each run, summed point
 time per attractor class, and each fast run's agreement with the reference
 (workflows.attractor_accuracy).
@@ -30,6 +33,7 @@ from workflows.bench.common import DOCS, ROOT, add_render_options, log, loadavg,
 
 FIG13 = ROOT / "configs" / "bai2006_fig13.toml"
 CASCADE = ROOT / "configs" / "bai2006_cascade.toml"
+WORK = ROOT / "build" / "attractor_cost"           # the runs' cubes (what --compare-only reads)
 # the diagnostics without this change's shortcuts (transient to its full length, 2 % Lyapunov stop)
 REFERENCE = {"attractor": True, "stop_when_settled": False, "lyapunov_rtol": 0.02}
 # the reference again from slightly different states (every transient one period longer): how
@@ -99,32 +103,44 @@ def summarize(timing, ds):
     return out
 
 
+def _cube(scene_name, run):
+    return WORK / f"{scene_name}_{run}.nc"
+
+
 def measure(args):
-    work = ROOT / "build" / "attractor_cost"
-    work.mkdir(parents=True, exist_ok=True)
+    WORK.mkdir(parents=True, exist_ok=True)
     log(f"compiling (or loading) the kernels: {warmup.compile_model(scene(FIG13, {}).model):.1f} s, not timed")
     runs = dict(FIG13_RUNS, **({"everywhere": EVERYWHERE} if args.lyapunov_everywhere else {}))
-    res, data = {"fig13": {}, "cascade": {}}, {}
+    res = {"fig13": {}, "cascade": {}}
     for name, (_, over) in runs.items():
         log(f"Fig. 13: {name}")
-        timing, data[name] = timed_run(scene(FIG13, over, args.speed_step), work / f"fig13_{name}.nc", args.workers)
-        res["fig13"][name] = summarize(timing, data[name])
-    res["fig13_accuracy"] = {name: acc.compare(data[name], data["reference"])
-                             for name in runs if name not in ("orbits_only", "reference")}
+        timing, ds = timed_run(scene(FIG13, over, args.speed_step), _cube("fig13", name), args.workers)
+        res["fig13"][name] = summarize(timing, ds)
     rtol = scene(FIG13, {}).data["analysis"]["lyapunov_rtol"]
-    cascade = {}
     for name, (_, over) in CASCADE_RUNS.items():
         log(f"cascade: {name}")
         over = {k: rtol if v is None else v for k, v in over.items()}
-        timing, cascade[name] = timed_run(scene(CASCADE, over, args.cascade_step), work / f"cascade_{name}.nc",
-                                          args.workers)
-        res["cascade"][name] = summarize(timing, cascade[name])
-    res["cascade_accuracy"] = {f"{name}, sweep {direction}": acc.compare(cascade[name], cascade["reference"], suffix)
-                               for name in CASCADE_RUNS if name != "reference"
-                               for direction, suffix in (("up", ""), ("down", "_down"))}
+        timing, ds = timed_run(scene(CASCADE, over, args.cascade_step), _cube("cascade", name), args.workers)
+        res["cascade"][name] = summarize(timing, ds)
     res["settings"] = {"speed_step": args.speed_step, "cascade_step": args.cascade_step, "workers": args.workers,
                        "fig13_lyapunov_rtol": rtol,
                        "cascade_lyapunov_rtol": scene(CASCADE, {}).data["analysis"]["lyapunov_rtol"]}
+    return res
+
+
+def accuracy(res):
+    """Each run's agreement with the reference, from the cubes the runs left in build/."""
+    def load(scene_name, run):
+        return cube.open_cube(_cube(scene_name, run)).load()
+    ref = load("fig13", "reference")
+    res["fig13_accuracy"] = {name: acc.compare(load("fig13", name), ref)
+                             for name in res["fig13"] if name not in ("orbits_only", "reference")}
+    ref = load("cascade", "reference")
+    res["cascade_accuracy"] = {}
+    for name in (n for n in res["cascade"] if n != "reference"):
+        ds = load("cascade", name)
+        for direction, suffix in (("up", ""), ("down", "_down")):
+            res["cascade_accuracy"][f"{name}, sweep {direction}"] = acc.compare(ds, ref, suffix)
     return res
 
 
@@ -191,14 +207,18 @@ def main(argv=None):
     ap.add_argument("--lyapunov-everywhere", action="store_true",
                     help="also run Fig. 13 with a Lyapunov run at every point (long: ~15 min on the full grid)")
     ap.add_argument("--out", type=Path, default=DOCS)
-    add_render_options(ap, "attractor_cost.md", "attractor_cost.json", ROOT / "build" / "attractor_cost")
+    add_render_options(ap, "attractor_cost.md", "attractor_cost.json", WORK)
+    ap.add_argument("--compare-only", action="store_true",
+                    help="run nothing: the accuracy tables again from the JSON's timings and the cubes in build/")
     args = ap.parse_args(argv)
-    if args.render_only:
+    if args.render_only or args.compare_only:
         res = json.loads(((args.data or args.out) / "attractor_cost.json").read_text())
     else:
         load = loadavg()
         res = measure(args)
         res["provenance"] = provenance(load, "workflows.attractor_cost", argv)
+    if not args.render_only:
+        res = accuracy(res)
         args.out.mkdir(parents=True, exist_ok=True)
         (args.out / "attractor_cost.json").write_text(json.dumps(res, indent=2))
     (args.out / "attractor_cost.md").write_text(report(res))

@@ -177,6 +177,14 @@ def _on_stable_orbit(model, orbit_state, multipliers, period, n_samples, end_sta
                      lle_all, np.asarray(multipliers, complex), True)
 
 
+# diagnose(): periodic samples whose refined orbit has max|lambda| > 1 + UNSTABLE_MARGIN sit on an
+# unstable orbit, not an attractor; up to ESCAPES new transients follow, each from the state
+# kicked by ESCAPE_KICK x its size.
+UNSTABLE_MARGIN = 1e-6
+ESCAPES = 2
+ESCAPE_KICK = 1e-3
+
+
 # settle_periodic(): the transient runs in blocks of SETTLE_BLOCK periods; once at least
 # SETTLE_MIN_WINDOW samples are in, the last (up to 4 x max_period) are tested for a period after
 # each block (`detect_period` on their second half: a period-k orbit needs 4 k samples).
@@ -188,12 +196,14 @@ def settle_periodic(model, u0, p, opts, n_transient, max_period, rel_tol):
     """The transient, stopped early when the stroboscopic map has settled on a stable periodic
     orbit: the recent samples repeat with a period k (the `detect_period` test of the full
     samples), the period-k orbit refined from the last one (`periodic_orbit_of`) converges and
-    is stable. Returns (orbit (k, state, multipliers) or None, state reached, periods used, status). A
-    refinement that fails or finds an unstable orbit (a trajectory passing near a saddle) ends
-    the testing: the transient then runs its full length, as without this shortcut."""
+    is stable. Returns (orbit (k, state, multipliers) or None, state reached, periods used, status).
+    Samples repeating on an unstable orbit (a start next to it: the neighbour's attractor just
+    past a bifurcation) are kicked off it, up to ESCAPES times; a refinement that fails, or
+    another unstable one, ends the testing: the transient then runs its full length, as without
+    this shortcut."""
     u = np.asarray(u0, float)
     window = [u]
-    used, testing = 0, True
+    used, testing, kicks = 0, True, 0
     while used < n_transient:
         block = min(SETTLE_BLOCK, n_transient - used)
         samples, status, u = _poincare(model.kernel, u, p, opts, 0, block + 1, 0.0, 0.0)
@@ -211,7 +221,13 @@ def settle_periodic(model, u0, p, opts, n_transient, max_period, rel_tol):
         orbit = periodic_orbit_of(model, u, p, opts, k, rel_tol)
         if orbit is not None and np.abs(orbit[2]).max() < 1.0:
             return orbit, u, used, ig.STATUS_OK
-        testing = False
+        # repeating samples on an unstable orbit: a start too close to it (as in diagnose),
+        # kicked off it; a refinement that fails ends the testing
+        testing = orbit is not None and kicks < ESCAPES
+        if testing:
+            kicks += 1
+            u = u + ESCAPE_KICK * max(1.0, float(np.abs(u).max()))
+            window = [u]
     return None, u, used, ig.STATUS_OK
 
 
@@ -231,14 +247,6 @@ def _on_settled_orbit(model, orbit, p, period, opts, n_samples, reached):
     expo = exponents_of_orbit(lams, k, period)
     return Attractor(PERIODIC, k, float(expo[0]), 0.0, _orbit_samples(model, state, p, opts, k, n_samples),
                      np.asarray(reached, float).copy(), ig.STATUS_OK, 0.0, expo, lams, True)
-
-
-# diagnose(): periodic samples whose refined orbit has max|lambda| > 1 + UNSTABLE_MARGIN sit on an
-# unstable orbit, not an attractor; up to ESCAPES new transients follow, each from the state
-# kicked by ESCAPE_KICK x its size.
-UNSTABLE_MARGIN = 1e-6
-ESCAPES = 2
-ESCAPE_KICK = 1e-3
 
 
 def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_period=32,
