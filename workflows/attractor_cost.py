@@ -185,6 +185,8 @@ def report(res):
         workers=res["settings"]["workers"], machine=_machine(res), load=res["provenance"]["load"],
         rtol=res["settings"]["fig13_lyapunov_rtol"], cascade_rtol=res["settings"]["cascade_lyapunov_rtol"],
         runs=_run_table(fig, labels), fast_wall=f"{fast['wall_s']:.1f}", ratio=f"{fast['wall_s'] / base['wall_s']:.1f}",
+        fast_cpu=f"{fast['cpu_s']:.1f}", cpu_ratio=f"{fast['cpu_s'] / base['cpu_s']:.1f}",
+        ref_cpu=f"{fig['reference']['cpu_s']:.1f}",
         saving=f"{fig['reference']['compute_s'] / fast['compute_s']:.1f}",
         classes=_class_table(fig, attractor_runs), accuracy=accuracy,
         summary=acc.summary(res["fig13_accuracy"], labels.get),
