@@ -157,7 +157,9 @@ def _directions(option):
     return ((option, ""),)
 
 
-# A Lyapunov run measures at least this many forcing periods before its 2 % standard-error stop:
+# A Lyapunov run measures at least this many forcing periods before its standard-error stop
+# ([analysis] lyapunov_rtol; lowering it would save little: Fig. 13's chaotic runs have a median
+# 5.6 % standard error after 1000 periods, so ~10 % -- its scene's tolerance -- at ~300):
 # with two multipliers of nearly equal modulus (a gap of ~0.02 per period is common here) the
 # tangent frame aligns slowly, and 100 periods left the exponent off by several standard errors
 # (Fig. 13 at 1 Hz: 6 of 1032 stable points; 300 periods: none beyond 3 standard errors).
