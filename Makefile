@@ -59,7 +59,7 @@ bench-backbone: $(STAMP)  ## manifold vs continuation backbones: cost and agreem
 bench-compile: $(STAMP)  ## cold and warm first point per model, this tree vs 4e517dd (~15 min on 2 cores) -> docs/benchmarks/compile.*
 	$(BIN)/python -m workflows.bench.compile --revision 4e517dd --revision worktree
 
-bench-attractor: $(STAMP)  ## attractor diagnostics on Fig. 13 (full grid) and the cascade: cost and accuracy of each shortcut (~15 min on 2 cores) -> docs/benchmarks/attractor_cost.*
+bench-attractor: $(STAMP)  ## attractor diagnostics on Fig. 13 (full grid) and the cascade: cost and accuracy of each shortcut (~10 min on a quiet 2-core machine) -> docs/benchmarks/attractor_cost.*
 	$(BIN)/python -m workflows.attractor_cost
 
 clean:
