@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow upgrade bench bench-scaling bench-atlas bench-revisions bench-continuation bench-reductions bench-compile bench-backbone bench-models fig13 cascade fold backbone clean
+.PHONY: demo test test-slow upgrade bench bench-scaling bench-atlas bench-attractor bench-revisions bench-continuation bench-reductions bench-compile bench-backbone bench-models fig13 cascade fold backbone clean
 
 # CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
 CONSTRAINTS ?= constraints.txt
@@ -61,6 +61,9 @@ bench-models: $(STAMP)  ## rigid_preloaded, symmetric4, asymmetric5: a point vs 
 
 bench-compile: $(STAMP)  ## cold and warm first result per model, this tree (added to the revisions in compile.json; ~5 min on 2 cores) -> docs/benchmarks/compile.*
 	$(BIN)/python -m workflows.bench.compile --keep
+
+bench-attractor: $(STAMP)  ## attractor diagnostics on Fig. 13 (full grid) and the cascade: cost and accuracy of each shortcut (~10 min on a quiet 2-core machine) -> docs/benchmarks/attractor_cost.*
+	$(BIN)/python -m workflows.attractor_cost
 
 clean:
 	rm -rf out .pytest_cache

@@ -157,7 +157,9 @@ def _directions(option):
     return ((option, ""),)
 
 
-# A Lyapunov run measures at least this many forcing periods before its 2 % standard-error stop:
+# A Lyapunov run measures at least this many forcing periods before its standard-error stop
+# ([analysis] lyapunov_rtol; lowering it would save little: Fig. 13's chaotic runs have a median
+# 5.6 % standard error after 1000 periods, so ~10 % -- its scene's tolerance -- at ~300):
 # with two multipliers of nearly equal modulus (a gap of ~0.02 per period is common here) the
 # tangent frame aligns slowly, and 100 periods left the exponent off by several standard errors
 # (Fig. 13 at 1 Hz: 6 of 1032 stable points; 300 periods: none beyond 3 standard errors).
@@ -180,7 +182,8 @@ def _attractor_chain(model, params, sols, opts, ana, order, seconds):
             n_samples=ana["poincare_samples"], max_period=ana["max_period"],
             lyapunov_always=not ana["derive_when_stable"], stable_orbit=stable_orbit,
             max_periods=ana["lyapunov_max_periods"],
-            min_periods=min(LYAPUNOV_MIN_PERIODS, ana["lyapunov_max_periods"]), periodic=par.periodic)
+            min_periods=min(LYAPUNOV_MIN_PERIODS, ana["lyapunov_max_periods"]), rtol_stop=ana["lyapunov_rtol"],
+            settle_early=ana["stop_when_settled"], periodic=par.periodic)
         # a diverged run leaves no attractor to continue from: the next speed starts afresh
         state = att.end_state if att.code not in (attractor.DIVERGED, attractor.INTEGRATION_FAILED) else None
         seconds[i] += time.perf_counter() - start

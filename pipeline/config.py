@@ -65,6 +65,10 @@ SCHEMA = {
         "poincare_samples": _num(8, 4096, kind="int", default=128),
         "max_period": _num(1, 1024, kind="int", default=32),
         "lyapunov_max_periods": _num(20, 1e6, kind="int", default=2000),
+        "lyapunov_rtol": _num(0, 1, lo_open=True, hi_open=True, default=0.02,
+                              help="a Lyapunov run stops once the largest exponent's standard error is below this fraction of it"),
+        "stop_when_settled": Key("bool", default=True,
+                                 help="end the transient once the samples repeat on a stable period-k orbit"),
     },
     "continuation": {   # `rotorsweep continue`: pseudo-arclength branches, one per line of the other axes
         "parameter": Key("str", default="", help="the scene parameter continued (default: the model's continuation axis)"),

@@ -304,6 +304,49 @@ def test_period_two_attractor_is_refined_and_stable_although_period_one_is_not()
     assert res.lle == pytest.approx(np.log(np.abs(ref_lams).max()) / (2 * period), rel=1e-6)
 
 
+def test_transient_stopped_when_settled_finds_the_long_transients_period_two_attractor():
+    """The settled stop (`settle_periodic`: blocks of 8 periods, period test, stable refined
+    orbit) against the full transient of 300 periods plus 128 samples from the same start (the
+    static guess, 55 Hz, 19 um: period 2): same k, the same two points on the section (within the
+    detection tolerance, 1e5 x rtol relative: the samples' jitter), the same multipliers (both
+    refined by Newton to 1e-9), and it stops well before the 300 periods."""
+    p, period = bai_params(BaiPoint(55.0, 19.0e-6))
+    start = jc.static_guess(p)
+    tol = at.default_period_rtol(OPTS)
+    orbit, _, used, status = at.settle_periodic(JEFF, start, p, OPTS, 300, 32, tol)
+    assert status == ig.STATUS_OK and orbit is not None and orbit[0] == 2 and used < 300
+    fast = at.diagnose(JEFF, start, p, period, OPTS, n_transient=300, settle_early=True)
+    long = at.diagnose(JEFF, start, p, period, OPTS, n_transient=300)
+    assert (fast.code, fast.period, fast.derived) == (long.code, long.period, long.derived) == (at.PERIODIC, 2, True)
+    scale = tol * np.abs(long.samples).max()
+    gaps = np.abs(fast.samples[:, None, :] - long.samples[None, :, :]).max(axis=2).min(axis=1)
+    assert gaps.max() <= scale, (gaps.max(), scale)
+    assert np.abs(fast.samples[-1] - fast.end_state).max() <= scale         # the state reached, next to the orbit
+    np.testing.assert_allclose(fast.samples[::2], np.tile(fast.samples[-2], (64, 1)))   # period 2, exact
+    np.testing.assert_allclose(np.sort_complex(fast.multipliers), np.sort_complex(long.multipliers), atol=1e-7)
+    assert fast.lle == pytest.approx(long.lle, rel=1e-6)
+
+
+def test_settled_stop_does_not_stop_on_an_unstable_orbit():
+    """Started on the unstable period-1 orbit (55 Hz, 19 um), the samples first repeat with
+    period 1; the refined orbit is unstable, so the transient goes on, kicked off it, and stops
+    on the stable period-2 attractor -- the one the full transient finds from there (checked
+    against a separate Newton solve at tighter tolerance in the test above it). Without kicks
+    (ESCAPES = 0) the testing ends at the unstable orbit and the transient runs its length."""
+    p, period = bai_params(BaiPoint(55.0, 19.0e-6))
+    p1 = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=jc.static_guess, tol=1e-10)
+    assert p1.status == shooting.CONVERGED and not p1.stable
+    tol = at.default_period_rtol(OPTS)
+    orbit, _, used, _ = at.settle_periodic(JEFF, p1.state, p, OPTS, 300, 32, tol)
+    assert orbit is not None and orbit[0] == 2 and np.abs(orbit[2]).max() < 1.0 and used < 300
+    long = at.diagnose(JEFF, p1.state, p, period, OPTS, n_transient=300)
+    np.testing.assert_allclose(np.sort_complex(orbit[2]), np.sort_complex(long.multipliers), atol=1e-7)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(at.diagnosis, "ESCAPES", 0)
+        orbit, _, used, _ = at.settle_periodic(JEFF, p1.state, p, OPTS, 300, 32, tol)
+    assert orbit is None and used == 300
+
+
 @pytest.mark.parametrize("point, expected", [
     (BaiPoint(148.0, 7.6e-6), (at.QUASI_PERIODIC, 0)),   # past the Neimark-Sacker: a torus
     (BaiPoint(84.0, 7.6e-6), (at.PERIODIC, 2)),          # past the period doubling

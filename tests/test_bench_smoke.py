@@ -206,3 +206,48 @@ def test_shipped_models_writeup_is_its_json_rendered():
         assert all(r["ours"]["converged"] and r["scipy"]["converged"] for r in pt["rows"])
         assert max(pt["floor"]["check"][k] for k in ("rhs", "var_f", "var_tangent")) < 1e-12
     assert {"date", "machine", "load", "command"} <= set(data)
+
+
+def _attractor_cube(att, k, lle, se, method):
+    """A (speed, clearance) cube of attractor variables on 5 speeds x 1 clearance."""
+    import numpy as np
+    import xarray as xr
+
+    dims = ("speed", "clearance")
+    col = lambda v, dtype=float: (dims, np.asarray(v, dtype)[:, None])
+    return xr.Dataset({"attractor": col(att, int), "period": col(k, int), "lle": col(lle), "lle_stderr": col(se),
+                       "lle_method": col(method, int), "forcing_period": ("speed", np.full(5, 0.01))},
+                      coords={"speed": [10.0, 10.1, 10.2, 10.3, 10.4], "clearance": [19e-6]})
+
+
+def test_attractor_accuracy_counts_what_differs():
+    """workflows.attractor_accuracy on a hand-made pair: one class change next to a change of the
+    reference attractor (near), one far from any (3 grid speeds from the only change), one
+    period change; exponents by the three rules (derived: ln|lambda| = lle k T to 1e-5, derived
+    vs integrated 3 se or 1e-3, both integrated 3 combined se)."""
+    from rotorkernels import attractor as at
+    from workflows import attractor_accuracy as acc
+
+    P, C, Q = at.PERIODIC, at.CHAOTIC, at.QUASI_PERIODIC
+    ref = _attractor_cube([P, P, P, P, C], [1, 1, 1, 1, 0], [-5.0, -5.0, -5.0, -5.0, 40.0],
+                          [0, 0, 0, 0, 2.0], [1, 1, 1, 1, 0])
+    fast = _attractor_cube([Q, P, P, P, C], [0, 1, 2, 1, 0], [0.1, -5.0, -5.0 + 1.1e-3, -5.0, 46.5],
+                           [0.1, 0, 0, 0, 2.0], [0, 1, 1, 1, 0])
+    cmp = acc.compare(fast, ref)
+    assert cmp["classes"]["periodic"] == {"points": 4, "disagree": 1, "near": 0}
+    assert cmp["classes"]["chaotic"] == {"points": 1, "disagree": 0, "near": 0}
+    assert [(d["speed"], d["reference"], d["fast"], d["near"]) for d in cmp["differences"]] == [
+        (10.0, "period 1", "quasi periodic", False), (10.2, "period 1", "period 2", True)]
+    assert (cmp["periodic_both"], cmp["period_agree"]) == (3, 2)
+    # 46.5 vs 40 +- 2 and 2: 6.5 <= 3 x 2.83; 10.2 Hz: 1.1e-3 1/s x T 0.01 s = 1.1e-5 > 1e-5
+    assert cmp["exponents"] == {"both derived": {"points": 3, "agree": 2},
+                                "derived vs integrated": {"points": 1, "agree": 0},
+                                "both integrated": {"points": 1, "agree": 1}}
+    assert "| 10.0 | 19.0 | period 1 | quasi periodic | no |" in acc.markdown(cmp)
+
+
+def test_shipped_attractor_cost_writeup_is_its_json_rendered():
+    from workflows import attractor_cost
+
+    res = json.loads((DOCS / "attractor_cost.json").read_text())
+    assert attractor_cost.report(res) == (DOCS / "attractor_cost.md").read_text()

@@ -44,12 +44,15 @@ def test_analysis_keys_are_validated():
     assert cfg.data["analysis"] == {
         "floquet": True, "attractor": True, "derive_when_stable": True, "sweep_direction": "up",
         "transient_periods": 200, "poincare_samples": 128, "max_period": 32,
-        "lyapunov_max_periods": 2000}
+        "lyapunov_max_periods": 2000, "lyapunov_rtol": 0.02, "stop_when_settled": True}
     bad = {
         'sweep_direction = "sideways"': "analysis.sweep_direction",
         "poincare_samples = 64": "analysis.poincare_samples: must be >= 4 x analysis.max_period",
         "max_period = 0": "analysis.max_period",
         "lyapunov_max_periods = 5": "analysis.lyapunov_max_periods",
+        "lyapunov_rtol = 0": "analysis.lyapunov_rtol",
+        "lyapunov_rtol = 1.5": "analysis.lyapunov_rtol",
+        'stop_when_settled = "yes"': "analysis.stop_when_settled",
     }
     for line, message in bad.items():
         with pytest.raises(config.ConfigError, match=message.replace(".", r"\.")):
@@ -83,6 +86,22 @@ def test_derived_exponents_of_stable_points_match_the_integrated_ones():
         np.testing.assert_allclose(run["lyapunov_exponents"].sum(axis=1), -300.0, rtol=1e-6)
     # the section of a stable period-1 attractor is the orbit's point
     np.testing.assert_allclose(fast["poincare_x"], np.repeat(fast["orbit_state"][:, :1] * 1e-6, 128, axis=1))
+
+
+def test_lyapunov_run_stops_at_the_scenes_tolerance():
+    """Chaos at 30 Hz, 19 um: a run stopped at lyapunov_rtol = 0.1 against one held to 0.01
+    (it runs to its 2000-period cap): fewer periods, a standard error within the tolerance, the
+    same class, and the exponents within 3 combined standard errors (block estimates of the
+    statistical error of each run)."""
+    runs = {}
+    for rtol in (0.1, 0.01):
+        cfg = scene(30.0, 30.0, 1.0, "19.0e-6", f"lyapunov_rtol = {rtol}\nmax_period = 8\npoincare_samples = 32")
+        runs[rtol] = compute.solve_segment(cfg.data, points(cfg))
+    fast, long = runs[0.1], runs[0.01]
+    assert fast["attractor"][0] == long["attractor"][0] == at.CHAOTIC
+    assert 300 <= fast["lyapunov_periods"][0] < long["lyapunov_periods"][0]
+    assert fast["lle_stderr"][0] <= 0.1 * fast["lle"][0]
+    assert abs(fast["lle"][0] - long["lle"][0]) <= 3 * np.hypot(fast["lle_stderr"][0], long["lle_stderr"][0])
 
 
 def test_up_and_down_sweeps_expose_coexisting_attractors():

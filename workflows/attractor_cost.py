@@ -1,49 +1,86 @@
-"""What the attractor diagnostics cost on the Fig. 13 scene, and what 'derive when stable' saves.
+"""What the attractor diagnostics cost on the Fig. 13 scene, what each shortcut saves, and what
+it costs in accuracy (`make bench-attractor`).
 
-    python -m workflows.attractor_cost                    # Fig. 13 at 1 Hz (1205 points), ~3 min
-    python -m workflows.attractor_cost --speed-step 0.1   # the full 12005-point grid
+    python -m workflows.attractor_cost                    # the full Fig. 13 grid (12005 points) and the cascade
+    python -m workflows.attractor_cost --speed-step 0.5 --cascade-step 0.5   # quicker (2405 + 89 points)
+    python -m workflows.attractor_cost --render-only      # the markdown again from the JSON
+    python -m workflows.attractor_cost --compare-only     # the accuracy tables again from the cubes in build/
 
-Runs configs/bai2006_fig13.toml three times on a local cluster: orbits only, attractor
-diagnostics with the shortcut (the shipped scene), and without it (a Lyapunov run at every
-point). Writes docs/benchmarks/attractor_cost.md and .json: wall time, summed per-point compute
-time by attractor class, the saving, and how well the derived exponents agree with the
-integrated ones on the same points.
+Runs on a local cluster (one process per worker), in this order:
+- Fig. 13 (configs/bai2006_fig13.toml): orbits only; the reference (no early stop of the
+  transient, Lyapunov runs to a 2 % standard error or the cap: the diagnostics before these
+  shortcuts); the reference again with one more transient period (its noise floor: how often
+  two equally long runs from slightly different states disagree); early stop of the transient
+  only; the scene as shipped (early stop and the scene's lyapunov_rtol); with
+  --lyapunov-everywhere also a Lyapunov run at every point (no 'derive when stable').
+- the cascade (configs/bai2006_cascade.toml, swept up and down): reference, its noise floor, as
+  shipped, and as shipped with the Fig. 13 scene's lyapunov_rtol.
+Writes docs/benchmarks/attractor_cost.{json,md}: wall and CPU time of each run, summed point
+time per attractor class, and each fast run's agreement with the reference
+(workflows.attractor_accuracy).
 """
 import argparse
 import json
-import os
-import platform
 import re
+import resource
 import time
 from pathlib import Path
 
-import numpy as np
+from pipeline import config, cube, sweep, warmup
+from workflows import attractor_accuracy as acc
+from workflows.bench import render
+from workflows.bench.common import DOCS, ROOT, add_render_options, log, loadavg, provenance
 
-from pipeline import config, cube, sweep
+FIG13 = ROOT / "configs" / "bai2006_fig13.toml"
+CASCADE = ROOT / "configs" / "bai2006_cascade.toml"
+WORK = ROOT / "build" / "attractor_cost"           # the runs' cubes (what --compare-only reads)
+# the diagnostics without this change's shortcuts (transient to its full length, 2 % Lyapunov stop)
+REFERENCE = {"attractor": True, "stop_when_settled": False, "lyapunov_rtol": 0.02}
+# the reference again from slightly different states (every transient one period longer): how
+# far two equally long runs disagree where the attractor depends on where a run starts
+AGAIN = ("reference, one more transient period", {**REFERENCE, "transient_periods": 201})
+FIG13_RUNS = {
+    "orbits_only": ("orbits + Floquet only", {"attractor": False}),
+    "reference": ("+ attractor, reference (full transients, Lyapunov to 2 % or the cap)", REFERENCE),
+    "again": AGAIN,
+    "settle": ("+ attractor, transient stopped when settled", {**REFERENCE, "stop_when_settled": True}),
+    "fast": ("+ attractor, as shipped (settled stop + the scene's lyapunov_rtol)", {"attractor": True}),
+}
+EVERYWHERE = ("+ attractor, Lyapunov run everywhere (no derive when stable)",
+              {**REFERENCE, "derive_when_stable": False})
+# the cascade as shipped, and with the Fig. 13 scene's Lyapunov tolerance (its exponents are drawn)
+CASCADE_RUNS = {"reference": ("reference", REFERENCE), "again": AGAIN, "fast": ("as shipped", {}),
+                "fig13_rtol": ("as shipped, with the Fig. 13 scene's lyapunov_rtol", {"lyapunov_rtol": None})}
 
-ROOT = Path(__file__).resolve().parents[1]
-SCENE = ROOT / "configs" / "bai2006_fig13.toml"
+
+def scene(path, overrides, speed_step=None):
+    """The scene at `path` with [analysis] keys replaced by `overrides` (and another speed step)."""
+    text = path.read_text()
+    if speed_step is not None:
+        text = re.sub(r"step = [0-9.]+\}", f"step = {speed_step}}}", text, count=1)
+    for key in overrides:
+        text = re.sub(rf"(?m)^{key}\s*=.*$", "", text)
+    extra = "".join(f"{k} = {json.dumps(v)}\n" for k, v in overrides.items())
+    text = text.replace("[analysis]\n", f"[analysis]\n{extra}", 1)
+    return config.parse_config(text, path=f"{path.name} {overrides}", allow_large=True)
 
 
-def scene(speed_step, analysis):
-    """The Fig. 13 scene at another speed step, with analysis = None (orbits only) or the value
-    of derive_when_stable."""
-    text = SCENE.read_text().replace("step = 0.1}", f"step = {speed_step}}}")
-    text = re.sub(r"(?m)^(attractor|derive_when_stable)\s*=.*$", "", text)
-    extra = "attractor = false" if analysis is None else f"attractor = true\nderive_when_stable = {analysis}"
-    text = text.replace("[analysis]\n", f"[analysis]\n{extra}\n", 1)
-    return config.parse_config(text, path=f"{SCENE.name} (speed step {speed_step} Hz)", allow_large=True)
+def _cpu():
+    """CPU seconds of this process and its finished children (the cluster's workers)."""
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 def timed_run(cfg, path, workers):
-    t0 = time.perf_counter()
-    sweep.run(cfg, path, workers=workers, overwrite=True, progress=True)
-    return time.perf_counter() - t0, cube.open_cube(path).load()
+    load, cpu0, t0 = loadavg(), _cpu(), time.perf_counter()
+    sweep.run(cfg, path, workers=workers, overwrite=True, progress=False)
+    wall, cpu = time.perf_counter() - t0, _cpu() - cpu0
+    return {"wall_s": wall, "cpu_s": cpu, "load_start": load}, cube.open_cube(path).load()
 
 
-def classes(ds):
+def classes(ds, suffix=""):
     """Point masks by what the point turned out to be."""
-    att, k, stable = ds["attractor"].values, ds["period"].values, ds["stable"].values
+    att, k, stable = ds["attractor" + suffix].values, ds["period" + suffix].values, ds["stable"].values
     return {
         "stable period-1 orbit": (stable == 1) & (att == 1) & (k == 1),
         "period k > 1": (att == 1) & (k > 1),
@@ -52,91 +89,142 @@ def classes(ds):
         "quasi-periodic": att == 2,
         "chaotic": att == 3,
         "diverged": att == 4,
+        "not settled": att == 5,
     }
 
 
-def summarize(wall, ds):
+def summarize(timing, ds):
     t = ds["compute_time"].values
-    rows = {name: {"points": int(m.sum()), "compute_s": float(t[m].sum()),
-                   "mean_ms": float(1e3 * t[m].mean()) if m.any() else None}
-            for name, m in classes(ds).items()}
-    return {"wall_s": wall, "points": int(t.size), "compute_s": float(t.sum()),
-            "mean_ms_per_point": float(1e3 * t.mean()), "classes": rows}
+    out = {**timing, "points": int(t.size), "compute_s": float(t.sum()), "mean_ms_per_point": float(1e3 * t.mean())}
+    if "attractor" in ds:
+        out["classes"] = {name: {"points": int(m.sum()), "compute_s": float(t[m].sum()),
+                                 "mean_ms": float(1e3 * t[m].mean()) if m.any() else None}
+                          for name, m in classes(ds).items()}
+    return out
 
 
-def agreement(fast, slow):
-    """Derived vs integrated largest exponent where both runs found the stable period-1 orbit."""
-    m = (fast["lle_method"].values == 1) & (slow["lle_method"].values == 0) & (fast["period"].values == 1)
-    a, b, se = fast["lle"].values[m], slow["lle"].values[m], slow["lle_stderr"].values[m]
-    rel = np.abs(a - b) / np.abs(a)
-    return {"points": int(m.sum()), "median_rel_diff": float(np.median(rel)),
-            "max_rel_diff": float(rel.max()), "within_1e-3_or_3_stderr": float(np.mean(
-                (rel <= 1e-3) | (np.abs(a - b) <= 3 * se)))}
+def _cube(scene_name, run):
+    return WORK / f"{scene_name}_{run}.nc"
 
 
-def report(res, args):
-    base, fast, slow = res["orbits_only"], res["shortcut"], res["no_shortcut"]
-    lines = [
-        "# Cost of the attractor diagnostics (Fig. 13 scene)",
-        "",
-        f"Generated by `python -m workflows.attractor_cost --speed-step {args.speed_step}` "
-        f"({res['points']} points: speed 10-250 Hz in {args.speed_step} Hz steps x 5 clearances, "
-        f"{args.workers} workers, {platform.processor() or platform.machine()}, "
-        f"{os.cpu_count()} cores, load average at start {res['load_start']}).",
-        "",
-        "| run | wall [s] | summed point time [s] | mean per point [ms] |",
-        "| --- | --- | --- | --- |",
-    ]
-    for name, r in (("orbits + Floquet only", base), ("+ attractor, derive when stable (default)", fast),
-                    ("+ attractor, Lyapunov run everywhere", slow)):
-        lines.append(f"| {name} | {r['wall_s']:.1f} | {r['compute_s']:.1f} | {r['mean_ms_per_point']:.1f} |")
-    saving = slow["compute_s"] / fast["compute_s"]
-    lines += ["", f"**The shortcut saves {saving:.1f}x** in summed point time "
-                  f"({slow['wall_s'] / fast['wall_s']:.1f}x in wall time).", "",
-              "Per class (with the shortcut / without):", "",
-              "| class | points | mean per point [ms] | summed [s] |", "| --- | --- | --- | --- |"]
-    for name, r in fast["classes"].items():
-        s = slow["classes"][name]
-        if r["points"] or s["points"]:
-            fm = f"{r['mean_ms']:.1f}" if r["mean_ms"] is not None else "-"
-            sm = f"{s['mean_ms']:.1f}" if s["mean_ms"] is not None else "-"
-            lines.append(f"| {name} | {r['points']} / {s['points']} | {fm} / {sm} | "
-                         f"{r['compute_s']:.1f} / {s['compute_s']:.1f} |")
-    ag = res["agreement"]
-    lines += ["", f"Derived vs integrated largest exponent on the {ag['points']} points where both runs "
-                  f"found the stable period-1 orbit: median relative difference {ag['median_rel_diff']:.1e}, "
-                  f"max {ag['max_rel_diff']:.1e}; {100 * ag['within_1e-3_or_3_stderr']:.1f} % agree to "
-                  "1e-3 relative or within 3 standard errors of the integrated value (whose runs stop at "
-                  "a 2 % standard error).", ""]
-    return "\n".join(lines)
+def measure(args):
+    WORK.mkdir(parents=True, exist_ok=True)
+    log(f"compiling (or loading) the kernels: {warmup.compile_model(scene(FIG13, {}).model):.1f} s, not timed")
+    runs = dict(FIG13_RUNS, **({"everywhere": EVERYWHERE} if args.lyapunov_everywhere else {}))
+    res = {"fig13": {}, "cascade": {}}
+    for name, (_, over) in runs.items():
+        log(f"Fig. 13: {name}")
+        timing, ds = timed_run(scene(FIG13, over, args.speed_step), _cube("fig13", name), args.workers)
+        res["fig13"][name] = summarize(timing, ds)
+    rtol = scene(FIG13, {}).data["analysis"]["lyapunov_rtol"]
+    for name, (_, over) in CASCADE_RUNS.items():
+        log(f"cascade: {name}")
+        over = {k: rtol if v is None else v for k, v in over.items()}
+        timing, ds = timed_run(scene(CASCADE, over, args.cascade_step), _cube("cascade", name), args.workers)
+        res["cascade"][name] = summarize(timing, ds)
+    res["settings"] = {"speed_step": args.speed_step, "cascade_step": args.cascade_step, "workers": args.workers,
+                       "fig13_lyapunov_rtol": rtol,
+                       "cascade_lyapunov_rtol": scene(CASCADE, {}).data["analysis"]["lyapunov_rtol"]}
+    return res
+
+
+def accuracy(res):
+    """Each run's agreement with the reference, from the cubes the runs left in build/."""
+    def load(scene_name, run):
+        return cube.open_cube(_cube(scene_name, run)).load()
+    ref = load("fig13", "reference")
+    res["fig13_accuracy"] = {name: acc.compare(load("fig13", name), ref)
+                             for name in res["fig13"] if name not in ("orbits_only", "reference")}
+    ref = load("cascade", "reference")
+    res["cascade_accuracy"] = {}
+    for name in (n for n in res["cascade"] if n != "reference"):
+        ds = load("cascade", name)
+        for direction, suffix in (("up", ""), ("down", "_down")):
+            res["cascade_accuracy"][f"{name}, sweep {direction}"] = acc.compare(ds, ref, suffix)
+    return res
+
+
+def _run_table(runs, labels):
+    base = runs.get("orbits_only")
+    rows = []
+    for name, r in runs.items():
+        ratio = f"{r['wall_s'] / base['wall_s']:.1f}x" if base else "-"
+        rows.append([labels[name], f"{r['wall_s']:.1f}", f"{r['cpu_s']:.1f}", f"{r['compute_s']:.1f}",
+                     f"{r['mean_ms_per_point']:.1f}", ratio, r["load_start"]])
+    return render.table(["run", "wall [s]", "CPU [s]", "summed point time [s]", "mean per point [ms]",
+                         "wall / orbits only", "load at start"], rows)
+
+
+def _class_table(runs, names):
+    rows = []
+    for cls in runs[names[0]]["classes"]:
+        cells = [runs[n]["classes"][cls] for n in names]
+        if any(c["points"] for c in cells):
+            rows.append([cls] + [f"{c['points']} / {c['mean_ms']:.1f} / {c['compute_s']:.1f}" if c["points"] else "0"
+                                 for c in cells])
+    return render.table(["class"] + [f"{n}: points / ms per point / summed s" for n in names], rows)
+
+
+def report(res):
+    fig, casc = res["fig13"], res["cascade"]
+    labels = {name: label for name, (label, _) in {**FIG13_RUNS, "everywhere": EVERYWHERE}.items()}
+    attractor_runs = [n for n in fig if n != "orbits_only"]
+    accuracy = "\n\n".join(f"**{labels[name]}** against the reference:\n\n{acc.markdown(c)}"
+                           for name, c in res["fig13_accuracy"].items())
+    cascade_labels = {n: label for n, (label, _) in CASCADE_RUNS.items()}
+
+    def cascade_label(key):
+        name, direction = key.split(", ")
+        return f"{cascade_labels[name]}, {direction}"
+    cascade_accuracy = "\n\n".join(f"**{cascade_label(key)}** against the reference:\n\n{acc.markdown(c)}"
+                                     for key, c in res["cascade_accuracy"].items())
+    fast, base = fig["fast"], fig["orbits_only"]
+    return render.fill(
+        "attractor_cost", command=res["provenance"]["command"], date=res["provenance"]["date"],
+        points=fig["orbits_only"]["points"], speed_step=res["settings"]["speed_step"],
+        workers=res["settings"]["workers"], machine=_machine(res), load=res["provenance"]["load"],
+        rtol=res["settings"]["fig13_lyapunov_rtol"], cascade_rtol=res["settings"]["cascade_lyapunov_rtol"],
+        runs=_run_table(fig, labels), fast_wall=f"{fast['wall_s']:.1f}", ratio=f"{fast['wall_s'] / base['wall_s']:.1f}",
+        fast_cpu=f"{fast['cpu_s']:.1f}", cpu_ratio=f"{fast['cpu_s'] / base['cpu_s']:.1f}",
+        ref_cpu=f"{fig['reference']['cpu_s']:.1f}",
+        saving=f"{fig['reference']['compute_s'] / fast['compute_s']:.1f}",
+        classes=_class_table(fig, attractor_runs), accuracy=accuracy,
+        summary=acc.summary(res["fig13_accuracy"], labels.get),
+        cascade_summary=acc.summary(res["cascade_accuracy"], cascade_label),
+        cascade_runs=_run_table(casc, cascade_labels),
+        cascade_classes=_class_table(casc, list(casc)), cascade_accuracy=cascade_accuracy)
+
+
+def _machine(res):
+    m = res["provenance"]["machine"]
+    return (f"{m['cpu']}, {m['cores']} cores ({m['usable_cores']} usable), Python {m['python']}, "
+            f"numpy {m['numpy']}, scipy {m['scipy']}, numba {m['numba']}")
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--speed-step", type=float, default=1.0)
+    ap.add_argument("--speed-step", type=float, default=0.1, help="Fig. 13 speed step [Hz] (0.1: the full grid)")
+    ap.add_argument("--cascade-step", type=float, default=0.1, help="cascade speed step [Hz] (0.1: the scene's)")
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--out", default=str(ROOT / "docs" / "benchmarks"))
+    ap.add_argument("--lyapunov-everywhere", action="store_true",
+                    help="also run Fig. 13 with a Lyapunov run at every point (long: ~15 min on the full grid)")
+    ap.add_argument("--out", type=Path, default=DOCS)
+    add_render_options(ap, "attractor_cost.md", "attractor_cost.json", WORK)
+    ap.add_argument("--compare-only", action="store_true",
+                    help="run nothing: the accuracy tables again from the JSON's timings and the cubes in build/")
     args = ap.parse_args(argv)
-    work = ROOT / "build" / "attractor_cost"
-    work.mkdir(parents=True, exist_ok=True)
-    res = {"load_start": [round(x, 2) for x in os.getloadavg()]}
-    runs = {"orbits_only": None, "shortcut": "true", "no_shortcut": "false"}
-    data = {}
-    for name, analysis in runs.items():
-        cfg = scene(args.speed_step, analysis)
-        wall, ds = timed_run(cfg, work / f"{name}.nc", args.workers)
-        res[name] = summarize(wall, ds) if "attractor" in ds else {
-            "wall_s": wall, "compute_s": float(ds["compute_time"].sum()),
-            "mean_ms_per_point": float(1e3 * ds["compute_time"].mean()), "points": int(ds["compute_time"].size)}
-        data[name] = ds
-    res["points"] = res["orbits_only"]["points"]
-    res["agreement"] = agreement(data["shortcut"], data["no_shortcut"])
-    res["load_end"] = [round(x, 2) for x in os.getloadavg()]
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "attractor_cost.json").write_text(json.dumps(res, indent=2))
-    (out / "attractor_cost.md").write_text(report(res, args))
-    print(report(res, args))
+    if args.render_only or args.compare_only:
+        res = json.loads(((args.data or args.out) / "attractor_cost.json").read_text())
+    else:
+        load = loadavg()
+        res = measure(args)
+        res["provenance"] = provenance(load, "workflows.attractor_cost", argv)
+    if not args.render_only:
+        res = accuracy(res)
+        args.out.mkdir(parents=True, exist_ok=True)
+        (args.out / "attractor_cost.json").write_text(json.dumps(res, indent=2))
+    (args.out / "attractor_cost.md").write_text(report(res))
+    print(report(res))
 
 
 if __name__ == "__main__":

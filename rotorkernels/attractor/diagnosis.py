@@ -185,10 +185,74 @@ ESCAPES = 2
 ESCAPE_KICK = 1e-3
 
 
+# settle_periodic(): the transient runs in blocks of SETTLE_BLOCK periods; once at least
+# SETTLE_MIN_WINDOW samples are in, the last (up to 4 x max_period) are tested for a period after
+# each block (`detect_period` on their second half: a period-k orbit needs 4 k samples).
+SETTLE_BLOCK = 8
+SETTLE_MIN_WINDOW = 16
+
+
+def settle_periodic(model, u0, p, opts, n_transient, max_period, rel_tol):
+    """The transient, stopped early when the stroboscopic map has settled on a stable periodic
+    orbit: the recent samples repeat with a period k (the `detect_period` test of the full
+    samples), the period-k orbit refined from the last one (`periodic_orbit_of`) converges and
+    is stable. Returns (orbit (k, state, multipliers) or None, state reached, periods used, status).
+    Samples repeating on an unstable orbit (a start next to it: the neighbour's attractor just
+    past a bifurcation) are kicked off it, up to ESCAPES times; a refinement that fails, or
+    another unstable one, ends the testing: the transient then runs its full length, as without
+    this shortcut."""
+    u = np.asarray(u0, float)
+    window = [u]
+    used, testing, kicks = 0, True, 0
+    while used < n_transient:
+        block = min(SETTLE_BLOCK, n_transient - used)
+        samples, status, u = _poincare(model.kernel, u, p, opts, 0, block + 1, 0.0, 0.0)
+        used += block
+        if status != ig.STATUS_OK:
+            return None, u, used, int(status)
+        if not testing:
+            continue
+        window = (window + list(samples[1:]))[-4 * max_period:]
+        if len(window) < SETTLE_MIN_WINDOW:
+            continue
+        k = detect_period(np.array(window), max_period, rel_tol)
+        if k == 0:
+            continue
+        orbit = periodic_orbit_of(model, u, p, opts, k, rel_tol)
+        if orbit is not None and np.abs(orbit[2]).max() < 1.0:
+            return orbit, u, used, ig.STATUS_OK
+        # repeating samples on an unstable orbit: a start too close to it (as in diagnose),
+        # kicked off it; a refinement that fails ends the testing
+        testing = orbit is not None and kicks < ESCAPES
+        if testing:
+            kicks += 1
+            u = u + ESCAPE_KICK * max(1.0, float(np.abs(u).max()))
+            window = [u]
+    return None, u, used, ig.STATUS_OK
+
+
+def _orbit_samples(model, orbit_state, p, opts, k, n_samples):
+    """n_samples stroboscopic samples on a period-k orbit, the last one `orbit_state` (what the
+    sampled trajectory would show once settled onto it, without integrating it)."""
+    points, _, _ = _poincare(model.kernel, np.asarray(orbit_state, float), p, opts, 0, k, 0.0, 0.0)
+    return points[(np.arange(n_samples) - (n_samples - 1)) % k]
+
+
+def _on_settled_orbit(model, orbit, p, period, opts, n_samples, reached):
+    """The Attractor of a settled stop. Its end state is the state the transient reached, not the
+    refined orbit: a neighbour past a bifurcation started exactly on this (then unstable) orbit
+    would leave it only after many periods; the full transient's end state has the same
+    residual offset."""
+    k, state, lams = orbit
+    expo = exponents_of_orbit(lams, k, period)
+    return Attractor(PERIODIC, k, float(expo[0]), 0.0, _orbit_samples(model, state, p, opts, k, n_samples),
+                     np.asarray(reached, float).copy(), ig.STATUS_OK, 0.0, expo, lams, True)
+
+
 def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_period=32,
              period_rtol=None, orbit_lle=True, lyapunov_always=False, stable_orbit=None,
              renorm_periods=1.0, max_periods=2000, n_blocks=10, rtol_stop=0.02, min_periods=None,
-             atol_stop=1e-4, align_periods=20.0, weighted=True, periodic=True):
+             atol_stop=1e-4, align_periods=20.0, weighted=True, periodic=True, settle_early=False):
     """One parameter point from u0 at tau = 0: Poincare samples after a transient, their period
     (tolerance `default_period_rtol(opts)` unless given), the largest exponent, and `classify`.
 
@@ -199,6 +263,9 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
     stable_orbit = (state, multipliers) of a stable period-1 orbit found by shooting: the
     transient stops as soon as the state reaches it (`settle_on_orbit`), and the point is that
     orbit (samples = its state) with derived exponents -- the 'derive when stable' shortcut.
+    settle_early: the transient stops once the map has settled on a stable period-k orbit
+    (`settle_periodic`); the point is that orbit, its samples the orbit's k points repeated,
+    derived exponents.
     Samples that repeat on an unstable orbit (a start on or next to it) are retaken after a kick
     off it (ESCAPES). Otherwise (no period, the shooting fails, or lyapunov_always) a Lyapunov
     run starts where the samples end (no second transient). Returns an Attractor: code, period k, lle and lle_stderr
@@ -220,6 +287,14 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
             return _on_stable_orbit(model, state, lams, period, int(n_samples), state.copy())
         n_transient -= used
     nan = np.full(model.n_state, np.nan)
+    if settle_early and periodic and orbit_lle and not lyapunov_always:
+        orbit, u0, used, status = settle_periodic(model, u0, p, opts, int(n_transient), max_period, period_rtol)
+        if status != ig.STATUS_OK:
+            return Attractor(failure_class(status), 0, np.nan, np.nan, np.full((int(n_samples), model.n_state), np.nan),
+                             u0, status, 0.0, nan, nan * (1 + 1j), False)
+        if orbit is not None:
+            return _on_settled_orbit(model, orbit, p, period, opts, int(n_samples), u0)
+        n_transient -= used
     for attempt in range(1 + ESCAPES):
         samples, status, end = _poincare(model.kernel, u0, p, opts, int(n_transient), int(n_samples), 0.0, clock)
         if status != ig.STATUS_OK:
