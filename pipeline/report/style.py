@@ -99,8 +99,9 @@ def grid_opts(k, n, backend, columns=None):
     return show_x, show_y
 
 
-def layout(hv, panels, backend, columns, title, fig_inches=None):
-    """One panel as is, several as a layout with `columns` columns and an overall title."""
+def layout(hv, panels, backend, columns, title, fig_inches=None, hspace=0.25):
+    """One panel as is, several as a layout with `columns` columns and an overall title; hspace:
+    matplotlib's gap between columns (wider where each panel has its own colour bar)."""
     if len(panels) == 1:
         obj = panels[0]
         if backend == "matplotlib" and fig_inches:
@@ -110,5 +111,5 @@ def layout(hv, panels, backend, columns, title, fig_inches=None):
     lay = hv.Layout(panels).cols(columns)
     if backend == "bokeh":
         return lay.opts(title=title, shared_axes=False, backend=backend)
-    return lay.opts(title=title, sublabel_format="", fig_inches=fig_inches, hspace=0.25,
+    return lay.opts(title=title, sublabel_format="", fig_inches=fig_inches, hspace=hspace,
                     vspace=0.35, fontsize={"title": 13}, backend=backend)

@@ -100,6 +100,10 @@ def _ticks(ds, axis):
     return [(i, f"{v * factor:.4g}") for i, v in enumerate(ds[axis].values)]
 
 
+# 1536 px at the report's 120 dpi: a PNG a page shows without scaling (three 5.6-inch panels would be 2016)
+MAX_WIDTH_INCHES = 12.8
+
+
 def _heat_figure(ds, backend, values, head, label, fmt_cell):
     hv = style.holoviews()
     plan = atlas_plan(ds)
@@ -111,7 +115,9 @@ def _heat_figure(ds, backend, values, head, label, fmt_cell):
         panels = [p.opts(aspect=1.25, backend=backend, **({"ylabel": ""} if k % columns else {}))
                   for k, p in enumerate(panels)]
     rows = -(-len(panels) // columns)
-    return style.layout(hv, panels, backend, columns, head, fig_inches=(5.6 * columns, 3.9 * rows + 0.6))
+    width = min(5.6 * columns, MAX_WIDTH_INCHES)
+    return style.layout(hv, panels, backend, columns, head, hspace=0.6,
+                        fig_inches=(width, 3.9 * width / (5.6 * columns) * rows + 0.6))
 
 
 def _cell(decimals):
