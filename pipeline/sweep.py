@@ -99,11 +99,11 @@ def compute_chunk(data, chunk):
 
 
 class Progress:
-    """Points done, rate and ETA on stderr (one updating line on a terminal, else a line per
-    ~5% of the work)."""
+    """Units of work done (points, unless `unit` says otherwise), rate and ETA on stderr (one
+    updating line on a terminal, else a line per ~5% of the work)."""
 
-    def __init__(self, total, done=0, stream=None):
-        self.total, self.done, self.stream = total, done, stream or sys.stderr
+    def __init__(self, total, done=0, stream=None, unit="points"):
+        self.total, self.done, self.stream, self.unit = total, done, stream or sys.stderr, unit
         self.tty = self.stream.isatty()
         self.last_reported = -1
         self.restart()
@@ -119,7 +119,7 @@ class Progress:
         eta = (self.total - self.done) / rate if rate > 0 else float("nan")
         frac = self.done / self.total if self.total else 1.0
         bar = "#" * int(30 * frac) + "." * (30 - int(30 * frac))
-        line = (f"[{bar}] {self.done}/{self.total} points  {rate:7.1f} pts/s  "
+        line = (f"[{bar}] {self.done}/{self.total} {self.unit}  {rate:7.1f} {self.unit}/s  "
                 f"ETA {_fmt_seconds(eta)}")
         step = int(frac * 20)
         if self.tty:
@@ -258,7 +258,7 @@ def _run_locked(cfg, output, parts, workers, scheduler, chunk_points, stream):
         say("refining the stability boundaries and assembling the cube")
         ds = cube.assemble(cfg.axes, _fixed_coords(cfg), cube.iter_parts(parts), _provenance(cfg),
                            n_multipliers=compute.model_of(cfg.data).n_state, config_hash=config_hash)
-        ds = boundaries.add_boundary_table(cfg.data, ds, _map_lines_on(client) if client else None)
+        ds = boundaries.add_boundary_table(cfg.data, ds, _map_lines_on(client, stream) if client else None)
     finally:
         if client is not None:
             _close(client, cluster)
@@ -268,22 +268,26 @@ def _run_locked(cfg, output, parts, workers, scheduler, chunk_points, stream):
     return path
 
 
-def _map_lines_on(client):
+def _map_lines_on(client, stream=None):
     """boundaries' map_lines on the sweep's workers: one task per line (~0.25 s of refinement
-    each on the atlas, 320 lines: 80 s serial in the driver). A line whose task keeps killing
-    workers is refined here instead."""
+    each on the atlas, 320 lines: 80 s serial in the driver), with a progress line on `stream`
+    (the atlas's table takes half a minute). A line whose task keeps killing workers is refined
+    here instead."""
     from dask.distributed import KilledWorker
 
     def map_lines(data, tasks):
         if not client.scheduler_info()["workers"]:      # an external cluster scaled to nothing
             return [boundaries.line_rows(data, where, line) for where, line in tasks]
         futures = [client.submit(boundaries.line_rows, data, where, line, pure=False) for where, line in tasks]
+        bar = Progress(len(tasks), stream=stream, unit="boundary lines") if stream and tasks else None
         out = []
         for (where, line), future in zip(tasks, futures):
             try:
                 out.append(future.result())
             except KilledWorker:
                 out.append(boundaries.line_rows(data, where, line))
+            if bar:
+                bar.update(1)
         return out
     return map_lines
 

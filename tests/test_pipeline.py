@@ -165,6 +165,9 @@ def test_run_prints_its_phases_before_the_progress_lines(tmp_path, capsys):
     assert len(phases) == len(PHASES) and all(p[len(sweep.PHASE):].startswith(w) for p, w in zip(phases, PHASES)), err
     progress = [i for i, line in enumerate(lines) if " points " in line and line.startswith("[")]
     assert progress and lines.index(phases[4]) < progress[0] < lines.index(phases[5])
+    # the boundary table's line tasks report their own progress within their phase
+    refining = [i for i, line in enumerate(lines) if " boundary lines " in line and line.startswith("[")]
+    assert refining and lines.index(phases[5]) < refining[0] and refining[-1] < lines.index(phases[6])
     assert "\r" not in err                         # not a terminal: whole lines only
 
 
