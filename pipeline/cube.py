@@ -4,6 +4,7 @@ plus the part files a sweep writes per finished chunk and assembles at the end.
 The schema (axes, variables, dtypes, attrs, flags) lives in pipeline.schema; this module only
 applies it.
 """
+import contextlib
 import errno
 import json
 from pathlib import Path
@@ -290,11 +291,8 @@ def part_metas(parts_dir):
     """The meta dict of every part file, in chunk-id order, without reading their arrays."""
     metas = []
     for path in _part_paths(parts_dir):
-        try:
-            with np.load(path, allow_pickle=False) as f:
-                metas.append(json.loads(str(f["meta"])))
-        except (OSError, ValueError, KeyError) as exc:
-            raise CubeError(f"{path}: unreadable part file ({exc}); delete it to recompute its points") from None
+        with _open_part(path) as f:
+            metas.append(json.loads(str(f["meta"])))
     return metas
 
 
@@ -303,13 +301,21 @@ def _part_paths(parts_dir):
     return sorted(parts_dir.glob("[!.]*.npz")) if parts_dir.is_dir() else []
 
 
-def _read_part(path):
+@contextlib.contextmanager
+def _open_part(path):
+    """np.load of a part file; one that cannot be read (truncated, not an npz, a key missing)
+    is a CubeError naming it."""
     try:
         with np.load(path, allow_pickle=False) as f:
-            results = {k[len("result_"):]: f[k] for k in f.files if k.startswith("result_")}
-            return path.stem, f["index"], results, json.loads(str(f["meta"]))
+            yield f
     except (OSError, ValueError, KeyError) as exc:
         raise CubeError(f"{path}: unreadable part file ({exc}); delete it to recompute its points") from None
+
+
+def _read_part(path):
+    with _open_part(path) as f:
+        results = {k[len("result_"):]: f[k] for k in f.files if k.startswith("result_")}
+        return path.stem, f["index"], results, json.loads(str(f["meta"]))
 
 
 def assemble(axes, fixed, parts, attrs, n_multipliers, allow_missing=False, config_hash=None):

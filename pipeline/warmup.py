@@ -3,9 +3,10 @@ any: `rotorsweep warmup [MODEL...]`, once in a cluster image or before a sweep f
 
 Kernels are compiled per kernel group (`ModelSpec.group`), so warming one model warms the other
 models of its group, and per integrator (the class of `integrators.settings()`): a scene compiles
-only its own; `rotorsweep warmup` compiles both unless told one (`--integrator`). Each entry point below is compiled for the argument types the Python
-orchestration passes it (`Dispatcher.compile(signature)`, which loads a cached compilation when
-there is one); the values are never used.
+only its own; `rotorsweep warmup` compiles both unless told one (`--integrator`). Each entry point
+below is compiled for the argument types the Python orchestration passes it
+(`Dispatcher.compile(signature)`, which loads a cached compilation when there is one); the values
+are never used.
 
 Numba's cache index is read, extended and rewritten without a lock, and its data files are
 numbered by the index's length: two processes compiling different signatures of one function at
