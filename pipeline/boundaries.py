@@ -12,6 +12,7 @@ Only if the branch shows no such event within a grid step beyond the bracket doe
 method on the grid's natural continuation (rotorkernels.continuation.events) refine it.
 """
 import itertools
+from collections import namedtuple
 
 import numpy as np
 
@@ -28,14 +29,6 @@ _EVENT_TYPE = {arclength.FOLD: floquet.FOLD, arclength.PERIOD_DOUBLING: floquet.
 
 def _others(ds, axis):
     return [a for a in schema.point_axes(ds) if a != axis]
-
-
-def _lines(ds, axis):
-    """(values of the other axes, the cube along `axis`) for each combination of the other axes."""
-    others = _others(ds, axis)
-    for values in itertools.product(*(ds[a].values for a in others)):
-        where = dict(zip(others, (float(v) for v in values)))
-        yield where, (ds.sel(where) if where else ds)
 
 
 def _solver(data, values, axis):
@@ -57,88 +50,157 @@ def _solver(data, values, axis):
     return solve, family
 
 
-def _crossings(line):
-    """Indices i where the orbit is found at i and i+1 and its stability differs."""
-    ok = line["orbit_status"].values == 0
-    stable = line["stable"].values == 1
-    return [i for i in range(len(ok) - 1) if ok[i] and ok[i + 1] and stable[i] != stable[i + 1]]
+# One stability change between grid points i and i + 1 of a line (`line`: the other axes' grid
+# indices): what its refinement reads, a few hundred bytes (shipped to the workers as is).
+Bracket = namedtuple("Bracket", "line i grid stable states lead")
 
 
-# What a line's refinement reads: the grid and these variables (a few kB per line, shipped to a
-# worker as one task per line).
+def brackets(line, grid, status, stable, states, lead, candidates=None):
+    """The Brackets of one line from its per-point arrays (status, stable: ints; states (n, n_state);
+    lead: the leading multiplier), where the orbit is found at i and i + 1 and its stability
+    differs; `candidates`: the i to test (default: all)."""
+    i = np.arange(len(grid) - 1) if candidates is None else np.asarray(candidates, int)
+    ok = (status[i] == 0) & (status[i + 1] == 0)
+    change = ok & ((stable[i] == 1) != (stable[i + 1] == 1))
+    return [Bracket(line, int(k), (float(grid[k]), float(grid[k + 1])),
+                    (int(stable[k]), int(stable[k + 1])), (states[k], states[k + 1]), complex(lead[k + 1]))
+            for k in i[change]]
+
+
+def _lead(real, imag):
+    return real[..., 0] + 1j * imag[..., 0]
+
+
+def _cube_brackets(ds, axis):
+    """(where, Bracket) of every stability change in a cube, lines in grid order."""
+    others = _others(ds, axis)
+    grid = ds[axis].values
+    keep = ds[[v for v in _LINE_VARS if v in ds]].transpose(*others, axis, ...)
+    arrays = {v: keep[v].values for v in keep.data_vars}
+    lead = _lead(arrays["multiplier_real"], arrays["multiplier_imag"])
+    out = []
+    for line in itertools.product(*(range(ds.sizes[a]) for a in others)):
+        where = {a: float(ds[a].values[k]) for a, k in zip(others, line)}
+        out += [(where, b) for b in brackets(line, grid, arrays["orbit_status"][line], arrays["stable"][line],
+                                             arrays["orbit_state"][line], lead[line])]
+    return out
+
+
+# What a line's refinement reads.
 _LINE_VARS = ("orbit_status", "stable", "orbit_state", "multiplier_real", "multiplier_imag")
 
 
-def line_rows(data, where, line):
-    """One dict per stability change on one line (`where`: values of the other axes; `line`: the
-    cube along the continued axis there), refined where possible."""
-    axis = schema.continued_axis(line)
-    solvers = _solver(data, {**compute.fixed_values(data), **where}, axis)
-    grid = line[axis].values
+def refine_brackets(data, axis, items):
+    """The refined row of each (where, Bracket) in items (one solver per line): a worker task."""
+    solvers = {}
     rows = []
-    for i in _crossings(line):
-        row = {**{f"boundary_{k}": v for k, v in where.items()},
-               "boundary_grid_low": grid[i], "boundary_grid_high": grid[i + 1],
-               "boundary_direction": 0 if line["stable"].values[i] == 1 else 1}
-        rows.append({**row, **_refine(solvers, line, axis, i)})
+    for where, bracket in items:
+        key = tuple(sorted(where.items()))
+        if key not in solvers:
+            solvers[key] = _solver(data, {**compute.fixed_values(data), **where}, axis)
+        rows.append(_refine(solvers[key], axis, bracket))
     return rows
 
 
-def line_tasks(ds):
-    """(where, line) per line of the cube, each line holding only what line_rows reads."""
+def boundary_rows(data, ds, map_tasks=None, done=None):
+    """One dict per stability change in the cube, in grid order. done: {(line, i): row} refined
+    already (a sweep refines brackets while it computes); the others are refined one task per
+    line by map_tasks(data, axis, tasks) -> the rows of each task in order (default: here, one
+    after the other; a sweep passes one that spreads them over its Dask workers)."""
     axis = schema.continued_axis(ds)
-    keep = ds[[v for v in _LINE_VARS if v in ds]]
-    return [(where, line.drop_vars([c for c in line.coords if c not in line.dims and c != axis]))
-            for where, line in _lines(keep, axis)]
+    done = dict(done or {})
+    todo = {}
+    for where, b in _cube_brackets(ds, axis):
+        if (b.line, b.i) not in done:
+            todo.setdefault(b.line, []).append((where, b))
+    tasks = list(todo.values())
+    for task, rows in zip(tasks, (map_tasks or _serial)(data, axis, tasks)):
+        done.update({(b.line, b.i): row for (_, b), row in zip(task, rows)})
+    others = _others(ds, axis)
+    return [{**{f"boundary_{a}": float(ds[a].values[k]) for a, k in zip(others, line)}, **done[line, i]}
+            for line, i in sorted(done)]
 
 
-def boundary_rows(data, ds, map_lines=None):
-    """One dict per stability change in the cube, line by line. map_lines(data, tasks) -> the
-    rows of each task in order (default: here, one line after the other; a sweep passes one that
-    spreads the lines over its Dask workers)."""
-    tasks = line_tasks(ds)
-    per_line = (map_lines or _serial)(data, tasks)
-    return [row for rows in per_line for row in rows]
+def _serial(data, axis, tasks):
+    return [refine_brackets(data, axis, task) for task in tasks]
 
 
-def _serial(data, tasks):
-    return [line_rows(data, where, line) for where, line in tasks]
-
-
-def _refine(solvers, line, axis, i):
+def _refine(solvers, axis, bracket):
     solve, family = solvers
-    a, b = float(line[axis].values[i]), float(line[axis].values[i + 1])
+    (a, b), (s_low, _), (u_low, u_high) = bracket.grid, bracket.stable, bracket.states
     name = f"boundary_{axis}"
-    event = _first_event_on_branch(family(b - a), line, axis, i)
+    row = {"boundary_grid_low": a, "boundary_grid_high": b, "boundary_direction": 0 if s_low == 1 else 1}
+    event = _first_event_on_branch(family(b - a), bracket)
     if event is not None:
-        return {name: event.point.lam, "boundary_status": 0, "boundary_type": _EVENT_TYPE[event.kind]}
+        return {**row, name: event.point.lam, "boundary_status": 0, "boundary_type": _EVENT_TYPE[event.kind]}
     try:
-        found = boundary.locate_boundary(solve, a, b, line["orbit_state"].values[i],
-                                         line["orbit_state"].values[i + 1], xtol_rel=XTOL_REL)
+        found = boundary.locate_boundary(solve, a, b, u_low, u_high, xtol_rel=XTOL_REL)
     except boundary.BoundaryError:
-        lead = complex(line["multiplier_real"].values[i + 1, 0], line["multiplier_imag"].values[i + 1, 0])
-        return {name: np.nan, "boundary_status": 1, "boundary_type": floquet.crossing_type(lead)}
-    return {name: found.value, "boundary_status": 0,
+        return {**row, name: np.nan, "boundary_status": 1, "boundary_type": floquet.crossing_type(bracket.lead)}
+    return {**row, name: found.value, "boundary_status": 0,
             "boundary_type": floquet.crossing_type(found.solution.multipliers[0])}
 
 
-def _first_event_on_branch(family, line, axis, i):
-    """The first stability-losing event on the branch of the stable one of grid points i, i + 1,
-    followed towards the other (at most a grid step beyond it); None if there is none."""
-    grid = line[axis].values
-    k, other = (i, i + 1) if line["stable"].values[i] == 1 else (i + 1, i)
-    a, b = float(grid[k]), float(grid[other])
+def _first_event_on_branch(family, bracket):
+    """The first stability-losing event on the branch of the stable end of the bracket, followed
+    towards the other (at most a grid step beyond it); None if there is none."""
+    k = 0 if bracket.stable[0] == 1 else 1
+    a, b = bracket.grid[k], bracket.grid[1 - k]
     span = abs(b - a)
-    branch = arclength.continue_orbit(family, a, line["orbit_state"].values[k],
-                                      (min(a, b) - span, max(a, b) + span), BRANCH_SETTINGS,
-                                      direction=1 if b > a else -1)
+    branch = arclength.continue_orbit(family, a, bracket.states[k], (min(a, b) - span, max(a, b) + span),
+                                      BRANCH_SETTINGS, direction=1 if b > a else -1)
     return next((e for e in branch.events if e.kind in _EVENT_TYPE), None)
 
 
-def add_boundary_table(data, ds, map_lines=None):
-    """ds with the boundary variables (dimension `boundary`, possibly of length 0); map_lines as
-    in boundary_rows."""
-    rows = boundary_rows(data, ds, map_lines)
+class Tracker:
+    """The Brackets of a sweep as its chunks finish: add(index, results) -> the (where, Bracket)
+    whose two grid points have both become known, so that each is found once, in whatever order
+    the chunks finish. A line is dropped once all its points are known."""
+
+    def __init__(self, axes, axis):
+        names = list(axes)
+        self.axes, self.at = axes, names.index(axis)
+        self.other_names = [a for a in names if a != axis]
+        self.others = [names.index(a) for a in self.other_names]
+        self.grid = np.asarray(axes[axis], float)
+        self.lines = {}
+
+    def _line(self, key, n_state):
+        if key not in self.lines:
+            n = len(self.grid)
+            self.lines[key] = {"known": np.zeros(n, bool), "orbit_status": np.zeros(n, int),
+                               "stable": np.zeros(n, int), "orbit_state": np.zeros((n, n_state)),
+                               "lead": np.zeros(n, complex)}
+        return self.lines[key]
+
+    def add(self, index, results):
+        index = np.asarray(index)
+        values = {**{k: results[k] for k in ("orbit_status", "stable", "orbit_state")},
+                  "lead": _lead(results["multiplier_real"], results["multiplier_imag"])}
+        keys, which = np.unique(index[:, self.others].reshape(len(index), -1), axis=0, return_inverse=True)
+        found = []
+        for j, key in enumerate(tuple(int(v) for v in k) for k in keys):
+            rows = np.flatnonzero(which.ravel() == j)
+            pos = index[rows, self.at]
+            line = self._line(key, values["orbit_state"].shape[1])
+            line["known"][pos] = True
+            for name, v in values.items():
+                line[name][pos] = v[rows]
+            cand = np.unique(np.concatenate([pos - 1, pos]))
+            cand = cand[(cand >= 0) & (cand < len(self.grid) - 1)]
+            cand = cand[line["known"][cand] & line["known"][cand + 1]]
+            where = {a: float(self.axes[a][k]) for a, k in zip(self.other_names, key)}
+            found += [(where, b) for b in brackets(key, self.grid, line["orbit_status"], line["stable"],
+                                                   line["orbit_state"], line["lead"], cand)]
+            if line["known"].all():
+                del self.lines[key]
+        return found
+
+
+def add_boundary_table(data, ds, map_tasks=None, done=None):
+    """ds with the boundary variables (dimension `boundary`, possibly of length 0); map_tasks and
+    done as in boundary_rows."""
+    rows = boundary_rows(data, ds, map_tasks, done)
     axis = schema.continued_axis(ds)
     out = ds.copy()
     coord = ds[axis].attrs

@@ -50,17 +50,59 @@ def test_guided_chunks_shrink_cover_every_segment_once_and_keep_a_floor():
     assert max(big) <= sweep.MAX_CHUNK_POINTS + 32 and big[0] > sweep.MAX_CHUNK_POINTS - 32
 
 
-def test_boundary_rows_are_the_same_for_any_map_of_the_lines(tiny_cube):
-    """The driver's serial map and any other order of evaluation (here: reversed, as workers
-    may finish) give the same rows in the same order."""
+def test_boundary_rows_are_the_same_for_any_map_and_rows_refined_during_the_sweep(tiny_cube):
+    """The driver's serial map, another order of evaluation (reversed, as workers may finish) and
+    rows refined earlier (as a sweep refines them while it computes) give the same rows in the
+    same order; only the brackets not refined yet reach the map."""
     ds = cube.open_cube(tiny_cube)
     data = config.parse_config(ds.attrs["config_toml"]).data
     plain = ds.drop_dims("boundary")
 
-    def backwards(data, tasks):
-        return [boundaries.line_rows(data, w, line) for w, line in tasks[::-1]][::-1]
+    def backwards(data, axis, tasks):
+        return [boundaries.refine_brackets(data, axis, task) for task in tasks[::-1]][::-1]
     serial = boundaries.boundary_rows(data, plain)
     assert serial and boundaries.boundary_rows(data, plain, backwards) == serial
+    first = boundaries._cube_brackets(plain, "speed")[0]
+    done = {(first[1].line, first[1].i): boundaries.refine_brackets(data, "speed", [first])[0]}
+    mapped = []
+
+    def recording(data, axis, tasks):
+        mapped.extend(b for task in tasks for _, b in task)
+        return boundaries._serial(data, axis, tasks)
+    assert boundaries.boundary_rows(data, plain, recording, done) == serial
+    assert (first[1].line, first[1].i) not in {(b.line, b.i) for b in mapped}
+    assert len(mapped) == len(serial) - 1
+
+
+def test_tracker_finds_each_stability_change_once_in_any_chunk_order():
+    """Chunks of a 7 x 3 grid (random statuses and stabilities) fed in random orders and sizes:
+    the tracker yields every pair of neighbours along speed where both orbits converged and their
+    stability differs, each once, with both points' values; compared with a plain double loop."""
+    axes = {"speed": np.arange(7.0), "clearance": np.array([1e-6, 2e-6, 3e-6])}
+    rng = np.random.default_rng(7)
+    index = np.array([(s, c) for c in range(3) for s in range(7)])
+    results = {"orbit_status": rng.choice([0, 0, 0, 1], len(index)), "stable": rng.integers(0, 2, len(index)),
+               "orbit_state": rng.normal(size=(len(index), 4)), "multiplier_real": rng.normal(size=(len(index), 4)),
+               "multiplier_imag": rng.normal(size=(len(index), 4))}
+    at = {tuple(ix): k for k, ix in enumerate(index)}
+    expected = {((c,), s) for c in range(3) for s in range(6)
+                if results["orbit_status"][at[s, c]] == 0 == results["orbit_status"][at[s + 1, c]]
+                and results["stable"][at[s, c]] != results["stable"][at[s + 1, c]]}
+    assert expected
+    for trial in range(5):
+        order = rng.permutation(len(index))
+        cuts = np.sort(rng.choice(np.arange(1, len(index)), size=trial + 2, replace=False))
+        tracker, found = boundaries.Tracker(axes, "speed"), []
+        for rows in np.split(order, cuts):
+            found += tracker.add(index[rows], {k: v[rows] for k, v in results.items()})
+        assert sorted((b.line, b.i) for _, b in found) == sorted(expected)
+        for where, b in found:
+            low, high = at[b.i, b.line[0]], at[b.i + 1, b.line[0]]
+            assert where == {"clearance": axes["clearance"][b.line[0]]} and b.grid == (b.i, b.i + 1.0)
+            assert b.stable == (results["stable"][low], results["stable"][high])
+            assert np.array_equal(b.states[0], results["orbit_state"][low])
+            assert b.lead == complex(results["multiplier_real"][high, 0], results["multiplier_imag"][high, 0])
+        assert not tracker.lines
 
 
 def _atlas_cube(onset_index, refined=None):
