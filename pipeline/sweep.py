@@ -256,7 +256,7 @@ def _run_locked(cfg, output, parts, workers, scheduler, chunk_points, stream):
             total = sum(len(s.points) for s in segs)
             bar = Progress(total, total - sum(len(s.points) for s in todo), stream) if stream else None
             refined = _run_chunks(client, cfg, todo, parts, config_hash, chunk_points, bar, say)
-        say("refining the stability boundaries and assembling the cube")
+        say("assembling the cube and its boundary table")
         ds = cube.assemble(cfg.axes, _fixed_coords(cfg), cube.iter_parts(parts), _provenance(cfg),
                            n_multipliers=compute.model_of(cfg.data).n_state, config_hash=config_hash)
         ds = boundaries.add_boundary_table(cfg.data, ds, _map_tasks_on(client, stream) if client else None,

@@ -147,7 +147,7 @@ def test_boundary_table_refines_each_stability_change(small_cube):
 
 PHASES = ("starting 1 local Dask worker (127.0.0.1)", "1 worker; Dask dashboard: http://127.0.0.1:",
           "compiling the kernels of jeffcott_clearance", "kernels ready", "sweeping 2 points in 1 chunk",
-          "refining the stability boundaries", "writing the cube", "writing the report into")
+          "assembling the cube and its boundary table", "writing the cube", "writing the report into")
 
 
 def test_run_prints_its_phases_before_the_progress_lines(tmp_path, capsys):

@@ -195,7 +195,7 @@ def markdown(res):
         [("points", ext["points"]), ("wall [s], at this run's load", ext["wall_s"]),
          ("wall [s] on 2 cores of its own (worker CPU s / 2 + assemble + write)", ext["quiet_wall_s"]),
          ("compute [s]", ext["compute_s"]),
-         ("boundary table [s] (320 lines on the workers)", ext["boundaries_s"]), ("assemble [s]", ext["assemble_s"]),
+         ("boundary table after the compute phase [s]", ext["boundaries_s"]), ("assemble [s]", ext["assemble_s"]),
          ("cube [MB]", ext["cube_mb"]), ("part files [MB]", ext["part_mb"])])
     io = res.get("full_size_io")
     io_text = "" if not io else table(

@@ -19,7 +19,8 @@ scheduler=<address>, chunk_points=..., overwrite=True)` on a fresh
   paid once per worker process, in parallel, by every real run too);
 * its phases, timed by wrapping the pipeline's own functions (nothing in pipeline/ changes):
   driver warm-up, the distributed compute phase (scatter, tasks, part files), cube assembly,
-  boundary table (every stability change refined to 1e-8 in the driver, serially), cube write;
+  what is left of the boundary table after it (the workers refine each stability change as soon
+  as its two grid points are computed, ahead of the queued chunks), cube write;
 * from Dask's task stream: busy time per worker, the span of the compute phase, its tail (how
   long the first worker to finish waits for the last), and worker utilization;
 * points per second, the sum of the per-point compute times stored in the cube;
