@@ -75,15 +75,13 @@ def bearing_loads(u, p, n):
 def accelerations(u, p, n, a, b, du):
     """du[n:] = -gain P(q) - gyro q', P = (P_xA, P_yA, P_xB, P_yB[, P_zA - P_zB])."""
     velocity_rows(u, du, n)
-    fz = a[2] - b[2]
+    load = (a[0], a[1], b[0], b[1], a[2] - b[2])
     gyro = n * n
     for i in range(n):
         g = n * i
-        acc = -(p[g] * a[0] + p[g + 1] * a[1] + p[g + 2] * b[0] + p[g + 3] * b[1])
-        if n == 5:
-            acc -= p[g + 4] * fz
+        acc = 0.0
         for j in range(n):
-            acc -= p[gyro + g + j] * u[n + j]
+            acc -= p[g + j] * load[j] + p[gyro + g + j] * u[n + j]
         du[n + i] = acc
 
 
