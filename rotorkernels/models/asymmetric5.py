@@ -16,7 +16,7 @@ from rotorkernels.models.spec import ModelSpec, Parameter
 N_POS = 5
 
 
-@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, forceinline=True, error_model="numpy")
 def rhs(tau, u, p, du):
     a, b = sr.bearing_loads(u, p, N_POS)
     sr.accelerations(u, p, N_POS, a, b, du)

@@ -60,6 +60,13 @@ def n_params(n):
 
 
 # --- kernels -----------------------------------------------------------------------------------
+# The models' `rhs` (symmetric4, asymmetric5) are `forceinline=True`: Numba compiles each once and
+# marks it LLVM `alwaysinline`, so LLVM inlines it into the step loops, where a call (23 arguments,
+# 17 of them on the stack, and a status check) cost symmetric4 a few ns against ~10 ns of
+# arithmetic. Numba's `inline="always"` gives the same code but types and lowers the body again at
+# every call site: +3.8 s CPU on the group's cold compile against +0.4 s (docs/benchmarks/models.md).
+# `error_model="numpy"` (all three kernels): a division by zero (z0 = 0) gives inf/NaN, which the
+# integrators report as STATUS_NAN, instead of a check and an exception branch in every evaluation.
 
 @njit(cache=True, nogil=True, inline="always")
 def bearing_loads(u, p, n):
@@ -73,7 +80,9 @@ def bearing_loads(u, p, n):
 
 @njit(cache=True, nogil=True, inline="always")
 def accelerations(u, p, n, a, b, du):
-    """du[n:] = -gain P(q) - gyro q', P = (P_xA, P_yA, P_xB, P_yB[, P_zA - P_zB])."""
+    """du[n:] = -gain P(q) - gyro q', P = (P_xA, P_yA, P_xB, P_yB[, P_zA - P_zB]), summed term by
+    term as the C floor (workflows/bench/peers/rotor_rhs.c) does: the same operations, the same
+    rounding."""
     velocity_rows(u, du, n)
     load = (a[0], a[1], b[0], b[1], a[2] - b[2])
     gyro = n * n
