@@ -64,7 +64,7 @@ def n_params(n):
 # marks it LLVM `alwaysinline`, so LLVM inlines it into the step loops, where a call (23 arguments,
 # 17 of them on the stack, and a status check) cost symmetric4 a few ns against ~10 ns of
 # arithmetic. Numba's `inline="always"` gives the same code but types and lowers the body again at
-# every call site: the first backbone's compile 15.4 -> 23.5 s CPU, against no change with
+# every call site: the first backbone's compile 15.3 -> 23.6 s CPU, against no change with
 # `forceinline` (docs/benchmarks/compile.md; revision 28c7349 is the `inline="always"` variant).
 # `error_model="numpy"` (all three kernels): a division by zero (z0 = 0, which no valid config
 # gives) makes inf/NaN and an integrator failure status instead of an exception, and costs no
