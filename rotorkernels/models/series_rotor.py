@@ -60,6 +60,15 @@ def n_params(n):
 
 
 # --- kernels -----------------------------------------------------------------------------------
+# The models' `rhs` (symmetric4, asymmetric5) are `forceinline=True`: Numba compiles each once and
+# marks it LLVM `alwaysinline`, so LLVM inlines it into the step loops, where a call (23 arguments,
+# 17 of them on the stack, and a status check) cost symmetric4 a few ns against ~10 ns of
+# arithmetic. Numba's `inline="always"` gives the same code but types and lowers the body again at
+# every call site: the first backbone's compile 15.3 -> 23.6 s CPU, against no change with
+# `forceinline` (docs/benchmarks/compile.md; revision 28c7349 is the `inline="always"` variant).
+# `error_model="numpy"` (all three kernels): a division by zero (z0 = 0, which no valid config
+# gives) makes inf/NaN and an integrator failure status instead of an exception, and costs no
+# check and exception branch in every evaluation.
 
 @njit(cache=True, nogil=True, inline="always")
 def bearing_loads(u, p, n):
@@ -73,17 +82,17 @@ def bearing_loads(u, p, n):
 
 @njit(cache=True, nogil=True, inline="always")
 def accelerations(u, p, n, a, b, du):
-    """du[n:] = -gain P(q) - gyro q', P = (P_xA, P_yA, P_xB, P_yB[, P_zA - P_zB])."""
+    """du[n:] = -gain P(q) - gyro q', P = (P_xA, P_yA, P_xB, P_yB[, P_zA - P_zB]), summed term by
+    term as the C floor (workflows/bench/peers/rotor_rhs.c) does: the same operations, the same
+    rounding."""
     velocity_rows(u, du, n)
-    fz = a[2] - b[2]
+    load = (a[0], a[1], b[0], b[1], a[2] - b[2])
     gyro = n * n
     for i in range(n):
         g = n * i
-        acc = -(p[g] * a[0] + p[g + 1] * a[1] + p[g + 2] * b[0] + p[g + 3] * b[1])
-        if n == 5:
-            acc -= p[g + 4] * fz
+        acc = 0.0
         for j in range(n):
-            acc -= p[gyro + g + j] * u[n + j]
+            acc -= p[g + j] * load[j] + p[gyro + g + j] * u[n + j]
         du[n + i] = acc
 
 

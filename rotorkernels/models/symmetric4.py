@@ -16,19 +16,19 @@ from rotorkernels.models.spec import ModelSpec
 N_POS = 4
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=True, error_model="numpy")
 def rhs(tau, u, p, du):
     a, b = sr.bearing_loads(u, p, N_POS)
     sr.accelerations(u, p, N_POS, a, b, du)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def jac(tau, u, p, out):
     a, b = sr.bearing_loads(u, p, N_POS)
     sr.jacobian(out, p, N_POS, a, b)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def rhs_jac(tau, u, p, du, out):
     a, b = sr.bearing_loads(u, p, N_POS)
     sr.accelerations(u, p, N_POS, a, b, du)
