@@ -82,7 +82,7 @@ def solve_orbit(model, p, opts, history=(), *, cold_guess, periods=1, tol=1e-9, 
     best = None
     for guess, cost, quick in _guesses(problem, list(history), transient_periods, cold_guess):
         n_rhs += cost
-        out = problem.shoot(guess, tol, min(max_iter, QUICK_ITERATIONS) if quick else max_iter)
+        out = problem.shoot(guess, tol, min(max_iter, QUICK_ITERATIONS) if quick else max_iter, far=not quick)
         n_rhs += out[6]
         if best is None or out[2] == shooting.CONVERGED:
             best = out
