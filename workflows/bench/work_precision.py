@@ -1,8 +1,9 @@
 """Work-precision of the kernels: time and error of the orbit solve, of one monodromy and of a
 stability-boundary location per integrator setting, and the cheapest setting per error target.
 
-Orbit solve: Newton from the reference state perturbed by +-1 % per component (timed from the
-first sign pattern, errors over all eight); monodromy: one variational integration over one
+Orbit solve: Newton (staged, as the pipeline solves a start off the orbit; plain Newton from the
+same starts for its errors) from the reference state perturbed by +-1 % per component (timed from
+the first sign pattern, errors over all eight); monodromy: one variational integration over one
 period from the reference state (timed with the integrator's own first step, errors over 16
 initial steps); boundary: `boundary.locate_boundary` at the period-doubling crossing near
 80.9 Hz, 7.6 um (timed for one bracket, errors over three)."""
