@@ -39,6 +39,7 @@ def entry_points(spec, attractor=True, integrator="dop853"):
     u, p, opts = np.zeros(n), np.zeros(1), ig.settings(integrator)
     orbits = [
         (shooting.shoot, (kernel, u, p, 1.0, opts, 1e-9, 1)),
+        (shooting.shoot_staged, (kernel, u, p, 1.0, opts, opts, 1e-9, 1)),
         (shooting.settle, (kernel, u, p, 1.0, opts)),
         (shooting.sample_orbit, (kernel, u, p, 1.0, 1, opts)),
         (ig.flow, (kernel, 0.0, 1.0, u, p, False, opts, 0.0)),     # Python's bool, either value

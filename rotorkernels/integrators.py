@@ -272,6 +272,14 @@ def settings(method="dop853", rtol=1e-10, atol=1e-12, steps_per_unit=512, max_st
     return cls(*(float(v) for v in (code, rtol, atol, steps_per_unit, max_steps, amplitude_limit)))
 
 
+def loosened(opts, rtol):
+    """`opts` with its rtol raised to at least `rtol` and atol in the same proportion (the
+    rtol / atol ratio kept); RK4 settings unchanged (fixed steps, no tolerance to loosen)."""
+    if type(opts) is not Dop853Settings or opts.rtol >= rtol:
+        return opts
+    return opts._replace(rtol=float(rtol), atol=opts.atol * (rtol / opts.rtol))
+
+
 def _flow_dop853(kernel, t0, t1, z0, p, variational, opts, h0):
     return dop853(kernel, t0, t1, z0, p, variational, opts[S_RTOL], opts[S_ATOL], h0,
                   int(opts[S_MAX_STEPS]), opts[S_AMPLITUDE])

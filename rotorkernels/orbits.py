@@ -25,9 +25,13 @@ class ForcedOrbitProblem(NamedTuple):
     opts: np.ndarray        # integrator settings
     periods: float = 1.0    # forcing periods in one orbit
 
-    def shoot(self, guess, tol, max_iter):
-        """Newton shooting from `guess`: (state, monodromy, status, reason, iterations, residual, n_rhs)."""
-        return shooting.shoot(self.model.kernel, guess, self.p, float(self.periods), self.opts, tol, max_iter)
+    def shoot(self, guess, tol, max_iter, far=False):
+        """Newton shooting from `guess`: (state, monodromy, status, reason, iterations, residual, n_rhs).
+        far: the guess is no neighbour's orbit (a transient, a cold start): staged Newton, whose
+        early iterations integrate at a looser tolerance (shooting.shoot_staged)."""
+        early = shooting.early_settings(self.opts) if far else self.opts
+        return shooting.shoot_staged(self.model.kernel, guess, self.p, float(self.periods), self.opts, early,
+                                     tol, max_iter)
 
     def settle(self, u0, n_periods):
         """(state after n_periods forcing periods from u0, integration ok, n_rhs)."""

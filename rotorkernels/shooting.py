@@ -102,26 +102,77 @@ def _newton_step(mono, r):
     return x, True
 
 
+# Staged (inexact) Newton for a start far from the orbit (a transient, a cold or perturbed state):
+# while the residual is far above the integration error, a Newton step needs the return map only
+# to a fraction of that residual, so those iterations integrate at the looser EARLY_RTOL (a
+# third of the cost at rtol 1e-10). A trial point is integrated at the configured tolerance once
+# the current residual is below EARLY_SWITCH (its Newton step lands near EARLY_SWITCH^2, at the
+# early map's own error), and convergence is judged only on the configured map: the converged
+# state, its residual and its monodromy are those of plain Newton on that map.
+EARLY_RTOL = 1e-6
+EARLY_SWITCH = 3e-3
+# An early residual below this many EARLY_RTOL is the early map's error, not a distance to the
+# orbit (the start was close after all): the configured map takes over at that point.
+_EARLY_NOISE = 10.0
+
+
+def early_settings(opts):
+    """The early iterations' integrator settings for `shoot_staged` (rk4: the same settings)."""
+    return ig.loosened(opts, EARLY_RTOL)
+
+
 @njit(cache=True, nogil=True)
 def shoot(kernel, guess, p, periods, opts, tol, max_iter):
     """Newton shooting for an orbit of period `periods` (scaled time) from `guess`.
 
     Returns (state, monodromy, status, reason, iterations, residual, n_rhs). The monodromy is
     evaluated at the returned state."""
+    return shoot_staged(kernel, guess, p, periods, opts, opts, tol, max_iter)
+
+
+@njit(cache=True, nogil=True)
+def shoot_staged(kernel, guess, p, periods, opts, early_opts, tol, max_iter):
+    """`shoot` whose early iterations, while the residual is above EARLY_SWITCH, integrate with
+    `early_opts` (`early_settings(opts)`; early_opts = opts is plain Newton). Any trouble on the
+    early map (a failed integration, a singular matrix, a failed line search, the iteration
+    limit, a residual at its error level) hands the current state to the configured map, so
+    every status and reason comes from the configured map, as in plain Newton."""
+    early = early_opts[ig.S_RTOL] > opts[ig.S_RTOL]
+    staged = early
+    noise = _EARLY_NOISE * early_opts[ig.S_RTOL]
     s = guess.copy()
-    r, mono, fstat, n_rhs, h = _return_map(kernel, s, p, periods, opts, 0.0)
-    if fstat != ig.STATUS_OK:
-        status, reason = _failure(fstat)
-        return s, mono, status, reason, 0, np.inf, n_rhs
-    res = _residual_norm(r, s)
-    for it in range(max_iter + 1):
-        if res <= tol:
+    r, mono, fstat, n_rhs, h = _return_map(kernel, s, p, periods, early_opts if early else opts, 0.0)
+    demote = fstat != ig.STATUS_OK
+    res = _residual_norm(r, s) if not demote else np.inf
+    it = 0
+    while True:
+        if early and (demote or res <= noise):
+            early, demote = False, False
+            r, mono, fstat, nr, h = _return_map(kernel, s, p, periods, opts, 0.0)
+            n_rhs += nr
+            res = _residual_norm(r, s) if fstat == ig.STATUS_OK else np.inf
+        if fstat != ig.STATUS_OK:
+            status, reason = _failure(fstat)
+            return s, mono, status, reason, it, res, n_rhs
+        if not early and res <= tol:
             return s, mono, CONVERGED, R_OK, it, res, n_rhs
         if it == max_iter:
-            break
+            if early:
+                demote = True
+                continue
+            return s, mono, NOT_CONVERGED, R_MAX_ITER, max_iter, res, n_rhs
         step, ok = _newton_step(mono, r)
         if not ok:
+            if early:
+                demote = True
+                continue
             return s, mono, NOT_CONVERGED, R_SINGULAR, it, res, n_rhs
+        it += 1
+        trial_early = early and res > EARLY_SWITCH
+        # the step size carried from the last map, except into a staged run's configured maps: all
+        # of them start from the integrator's own first step, so their step sequences match and
+        # the configured map stays smooth between iterates (its last two iterates decide)
+        h0 = h if trial_early or not staged else 0.0
         lam = 1.0
         accepted = False
         last_fail = ig.STATUS_OK
@@ -129,23 +180,27 @@ def shoot(kernel, guess, p, periods, opts, tol, max_iter):
             trial = np.empty(s.size)
             for i in range(s.size):
                 trial[i] = s[i] + lam * step[i]
-            r_t, mono_t, fstat, nr, h_t = _return_map(kernel, trial, p, periods, opts, h)
+            r_t, mono_t, fstat_t, nr, h_t = _return_map(kernel, trial, p, periods,
+                                                        early_opts if trial_early else opts, h0)
             n_rhs += nr
-            if fstat == ig.STATUS_OK:
+            if fstat_t == ig.STATUS_OK:
                 res_t = _residual_norm(r_t, trial)
                 if res_t < (1.0 - 1e-4 * lam) * res or res_t <= tol:
-                    s, r, mono, res, h = trial, r_t, mono_t, res_t, h_t
+                    s, r, mono, res, h, early = trial, r_t, mono_t, res_t, h_t, trial_early
                     accepted = True
                     break
             else:
-                last_fail = fstat
+                last_fail = fstat_t
             lam *= 0.5
-        if not accepted:
-            if last_fail != ig.STATUS_OK:
-                status, reason = _failure(last_fail)
-                return s, mono, status, reason, it + 1, res, n_rhs
-            return s, mono, NOT_CONVERGED, R_LINE_SEARCH, it + 1, res, n_rhs
-    return s, mono, NOT_CONVERGED, R_MAX_ITER, max_iter, res, n_rhs
+        if accepted:
+            continue
+        if early:
+            demote = True
+            continue
+        if last_fail != ig.STATUS_OK:
+            status, reason = _failure(last_fail)
+            return s, mono, status, reason, it, res, n_rhs
+        return s, mono, NOT_CONVERGED, R_LINE_SEARCH, it, res, n_rhs
 
 
 @njit(cache=True, nogil=True)
@@ -177,7 +232,9 @@ def sample_orbit(kernel, u0, p, periods, n_samples, opts):
     return out
 
 
-def periodic_orbit(model, guess, p, opts, periods=1, tol=1e-9, max_iter=30):
-    """Python-facing wrapper of `shoot` for a `models.ModelSpec`."""
-    res = shoot(model.kernel, np.asarray(guess, float), p, float(periods), opts, tol, max_iter)
+def periodic_orbit(model, guess, p, opts, periods=1, tol=1e-9, max_iter=30, staged=True):
+    """Python-facing wrapper of `shoot_staged` for a `models.ModelSpec` (`staged`: the start is
+    far from the orbit, see EARLY_RTOL; False: plain Newton, `shoot`)."""
+    early = early_settings(opts) if staged else opts
+    res = shoot_staged(model.kernel, np.asarray(guess, float), p, float(periods), opts, early, tol, max_iter)
     return Orbit(*res)

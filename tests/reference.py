@@ -56,6 +56,14 @@ class BaiPoint:
             cols.append((self.period_map(u0 + du) - self.period_map(u0 - du)) / (2 * du[i]))
         return np.array(cols).T
 
+    def fd_monodromy_median(self, u0, scale, rel_steps=(5e-5, 1e-4, 2e-4)):
+        """Element-wise median of fd_monodromy over three step sizes. Where balls leave and regain
+        contact, one of a column's two integrations can take a step across a contact instant that
+        passes the error test with a larger error (the heavy tail in docs/benchmarks): measured,
+        one step size off by 1.4e-5 in the multipliers while the other two agree to 1e-7. The
+        median drops such an outlier; the O(h^2) truncation error stays below 1e-7."""
+        return np.median([self.fd_monodromy(u0, scale, rel_step=h) for h in rel_steps], axis=0)
+
     def periodic_orbit(self, u0, iterations=3):
         """Newton with the finite-difference monodromy, from u0 (physical units)."""
         u = np.asarray(u0, float)

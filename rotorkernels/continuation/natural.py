@@ -4,8 +4,9 @@ chain of parameter points, each started from its neighbours.
 Each point starts Newton from the best guess available, in this order: the secant predictor
 through the two previous converged orbits (the scaled state makes neighbouring orbits close),
 the previous orbit itself, a transient settled from that guess, and last a cold start (a
-transient from near static equilibrium). The first start that converges wins; failure of all is
-recorded as data. Everything depends only on the chain, never on how chains are scheduled.
+transient from near static equilibrium); Newton from a transient or a cold start, far from the
+orbit, is staged (its early iterations at a looser tolerance, shooting.shoot_staged). The first
+start that converges wins; failure of all is recorded as data. Everything depends only on the chain, never on how chains are scheduled.
 """
 from collections import namedtuple
 
@@ -82,7 +83,7 @@ def solve_orbit(model, p, opts, history=(), *, cold_guess, periods=1, tol=1e-9, 
     best = None
     for guess, cost, quick in _guesses(problem, list(history), transient_periods, cold_guess):
         n_rhs += cost
-        out = problem.shoot(guess, tol, min(max_iter, QUICK_ITERATIONS) if quick else max_iter)
+        out = problem.shoot(guess, tol, min(max_iter, QUICK_ITERATIONS) if quick else max_iter, far=not quick)
         n_rhs += out[6]
         if best is None or out[2] == shooting.CONVERGED:
             best = out

@@ -17,6 +17,7 @@ JEFF = models.get("jeffcott_clearance")
 LINEAR = models.get("linear_oscillator")
 N, NPOS = JEFF.n_state, JEFF.n_position
 CONVERGED = shooting.CONVERGED
+EARLY_RTOL, EARLY_SWITCH = shooting.EARLY_RTOL, shooting.EARLY_SWITCH    # the staged Newton's early stage
 BoundaryError = boundary.BoundaryError
 multipliers = floquet.multipliers
 static_guess = jc.static_guess
@@ -57,13 +58,15 @@ def make_setting(method, value):
                 tol=newton_tol(method, value))
 
 
-def orbit(p, guess, opts, tol, max_iter=30):
-    return shooting.periodic_orbit(JEFF, guess, p, opts, tol=tol, max_iter=max_iter)
+def orbit(p, guess, opts, tol, max_iter=30, staged=True):
+    """Newton shooting from a start off the orbit: staged, as the pipeline solves a transient or
+    cold start (shooting.shoot_staged); staged=False: plain Newton, the scipy peer's algorithm."""
+    return shooting.periodic_orbit(JEFF, guess, p, opts, tol=tol, max_iter=max_iter, staged=staged)
 
 
-def point(p, guess, opts, tol):
+def point(p, guess, opts, tol, staged=True):
     """One point the way the pipeline computes it: shooting, then the Floquet multipliers."""
-    sol = orbit(p, guess, opts, tol)
+    sol = orbit(p, guess, opts, tol, staged=staged)
     return sol, floquet.multipliers(sol.monodromy)
 
 

@@ -81,7 +81,8 @@ def measure(out, quick, repeats, regenerate_refs, command):
     fd = None if quick else finite_difference_check(refs["points"][0])
     log("C floor ...")
     run = dict(mode="quick" if quick else "full", command=command, repeats=repeats, peer_repeats=peer_repeats,
-               headline_rtol=HEADLINE_RTOL, n_states=20_000, passes=20 if quick else 50)
+               headline_rtol=HEADLINE_RTOL, n_states=20_000, passes=20 if quick else 50,
+               early_rtol=jc.EARLY_RTOL, early_switch=jc.EARLY_SWITCH)
     cfl = c_floor(refs, run["n_states"], run["passes"], repeats)
     return dict(machine=machine, loadavg_end=loadavg(), run=run,
                 settings=[{k: v for k, v in s.items() if k != "opts"} for s in settings],

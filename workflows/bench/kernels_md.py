@@ -16,6 +16,7 @@ REC_LABELS = {
     "boundary": ("boundary location, relative (worst of 3 brackets)", "locate_boundary"),
 }
 HEADLINE_RECS = ("orbit", "mult", "mono", "boundary")
+STAGED_RTOLS = (1e-8, 1e-10, 1e-12)     # the staged-vs-plain table's settings
 
 # Issue 17's targets (issue 5's were 200x and 2x): a point >= PEER_TARGET x faster than scipy DOP853 at
 # equal tolerance, the right-hand side within RHS_TARGET x a C -O3 loop of the same equations.
@@ -78,9 +79,12 @@ def peer_headline_values(peer, hr):
     cpu = [r["t_cpu"] / r["t_ours_same"] for r in dop]
     interp = [r["t"] / r["t_ours_matched"] for r in peer if r["method"] == "DOP853" and r["rtol"] == hr]
     lsoda = [r["t"] / r["t_ours_matched"] for r in peer if r["method"] == "LSODA" and r["rtol"] == hr]
+    plain = [r["t"] / r["t_ours_plain"] for r in dop]
+    gain = [r["t_ours_same"] / r["t_ours_plain"] for r in dop]
     return dict(headline_rtol=f"{hr:.0e}", peer_target=_target(min(min(cpu), min(same)) >= PEER_TARGET), peer_target_x=PEER_TARGET,
                 **_spread("same", same, _x), **_spread("cpu_ratio", cpu, _x), **_spread("interp", interp, _x),
-                **_spread("lsoda", lsoda, _x))
+                **_spread("lsoda", lsoda, _x), **_spread("plain", plain, _x),
+                **_spread("staged_gain", gain, lambda v: f"{v:.2f}"))
 
 
 def cfloor_medians(P):
@@ -183,6 +187,22 @@ def point_tables(wp, names):
     return "\n\n".join(out)
 
 
+def staged_table(wp, names):
+    """Staged against plain Newton from the same 8 starts, DOP853 at the STAGED_RTOLS."""
+    rows = []
+    for name in names:
+        for r in wp:
+            q = r["plain"]
+            if r["point"] != name or r["method"] != "dop853" or r["value"] not in STAGED_RTOLS:
+                continue
+            rows.append([name, r["label"], f"{r['n_rhs_orbit']} / {q['n_rhs_orbit']}",
+                         f"{_e(r['err_orbit_max'])} / {_e(q['err_orbit_max'])}",
+                         f"{_e(r['err_mult_med'])} / {_e(q['err_mult_med'])}",
+                         f"{_e(r['err_mult_max'])} / {_e(q['err_mult_max'])}", f"{r['n_failed']} / {q['n_failed']}"])
+    return table(["point", "setting", "RHS evals (timed start)", "err orbit (max)", "err mult (median)",
+                  "err mult (max)", "fails"], rows)
+
+
 def recommended_table(rec):
     rows = []
     for key, (desc, unit) in REC_LABELS.items():
@@ -227,6 +247,8 @@ def work_precision_values(data, names):
     wp = data["work_precision"]
     return dict(start_pattern=", ".join(f"{x:+g}" for x in START_PATTERNS[0]), n_starts=len(START_PATTERNS),
                 n_placements=len(STEP_PLACEMENTS), point_tables=point_tables(wp, names),
+                staged_table=staged_table(wp, names), early_rtol=f"{data['run']['early_rtol']:.0e}",
+                early_switch=f"{data['run']['early_switch']:.0e}",
                 bracket_lo=f"{BOUNDARY['bracket'][0]:g}", bracket_hi=f"{BOUNDARY['bracket'][1]:g}",
                 other_brackets=", ".join(f"{a:g}-{b:g}" for a, b in BOUNDARY_BRACKETS[1:]),
                 boundary_table=boundary_table(data["boundary"]),
@@ -245,6 +267,7 @@ def _peer_row(r):
             r["n_rhs_ours_same"] if dop else "",
             f"{_e(r['ours_same_err_orbit'])} / {_e(r['ours_same_err_mult'])}" if dop else "",
             f"{r['t'] / r['t_ours_same']:.0f}x" if same else "n/a",
+            _ms(r["t_ours_plain"]) if dop else "n/a", f"{r['t'] / r['t_ours_plain']:.0f}x" if dop else "n/a",
             _ms(r["t_ours_matched"]) + ("" if r["matched_inside"] else " (clamped)"),
             f"{r['t'] / r['t_ours_matched']:.0f}x"]
 
@@ -255,7 +278,8 @@ def peer_values(data):
                     nfev_fd=fd["nfev_fd"], err_fd=_e(fd["err_mult_fd"]), t_aug=f"{fd['t_aug']:.2f}",
                     nfev_aug=fd["nfev_aug"], err_aug=_e(fd["err_mult_aug"])) + "\n\n" if fd else ""
     header = ["point", "scipy", "rtol", "scipy [ms] (CPU)", "Newton it.", "RHS calls", "err orbit / mult (scipy)",
-              "ours, same [ms]", "RHS evals (ours)", "err orbit / mult (ours)", "ratio same",
+              "ours, same [ms]", "RHS evals (ours)", "err orbit / mult (ours)", "ratio same", "ours plain [ms]",
+              "ratio plain",
               "ours, interp. [ms]", "ratio interp."]
     return dict(finite_differences=fd_text, peer_table=table(header, [_peer_row(r) for r in data["peer"]]))
 
@@ -334,15 +358,20 @@ def _boundary_bullet(bwp):
                  default_error=_e(dflt["err_max"]))
 
 
-def _peer_bullet(peer, c, hr):
+def _peer_bullet(peer, c, hr, early_rtol):
     pd = [r for r in peer if r["method"] == "DOP853" and r["rtol"] == hr]
     rs = [r["t"] / r["t_ours_same"] for r in pd if np.isfinite(r["t_ours_same"])]
+    rp = [r["t"] / r["t_ours_plain"] for r in pd]
     ours_per = np.median([r["t_ours_same"] / max(r["n_rhs_ours_same"], 1) * 1e9 for r in pd])
     target = (_part("peer_met") if min(rs) >= PEER_TARGET else
               _part("peer_not_met", target=PEER_TARGET, needed=f"{ours_per * min(rs) / PEER_TARGET:.0f}"))
-    return _part("peer", calls=f"{np.median([r['nfev'] / max(r['n_rhs_ours_same'], 1) for r in pd]):.2f}",
+    return _part("peer", calls=f"{np.median([r['nfev'] / max(r['n_rhs_ours_plain'], 1) for r in pd]):.2f}",
                  scipy_us=f"{np.median([r['t'] / max(r['nfev'], 1) * 1e9 for r in pd]) / 1e3:.1f}",
-                 python_us=f"{c['python_aug'] / 1e3:.0f}", ours_ns=f"{ours_per:.0f}", median=f"{np.median(rs):.0f}",
+                 python_us=f"{c['python_aug'] / 1e3:.0f}",
+                 ours_ns=f"{np.median([r['t_ours_plain'] / max(r['n_rhs_ours_plain'], 1) * 1e9 for r in pd]):.0f}",
+                 plain=f"{np.median(rp):.0f}", plain_lo=f"{min(rp):.0f}", plain_hi=f"{max(rp):.0f}",
+                 staged_calls=f"{np.median([r['n_rhs_ours_same'] / max(r['n_rhs_ours_plain'], 1) for r in pd]):.2f}",
+                 early_rtol=f"{early_rtol:.0e}", median=f"{np.median(rs):.0f}",
                  lo=f"{min(rs):.0f}", hi=f"{max(rs):.0f}", target=target, peer_target_x=PEER_TARGET)
 
 
@@ -368,7 +397,7 @@ def interpretation(data, refs):
     c = cfloor_medians(cfl["points"])
     bullets = [_references_bullet(refs), _dop853_bullet(wp), _rk4_bullet(wp, names), _newton_bullet(wp),
                _boundary_bullet(data["boundary"]), "- " + default_verdict(wp, data["recommended"]),
-               _peer_bullet(data["peer"], c, data["run"]["headline_rtol"])]
+               _peer_bullet(data["peer"], c, data["run"]["headline_rtol"], data["run"]["early_rtol"])]
     if cfl["compiler"]:
         bullets += _cfloor_bullets(c, cfl["integrator_only"], per_rhs_ns(wp)[1])
     return "\n".join(bullets)

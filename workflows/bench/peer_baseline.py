@@ -30,20 +30,23 @@ def _peer_point(peer, guess, method, rtol, tol):
     return out, jc.multipliers(out[1])
 
 
-def time_pair(peer_call, ours_call, repeats):
-    """(best wall, best CPU seconds of the peer call, best wall, best CPU seconds of ours): each
-    peer call is followed by 10 of ours, so that both see the same machine state."""
-    t = t_cpu = t_ours = t_ours_cpu = np.inf
+def time_pair(peer_call, ours_calls, repeats):
+    """(best wall, best CPU seconds of the peer call, best wall and best CPU seconds of each of
+    ours_calls, as lists): each peer call is followed by 10 of each of ours, so that all see the
+    same machine state."""
+    t = t_cpu = np.inf
+    t_ours, t_ours_cpu = [np.inf] * len(ours_calls), [np.inf] * len(ours_calls)
     for _ in range(repeats):
         w0, c0 = time.perf_counter(), time.process_time()
         peer_call()
         t = min(t, time.perf_counter() - w0)
         t_cpu = min(t_cpu, time.process_time() - c0)
-        for _ in range(10):
-            w0, c0 = time.perf_counter(), time.process_time()
-            ours_call()
-            t_ours = min(t_ours, time.perf_counter() - w0)
-            t_ours_cpu = min(t_ours_cpu, time.process_time() - c0)
+        for k, ours_call in enumerate(ours_calls):
+            for _ in range(10):
+                w0, c0 = time.perf_counter(), time.process_time()
+                ours_call()
+                t_ours[k] = min(t_ours[k], time.perf_counter() - w0)
+                t_ours_cpu[k] = min(t_ours_cpu[k], time.process_time() - c0)
     return t, t_cpu, t_ours, t_ours_cpu
 
 
@@ -53,10 +56,13 @@ def _peer_row(e, peer, ours, method, rtol, repeats):
     tol = newton_tol("dop853", rtol)
     ours_opts = jc.dop853(rtol, rtol * ATOL_OVER_RTOL)
     (s, mono, its, nfev, conv), _ = _peer_point(peer, guess, method, rtol, tol)
-    jc.point(p, guess, ours_opts, tol)
-    t, t_cpu, t_adj, _ = time_pair(lambda: _peer_point(peer, guess, method, rtol, tol),
-                                 lambda: jc.point(p, guess, ours_opts, tol), repeats)
-    err_o, err_m = state_error(s, s_ref), match(jc.multipliers(mono), from_complex_list(e["multipliers"]))
+    lam_ref = from_complex_list(e["multipliers"])
+    plain, lam_plain = jc.point(p, guess, ours_opts, tol, staged=False)
+    t, t_cpu, (t_adj, t_plain), _ = time_pair(
+        lambda: _peer_point(peer, guess, method, rtol, tol),
+        (lambda: jc.point(p, guess, ours_opts, tol), lambda: jc.point(p, guess, ours_opts, tol, staged=False)),
+        repeats)
+    err_o, err_m = state_error(s, s_ref), match(jc.multipliers(mono), lam_ref)
     same = next((r for r in ours if r["method"] == "dop853" and r["value"] == rtol), None)
     t_match, inside = interp_time(ours, max(err_o, err_m))
     return dict(point=e["name"], method=method, rtol=rtol, t=t, t_cpu=t_cpu, iterations=its,
@@ -65,6 +71,8 @@ def _peer_row(e, peer, ours, method, rtol, repeats):
                 ours_same_err_orbit=same["err_orbit"] if same else np.nan,
                 ours_same_err_mult=same["err_mult"] if same else np.nan,
                 n_rhs_ours_same=same["n_rhs_orbit"] if same else 0,
+                t_ours_plain=t_plain, n_rhs_ours_plain=int(plain.n_rhs), ours_plain_converged=plain.status == jc.CONVERGED,
+                ours_plain_err_orbit=state_error(plain.state, s_ref), ours_plain_err_mult=match(lam_plain, lam_ref),
                 t_ours_matched=t_match, matched_inside=inside)
 
 

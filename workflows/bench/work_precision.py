@@ -1,8 +1,9 @@
 """Work-precision of the kernels: time and error of the orbit solve, of one monodromy and of a
 stability-boundary location per integrator setting, and the cheapest setting per error target.
 
-Orbit solve: Newton from the reference state perturbed by +-1 % per component (timed from the
-first sign pattern, errors over all eight); monodromy: one variational integration over one
+Orbit solve: Newton (staged, as the pipeline solves a start off the orbit; plain Newton from the
+same starts for its errors) from the reference state perturbed by +-1 % per component (timed from
+the first sign pattern, errors over all eight); monodromy: one variational integration over one
 period from the reference state (timed with the integrator's own first step, errors over 16
 initial steps); boundary: `boundary.locate_boundary` at the period-doubling crossing near
 80.9 Hz, 7.6 um (timed for one bracket, errors over three)."""
@@ -14,20 +15,25 @@ from workflows.bench.references import from_complex_list, match, state_error
 from workflows.bench.scene import BOUNDARY_BRACKETS, REC_QUANTITIES, START_PATTERNS, STEP_PLACEMENTS, TARGETS, rec_key
 
 
-def _errors(orbits, monos, s_ref, lam_ref):
-    """Errors of the converged orbit solves and of the monodromies against the reference."""
+def _orbit_errors(orbits, s_ref, lam_ref):
+    """Failures and error statistics of orbit solves (from the starts) against the reference."""
     ok = [o for o in orbits if o.status == jc.CONVERGED]
     e_orb = np.array([state_error(o.state, s_ref) for o in ok]) if ok else np.array([np.inf])
     e_mul = np.array([match(jc.multipliers(o.monodromy), lam_ref) for o in ok]) if ok else np.array([np.inf])
-    e_mono = np.array([match(jc.multipliers(m.reshape(jc.N, jc.N)), lam_ref) for m in monos])
     timed = orbits[0]
     return dict(
-        n_failed=len(orbits) - len(ok),
+        n_failed=len(orbits) - len(ok), n_rhs_orbit=int(timed.n_rhs),
         err_orbit=state_error(timed.state, s_ref),
         err_orbit_med=float(np.median(e_orb)), err_orbit_max=float(e_orb.max()),
         err_mult=match(jc.multipliers(timed.monodromy), lam_ref),
-        err_mult_med=float(np.median(e_mul)), err_mult_max=float(e_mul.max()),
-        err_mono=float(e_mono[0]), err_mono_med=float(np.median(e_mono)), err_mono_max=float(e_mono.max()))
+        err_mult_med=float(np.median(e_mul)), err_mult_max=float(e_mul.max()))
+
+
+def _errors(orbits, monos, s_ref, lam_ref):
+    """Errors of the converged orbit solves and of the monodromies against the reference."""
+    e_mono = np.array([match(jc.multipliers(m.reshape(jc.N, jc.N)), lam_ref) for m in monos])
+    return dict(**_orbit_errors(orbits, s_ref, lam_ref),
+                err_mono=float(e_mono[0]), err_mono_med=float(np.median(e_mono)), err_mono_max=float(e_mono.max()))
 
 
 def work_precision(refs, settings, repeats):
@@ -46,10 +52,14 @@ def work_precision(refs, settings, repeats):
             _, _, n_rhs_mono = timer.add(key + ("mono",), lambda p=p, z0=z_ref, o=opts: jc.flow(p, z0, o, True))
             orbits = [orbit] + [jc.orbit(p, g, opts, tol) for g in guesses[1:]]
             monos = jc.monodromies(p, s_ref, opts, STEP_PLACEMENTS)
+            # the same starts by plain Newton (the peer's algorithm): the staged one's accuracy against it
+            plain = ([jc.orbit(p, g, opts, tol, staged=False) for g in guesses] if st["method"] == "dop853"
+                     else None)
             rows.append(dict(
                 point=e["name"], method=st["method"], value=st["value"], label=st["label"],
                 newton_tol=tol, status=int(orbit.status), reason=int(orbit.reason),
-                iterations=int(orbit.iterations), n_rhs_orbit=int(orbit.n_rhs), n_rhs_mono=int(n_rhs_mono),
+                iterations=int(orbit.iterations), n_rhs_mono=int(n_rhs_mono),
+                plain=_orbit_errors(plain, s_ref, lam_ref) if plain else None,
                 **_errors(orbits, monos, s_ref, lam_ref)))
         log(f"  work-precision {e['name']}: errors done")
     times = timer.run(repeats)
