@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from rotorkernels import attractor as at, continuation, floquet, integrators as ig, models, shooting
+from rotorkernels.attractor import lyapunov
 from rotorkernels.models import jeffcott_clearance as jc
 from tests.reference import BaiPoint
 from tests.test_kernels import JEFF, bai_params
@@ -121,6 +122,62 @@ def test_early_stop_and_largest_lyapunov_is_the_first_component():
     assert (lle, lle_err, used2, status2) == (expo[0], stderr[0], used, status)
     assert 200 <= used < 3000                                  # stopped on its uncertainty
     assert stderr[0] <= 0.1 * abs(expo[0]) + 1e-4
+
+
+def test_converged_stop_on_a_complex_pair_gives_its_real_part():
+    """A linear oscillator with two complex pairs and generic rotations per period (5.45 and
+    8.36 rad): log R_11 is a quasi-periodic sequence, so the weighted average converges faster
+    than any power of N while the block standard error falls only like 1/N. The converged stop
+    ends the run long before the standard-error rule would (here never, in 3000 periods), at the
+    largest real part to within the stop's own tolerance (spread <= rtol |lle| + atol: the
+    spread over N/2 .. N intervals bounds the error of the average over N); the sum of the first
+    two exponents (the pair's plane: no oscillation) is exact either way."""
+    p = np.array([30.0, 1.0, 70.0, 1.0, 0.5])
+    lam = np.linalg.eigvals(linear_system(p))
+    assert np.all(np.abs(lam.imag) > 1.0)                               # two complex pairs
+    expected = np.sort(lam.real)[::-1]
+    kw = dict(n_transient=0, max_periods=3000, rtol_stop=1e-5, min_periods=100, atol_stop=1e-10)
+    expo, stderr, used, status = at.lyapunov_spectrum(LINEAR, np.ones(4), p, TIGHT, converged_stop=True, **kw)
+    assert status == ig.STATUS_OK and used < 1500, used
+    assert stderr[0] > 1e-5 * abs(expo[0]) + 1e-10                      # not the standard-error rule
+    assert abs(expo[0] - expected[0]) <= 1e-5 * abs(expected[0]) + 1e-10
+    assert expo[0] + expo[1] == pytest.approx(expected[0] + expected[1], rel=1e-8)
+    _, _, used_plain, _ = at.lyapunov_spectrum(LINEAR, np.ones(4), p, TIGHT, **kw)
+    assert used_plain == 3000
+
+
+def test_converged_test_rejects_a_random_sequence_and_accepts_a_quasi_periodic_one():
+    """`_converged` alone, with a tolerance that any spread passes (rtol 1, atol 1): on i.i.d.
+    interval logs (a mixing, chaotic-like sequence) the three weighted averages differ by the
+    order of the statistical error, so the spread stays below 1 % of the block standard error in
+    about 1e-4 of the runs (two such differences, each ~1 % likely); on g(k alpha), alpha
+    irrational, it passes after a few hundred intervals."""
+    def csum(logs):
+        return np.concatenate([np.zeros(1), np.cumsum(logs)])[:, None]
+
+    def converged(logs):
+        c = csum(logs)
+        se = lyapunov._block_stderr(c, len(logs), 10, 1.0)[0] * lyapunov.WEIGHT_STDERR_FACTOR
+        return lyapunov._converged(c, len(logs), se, 1.0, 1.0, 1.0)
+
+    rng = np.random.default_rng(5)
+    passed = sum(converged(0.3 + rng.standard_normal(400)) for _ in range(500))
+    assert passed <= 2, passed
+    k = np.arange(400)
+    assert converged(0.05 * np.cos(2 * np.pi * k * (np.sqrt(5) - 1) / 2) + 0.1 * np.sin(k * np.sqrt(2)))
+
+
+def test_converged_stop_on_the_torus_gives_a_zero_exponent():
+    """Past the Neimark-Sacker bifurcation (148 Hz, 7.6 um) the attractor is a torus, whose
+    largest exponent is 0 exactly. With the converged stop the Lyapunov run ends well before the
+    cap with |lle| per period within the stop's tolerance (atol 1e-4, rtol |lle| negligible)."""
+    p, period = bai_params(BaiPoint(148.0, 7.6e-6))
+    p1 = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=jc.static_guess, tol=1e-10)
+    res = at.diagnose(JEFF, p1.state, p, period, OPTS, max_periods=1000, min_periods=300,
+                      rtol_stop=0.1, converged_stop=True)
+    assert (res.code, res.period) == (at.QUASI_PERIODIC, 0)
+    assert 300 <= res.periods_used < 1000
+    assert abs(res.lle * period) <= 1e-4 * (1 + 0.1), res.lle * period
 
 
 def test_diverging_run_reports_its_status():
@@ -345,6 +402,34 @@ def test_settled_stop_does_not_stop_on_an_unstable_orbit():
         mp.setattr(at.diagnosis, "ESCAPES", 0)
         orbit, _, used, _ = at.settle_periodic(JEFF, p1.state, p, OPTS, 300, 32, tol)
     assert orbit is None and used == 300
+
+
+def test_continued_period_two_orbit_is_the_full_transients_attractor():
+    """The neighbour's period-2 attractor continued (`settle_on_continued_orbit`: shooting on 2 T
+    from its end state, then the transient 2 periods at a time until it reaches the orbit)
+    against the full transient of 300 periods from the same start, 55.0 Hz from 55.1 Hz's
+    attractor: same k, multipliers (both refined by Newton to 1e-9), points on the section
+    (detection tolerance); far fewer periods. From the unstable period-1 orbit it declines
+    (None, no periods used) and the transient goes on as without it."""
+    tol = at.default_period_rtol(OPTS)
+    p_next, period_next = bai_params(BaiPoint(55.1, 19.0e-6))
+    neighbour = at.diagnose(JEFF, jc.static_guess(p_next), p_next, period_next, OPTS, n_transient=300)
+    assert (neighbour.code, neighbour.period) == (at.PERIODIC, 2)
+    p, period = bai_params(BaiPoint(55.0, 19.0e-6))
+    orbit, reached, used = at.settle_on_continued_orbit(JEFF, neighbour.end_state, p, OPTS, 2, 300, tol)
+    assert orbit is not None and orbit[0] == 2 and used < 100
+    fast = at.diagnose(JEFF, neighbour.end_state, p, period, OPTS, n_transient=300, settle_early=True,
+                       continued_period=2)
+    long = at.diagnose(JEFF, neighbour.end_state, p, period, OPTS, n_transient=300)
+    assert (fast.code, fast.period, fast.derived) == (long.code, long.period, long.derived) == (at.PERIODIC, 2, True)
+    np.testing.assert_allclose(np.sort_complex(fast.multipliers), np.sort_complex(long.multipliers), atol=1e-7)
+    scale = tol * np.abs(long.samples).max()
+    gaps = np.abs(fast.samples[:, None, :] - long.samples[None, :, :]).max(axis=2).min(axis=1)
+    assert gaps.max() <= scale and np.abs(reached - fast.end_state).max() == 0.0
+    p1 = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=jc.static_guess, tol=1e-10)
+    assert not p1.stable
+    orbit, reached, used = at.settle_on_continued_orbit(JEFF, p1.state, p, OPTS, 1, 300, tol)
+    assert orbit is None and used == 0 and reached is p1.state
 
 
 @pytest.mark.parametrize("point, expected", [
