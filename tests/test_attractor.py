@@ -124,45 +124,45 @@ def test_early_stop_and_largest_lyapunov_is_the_first_component():
     assert stderr[0] <= 0.1 * abs(expo[0]) + 1e-4
 
 
-def test_converged_stop_on_a_complex_pair_gives_its_real_part():
-    """A linear oscillator with two complex pairs and generic rotations per period (5.45 and
-    8.36 rad): log R_11 is a quasi-periodic sequence, so the weighted average converges faster
-    than any power of N while the block standard error falls only like 1/N. The converged stop
-    ends the run long before the standard-error rule would (here never, in 3000 periods), at the
-    largest real part to within the stop's own tolerance (spread <= rtol |lle| + atol: the
-    spread over N/2 .. N intervals bounds the error of the average over N); the sum of the first
-    two exponents (the pair's plane: no oscillation) is exact either way."""
-    p = np.array([30.0, 1.0, 70.0, 1.0, 0.5])
+def test_converged_stop_on_an_undamped_oscillator_gives_zero_exponents():
+    """An undamped linear oscillator (rotations of 5.48 and 8.37 rad per period, generic): every
+    exponent is 0 exactly, and log R_11 is a quasi-periodic sequence, so the weighted average
+    converges faster than any power of N while the block standard error falls only like 1/N.
+    The converged stop ends the run long before the standard-error rule does (608 against 1910
+    periods, where its blocks happen to cancel), at 0 to within its tolerance atol_stop; the
+    spectrum's sum is the trace, 0."""
+    p = np.array([30.0, 0.0, 70.0, 0.0, 0.0])
     lam = np.linalg.eigvals(linear_system(p))
-    assert np.all(np.abs(lam.imag) > 1.0)                               # two complex pairs
-    expected = np.sort(lam.real)[::-1]
-    kw = dict(n_transient=0, max_periods=3000, rtol_stop=1e-5, min_periods=100, atol_stop=1e-10)
+    assert np.all(lam.real == 0.0) and np.all(np.abs(lam.imag) > 5.0)
+    # rtol_stop ~0: the standard-error rule compares with rtol x the plain mean, whose O(1/N)
+    # oscillation would stand in for the exponent here
+    kw = dict(n_transient=0, max_periods=3000, rtol_stop=1e-12, min_periods=100, atol_stop=1e-7)
     expo, stderr, used, status = at.lyapunov_spectrum(LINEAR, np.ones(4), p, TIGHT, converged_stop=True, **kw)
     assert status == ig.STATUS_OK and used < 1500, used
-    assert stderr[0] > 1e-5 * abs(expo[0]) + 1e-10                      # not the standard-error rule
-    assert abs(expo[0] - expected[0]) <= 1e-5 * abs(expected[0]) + 1e-10
-    assert expo[0] + expo[1] == pytest.approx(expected[0] + expected[1], rel=1e-8)
+    assert stderr[0] > 1e-7                                             # not the standard-error rule
+    assert abs(expo[0]) <= 1e-7 and abs(expo.sum()) < 1e-10
     _, _, used_plain, _ = at.lyapunov_spectrum(LINEAR, np.ones(4), p, TIGHT, **kw)
-    assert used_plain == 3000
+    assert used_plain > 3 * used, used_plain   # its blocks happen to cancel at 1910
+    # a damped one (exponents -0.25 and -0.5, not 0) is not stopped by it
+    damped = np.array([30.0, 1.0, 70.0, 1.0, 0.5])
+    _, _, used_damped, _ = at.lyapunov_spectrum(LINEAR, np.ones(4), damped, TIGHT, converged_stop=True, **kw)
+    assert used_damped == 3000
 
 
 def test_converged_test_rejects_a_random_sequence_and_accepts_a_quasi_periodic_one():
-    """`_converged` alone, with a tolerance that any spread passes (rtol 1, atol 1): on i.i.d.
-    interval logs (a mixing, chaotic-like sequence) the three weighted averages differ by the
-    order of the statistical error, so the spread stays below 1 % of the block standard error in
-    about 1e-4 of the runs (two such differences, each ~1 % likely); on g(k alpha), alpha
-    irrational, it passes after a few hundred intervals."""
-    def csum(logs):
-        return np.concatenate([np.zeros(1), np.cumsum(logs)])[:, None]
-
+    """`_converged` alone, with a tolerance that any average passes (atol 1): on i.i.d. interval
+    logs of mean 0 (a mixing sequence, the hardest case: its exponent is within any atol of 0)
+    the three weighted averages differ by the order of the statistical error, so their spread is
+    below 10 % of the block standard error in about 0.3 % of the runs (measured on 2000 runs at
+    304 and 600 intervals); on g(k alpha), alpha irrational, the test passes at 400 intervals."""
     def converged(logs):
-        c = csum(logs)
-        se = lyapunov._block_stderr(c, len(logs), 10, 1.0)[0] * lyapunov.WEIGHT_STDERR_FACTOR
-        return lyapunov._converged(c, len(logs), se, 1.0, 1.0, 1.0)
+        csum = np.concatenate([np.zeros(1), np.cumsum(logs)])[:, None]
+        se = lyapunov._block_stderr(csum, len(logs), 10, 1.0)[0] * lyapunov.WEIGHT_STDERR_FACTOR
+        return lyapunov._converged(csum, len(logs), se, 1.0, 1.0)
 
     rng = np.random.default_rng(5)
-    passed = sum(converged(0.3 + rng.standard_normal(400)) for _ in range(500))
-    assert passed <= 2, passed
+    passed = sum(converged(rng.standard_normal(400)) for _ in range(500))
+    assert passed <= 7, passed                                          # ~1.5 expected
     k = np.arange(400)
     assert converged(0.05 * np.cos(2 * np.pi * k * (np.sqrt(5) - 1) / 2) + 0.1 * np.sin(k * np.sqrt(2)))
 
@@ -342,6 +342,19 @@ def test_settle_on_orbit_stops_only_on_the_orbit():
     # too few periods to converge: not reached (the state then continues as a plain transient)
     _, _, reached = at.settle_on_orbit(JEFF, start, p, OPTS, sol.state, 3, 1e-6)
     assert not reached
+    # the near stop (multipliers given, max |lambda| = 0.88 <= SETTLE_CONTRACTION): within
+    # SETTLE_NEAR and contracting, in fewer periods; from there the state does reach the orbit
+    assert np.abs(sol.multipliers).max() <= at.diagnosis.SETTLE_CONTRACTION
+    near, used_near, reached = at.settle_on_orbit(JEFF, start, p, OPTS, sol.state, 400, 1e-6,
+                                                  multipliers=sol.multipliers)
+    assert reached and 0 < used_near < used
+    assert np.abs(near - sol.state).max() <= at.diagnosis.SETTLE_NEAR * np.abs(sol.state).max()
+    _, _, reached = at.settle_on_orbit(JEFF, near, p, OPTS, sol.state, 400, 1e-6)
+    assert reached
+    # an orbit closer to a bifurcation (max |lambda| > SETTLE_CONTRACTION) gets no near stop
+    slow = sol.multipliers / np.abs(sol.multipliers).max() * 0.95
+    _, used_slow, _ = at.settle_on_orbit(JEFF, start, p, OPTS, sol.state, 400, 1e-6, multipliers=slow)
+    assert used_slow == used
 
 
 def test_period_two_attractor_is_refined_and_stable_although_period_one_is_not():

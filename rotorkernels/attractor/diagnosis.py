@@ -151,20 +151,36 @@ def exponents_of_orbit(multipliers, k, period):
     return np.sort(np.log(np.abs(np.asarray(multipliers))))[::-1] / (k * period)
 
 
-def settle_on_orbit(model, u0, p, opts, orbit_state, max_periods, rel_tol, k=1):
+# settle_on_orbit(multipliers=...): an orbit whose multipliers are all within SETTLE_CONTRACTION of 0
+# (its deviations shrink by 10 % or more per period: no bifurcation is near, where the basin
+# could be small) counts as reached once the state is within SETTLE_NEAR x its size and got
+# closer over the last period; a state that close to such an orbit converges onto it (a start
+# on another attractor does not come that close), and the last factor 100 of convergence took
+# half of the settling periods (Fig. 13: 8-16 -> 1-4 periods per point).
+SETTLE_NEAR = 1e-3
+SETTLE_CONTRACTION = 0.9
+
+
+def settle_on_orbit(model, u0, p, opts, orbit_state, max_periods, rel_tol, k=1, multipliers=None):
     """Integrate from u0 k forcing periods at a time until the state is within rel_tol x
-    max(1, max|orbit_state|) of the period-k orbit's state. Returns (state, periods used,
-    reached). A start in the orbit's basin converges like max|lambda|^n; one on another
-    attractor does not, and its periods then count as that attractor's transient."""
+    max(1, max|orbit_state|) of the period-k orbit's state -- or, given the orbit's multipliers
+    with max|lambda| <= SETTLE_CONTRACTION, within SETTLE_NEAR x that and closer than a period
+    before. Returns (state, periods used, reached). A start in the orbit's basin converges like
+    max|lambda|^n; one on another attractor does not, and its periods then count as that
+    attractor's transient."""
     u = np.asarray(u0, float).copy()
-    scale = rel_tol * max(1.0, float(np.abs(orbit_state).max()))
+    size = max(1.0, float(np.abs(orbit_state).max()))
+    near = multipliers is not None and np.abs(multipliers).max() <= SETTLE_CONTRACTION
     h = 0.0
     steps = int(max_periods) // k
+    last = -np.inf           # the near test needs one period of contraction
     for n in range(steps + 1):
-        if np.abs(u - orbit_state).max() <= scale:
+        dist = np.abs(u - orbit_state).max()
+        if dist <= rel_tol * size or (near and dist <= SETTLE_NEAR * size and dist < last):
             return u, n * k, True
         if n == steps:
             break
+        last = dist
         u, status, _, h = ig.flow(model.kernel, 0.0, float(k), u, p, False, opts, h)
         if status != ig.STATUS_OK:
             break
@@ -182,7 +198,7 @@ def settle_on_continued_orbit(model, u0, p, opts, k, max_periods, rel_tol):
     orbit = periodic_orbit_of(model, np.asarray(u0, float), p, opts, k, rel_tol)
     if orbit is None or np.abs(orbit[2]).max() >= 1.0:
         return None, u0, 0
-    u, used, reached = settle_on_orbit(model, u0, p, opts, orbit[1], max_periods, rel_tol, orbit[0])
+    u, used, reached = settle_on_orbit(model, u0, p, opts, orbit[1], max_periods, rel_tol, orbit[0], orbit[2])
     return (orbit if reached else None), u, used
 
 
@@ -302,7 +318,8 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
     u0 = np.asarray(u0, float)
     if stable_orbit is not None and not lyapunov_always:
         state, lams = stable_orbit
-        u0, used, reached = settle_on_orbit(model, u0, p, opts, state, n_transient, period_rtol)
+        u0, used, reached = settle_on_orbit(model, u0, p, opts, state, n_transient, period_rtol,
+                                            multipliers=lams if settle_early else None)
         if reached:
             return _on_stable_orbit(model, state, lams, period, int(n_samples), state.copy())
         n_transient -= used
