@@ -169,7 +169,7 @@ LYAPUNOV_MIN_PERIODS = 300
 def _attractor_chain(model, params, sols, opts, ana, order, seconds):
     """Continuation of the attractor: each speed (in `order`) starts from the previous one's end
     state; the first from its periodic orbit when one was found, else near static equilibrium."""
-    state = None
+    state, k_prev = None, 0
     for i in order:
         start = time.perf_counter()
         par, sol = params[i], sols[i]
@@ -183,9 +183,11 @@ def _attractor_chain(model, params, sols, opts, ana, order, seconds):
             lyapunov_always=not ana["derive_when_stable"], stable_orbit=stable_orbit,
             max_periods=ana["lyapunov_max_periods"],
             min_periods=min(LYAPUNOV_MIN_PERIODS, ana["lyapunov_max_periods"]), rtol_stop=ana["lyapunov_rtol"],
-            settle_early=ana["stop_when_settled"], periodic=par.periodic)
+            settle_early=ana["stop_when_settled"], converged_stop=ana["lyapunov_converged_stop"],
+            continued_period=k_prev, periodic=par.periodic)
         # a diverged run leaves no attractor to continue from: the next speed starts afresh
         state = att.end_state if att.code not in (attractor.DIVERGED, attractor.INTEGRATION_FAILED) else None
+        k_prev = att.period if att.code == attractor.PERIODIC else 0
         seconds[i] += time.perf_counter() - start
         yield i, att
 

@@ -69,6 +69,8 @@ SCHEMA = {
                               help="a Lyapunov run stops once the largest exponent's standard error is below this fraction of it"),
         "stop_when_settled": Key("bool", default=True,
                                  help="end the transient once the samples repeat on a stable period-k orbit"),
+        "lyapunov_converged_stop": Key("bool", default=True,
+                                       help="a Lyapunov run also stops once its weighted average has converged to 0 (tori)"),
     },
     "continuation": {   # `rotorsweep continue`: pseudo-arclength branches, one per line of the other axes
         "parameter": Key("str", default="", help="the scene parameter continued (default: the model's continuation axis)"),

@@ -49,7 +49,7 @@ def entry_points(spec, attractor=True, integrator="dop853"):
         orbits.append((ig.derivative, (kernel, 0.0, u, p, False, u, np.zeros((n, n)))))
     attractors = [
         (_poincare, (kernel, u, p, opts, 0, 1, 0.0, 0.0)),
-        (_benettin, (kernel, u, p, opts, 0, 0, 1.0, 1, 2, 2, 1e-3, 1e-4, True, 0.0, 0.0)),
+        (_benettin, (kernel, u, p, opts, 0, 0, 1.0, 1, 2, 2, 1e-3, 1e-4, True, 0.0, 0.0, False)),
         (_detect_period, (np.zeros((2, n)), 1, 1e-6, 1e-3)),     # the same for every model
     ]
     return orbits + attractors if attractor else orbits

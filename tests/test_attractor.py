@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from rotorkernels import attractor as at, continuation, floquet, integrators as ig, models, shooting
+from rotorkernels.attractor import lyapunov
 from rotorkernels.models import jeffcott_clearance as jc
 from tests.reference import BaiPoint
 from tests.test_kernels import JEFF, bai_params
@@ -121,6 +122,62 @@ def test_early_stop_and_largest_lyapunov_is_the_first_component():
     assert (lle, lle_err, used2, status2) == (expo[0], stderr[0], used, status)
     assert 200 <= used < 3000                                  # stopped on its uncertainty
     assert stderr[0] <= 0.1 * abs(expo[0]) + 1e-4
+
+
+def test_converged_stop_on_an_undamped_oscillator_gives_zero_exponents():
+    """An undamped linear oscillator (rotations of 5.48 and 8.37 rad per period, generic): every
+    exponent is 0 exactly, and log R_11 is a quasi-periodic sequence, so the weighted average
+    converges faster than any power of N while the block standard error falls only like 1/N.
+    The converged stop ends the run long before the standard-error rule does (608 against 1910
+    periods, where its blocks happen to cancel), at 0 to within its tolerance atol_stop; the
+    spectrum's sum is the trace, 0."""
+    p = np.array([30.0, 0.0, 70.0, 0.0, 0.0])
+    lam = np.linalg.eigvals(linear_system(p))
+    assert np.all(lam.real == 0.0) and np.all(np.abs(lam.imag) > 5.0)
+    # rtol_stop ~0: the standard-error rule compares with rtol x the plain mean, whose O(1/N)
+    # oscillation would stand in for the exponent here
+    kw = dict(n_transient=0, max_periods=3000, rtol_stop=1e-12, min_periods=100, atol_stop=1e-7)
+    expo, stderr, used, status = at.lyapunov_spectrum(LINEAR, np.ones(4), p, TIGHT, converged_stop=True, **kw)
+    assert status == ig.STATUS_OK and used < 1500, used
+    assert stderr[0] > 1e-7                                             # not the standard-error rule
+    assert abs(expo[0]) <= 1e-7 and abs(expo.sum()) < 1e-10
+    _, _, used_plain, _ = at.lyapunov_spectrum(LINEAR, np.ones(4), p, TIGHT, **kw)
+    assert used_plain > 3 * used, used_plain   # its blocks happen to cancel at 1910
+    # a damped one (exponents -0.25 and -0.5, not 0) is not stopped by it
+    damped = np.array([30.0, 1.0, 70.0, 1.0, 0.5])
+    _, _, used_damped, _ = at.lyapunov_spectrum(LINEAR, np.ones(4), damped, TIGHT, converged_stop=True, **kw)
+    assert used_damped == 3000
+
+
+def test_converged_test_rejects_a_random_sequence_and_accepts_a_quasi_periodic_one():
+    """`_converged` alone, with a tolerance that any average passes (atol 1): on i.i.d. interval
+    logs of mean 0 (a mixing sequence, the hardest case: its exponent is within any atol of 0)
+    the three weighted averages differ by the order of the statistical error, so their spread is
+    below 10 % of the block standard error in about 0.3 % of the runs (measured on 2000 runs at
+    304 and 600 intervals); on g(k alpha), alpha irrational, the test passes at 400 intervals."""
+    def converged(logs):
+        csum = np.concatenate([np.zeros(1), np.cumsum(logs)])[:, None]
+        se = lyapunov._block_stderr(csum, len(logs), 10, 1.0)[0] * lyapunov.WEIGHT_STDERR_FACTOR
+        return lyapunov._converged(csum, len(logs), se, 1.0, 1.0)
+
+    rng = np.random.default_rng(5)
+    passed = sum(converged(rng.standard_normal(400)) for _ in range(500))
+    assert passed <= 7, passed                                          # ~1.5 expected
+    k = np.arange(400)
+    assert converged(0.05 * np.cos(2 * np.pi * k * (np.sqrt(5) - 1) / 2) + 0.1 * np.sin(k * np.sqrt(2)))
+
+
+def test_converged_stop_on_the_torus_gives_a_zero_exponent():
+    """Past the Neimark-Sacker bifurcation (148 Hz, 7.6 um) the attractor is a torus, whose
+    largest exponent is 0 exactly. With the converged stop the Lyapunov run ends well before the
+    cap with |lle| per period within the stop's tolerance (atol 1e-4, rtol |lle| negligible)."""
+    p, period = bai_params(BaiPoint(148.0, 7.6e-6))
+    p1 = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=jc.static_guess, tol=1e-10)
+    res = at.diagnose(JEFF, p1.state, p, period, OPTS, max_periods=1000, min_periods=300,
+                      rtol_stop=0.1, converged_stop=True)
+    assert (res.code, res.period) == (at.QUASI_PERIODIC, 0)
+    assert 300 <= res.periods_used < 1000
+    assert abs(res.lle * period) <= 1e-4 * (1 + 0.1), res.lle * period
 
 
 def test_diverging_run_reports_its_status():
@@ -285,6 +342,19 @@ def test_settle_on_orbit_stops_only_on_the_orbit():
     # too few periods to converge: not reached (the state then continues as a plain transient)
     _, _, reached = at.settle_on_orbit(JEFF, start, p, OPTS, sol.state, 3, 1e-6)
     assert not reached
+    # the near stop (multipliers given, max |lambda| = 0.88 <= SETTLE_CONTRACTION): within
+    # SETTLE_NEAR and contracting, in fewer periods; from there the state does reach the orbit
+    assert np.abs(sol.multipliers).max() <= at.diagnosis.SETTLE_CONTRACTION
+    near, used_near, reached = at.settle_on_orbit(JEFF, start, p, OPTS, sol.state, 400, 1e-6,
+                                                  multipliers=sol.multipliers)
+    assert reached and 0 < used_near < used
+    assert np.abs(near - sol.state).max() <= at.diagnosis.SETTLE_NEAR * np.abs(sol.state).max()
+    _, _, reached = at.settle_on_orbit(JEFF, near, p, OPTS, sol.state, 400, 1e-6)
+    assert reached
+    # an orbit closer to a bifurcation (max |lambda| > SETTLE_CONTRACTION) gets no near stop
+    slow = sol.multipliers / np.abs(sol.multipliers).max() * 0.95
+    _, used_slow, _ = at.settle_on_orbit(JEFF, start, p, OPTS, sol.state, 400, 1e-6, multipliers=slow)
+    assert used_slow == used
 
 
 def test_period_two_attractor_is_refined_and_stable_although_period_one_is_not():
@@ -345,6 +415,34 @@ def test_settled_stop_does_not_stop_on_an_unstable_orbit():
         mp.setattr(at.diagnosis, "ESCAPES", 0)
         orbit, _, used, _ = at.settle_periodic(JEFF, p1.state, p, OPTS, 300, 32, tol)
     assert orbit is None and used == 300
+
+
+def test_continued_period_two_orbit_is_the_full_transients_attractor():
+    """The neighbour's period-2 attractor continued (`settle_on_continued_orbit`: shooting on 2 T
+    from its end state, then the transient 2 periods at a time until it reaches the orbit)
+    against the full transient of 300 periods from the same start, 55.0 Hz from 55.1 Hz's
+    attractor: same k, multipliers (both refined by Newton to 1e-9), points on the section
+    (detection tolerance); far fewer periods. From the unstable period-1 orbit it declines
+    (None, no periods used) and the transient goes on as without it."""
+    tol = at.default_period_rtol(OPTS)
+    p_next, period_next = bai_params(BaiPoint(55.1, 19.0e-6))
+    neighbour = at.diagnose(JEFF, jc.static_guess(p_next), p_next, period_next, OPTS, n_transient=300)
+    assert (neighbour.code, neighbour.period) == (at.PERIODIC, 2)
+    p, period = bai_params(BaiPoint(55.0, 19.0e-6))
+    orbit, reached, used = at.settle_on_continued_orbit(JEFF, neighbour.end_state, p, OPTS, 2, 300, tol)
+    assert orbit is not None and orbit[0] == 2 and used < 100
+    fast = at.diagnose(JEFF, neighbour.end_state, p, period, OPTS, n_transient=300, settle_early=True,
+                       continued_period=2)
+    long = at.diagnose(JEFF, neighbour.end_state, p, period, OPTS, n_transient=300)
+    assert (fast.code, fast.period, fast.derived) == (long.code, long.period, long.derived) == (at.PERIODIC, 2, True)
+    np.testing.assert_allclose(np.sort_complex(fast.multipliers), np.sort_complex(long.multipliers), atol=1e-7)
+    scale = tol * np.abs(long.samples).max()
+    gaps = np.abs(fast.samples[:, None, :] - long.samples[None, :, :]).max(axis=2).min(axis=1)
+    assert gaps.max() <= scale and np.abs(reached - fast.end_state).max() == 0.0
+    p1 = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=jc.static_guess, tol=1e-10)
+    assert not p1.stable
+    orbit, reached, used = at.settle_on_continued_orbit(JEFF, p1.state, p, OPTS, 1, 300, tol)
+    assert orbit is None and used == 0 and reached is p1.state
 
 
 @pytest.mark.parametrize("point, expected", [

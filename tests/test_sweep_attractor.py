@@ -44,7 +44,8 @@ def test_analysis_keys_are_validated():
     assert cfg.data["analysis"] == {
         "floquet": True, "attractor": True, "derive_when_stable": True, "sweep_direction": "up",
         "transient_periods": 200, "poincare_samples": 128, "max_period": 32,
-        "lyapunov_max_periods": 2000, "lyapunov_rtol": 0.02, "stop_when_settled": True}
+        "lyapunov_max_periods": 2000, "lyapunov_rtol": 0.02, "stop_when_settled": True,
+        "lyapunov_converged_stop": True}
     bad = {
         'sweep_direction = "sideways"': "analysis.sweep_direction",
         "poincare_samples = 64": "analysis.poincare_samples: must be >= 4 x analysis.max_period",
@@ -53,6 +54,7 @@ def test_analysis_keys_are_validated():
         "lyapunov_rtol = 0": "analysis.lyapunov_rtol",
         "lyapunov_rtol = 1.5": "analysis.lyapunov_rtol",
         'stop_when_settled = "yes"': "analysis.stop_when_settled",
+        'lyapunov_converged_stop = 1': "analysis.lyapunov_converged_stop",
     }
     for line, message in bad.items():
         with pytest.raises(config.ConfigError, match=message.replace(".", r"\.")):

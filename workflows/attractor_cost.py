@@ -11,7 +11,8 @@ Runs on a local cluster (one process per worker), in this order:
   transient, Lyapunov runs to a 2 % standard error or the cap: the diagnostics before these
   shortcuts); the reference again with one more transient period (its noise floor: how often
   two equally long runs from slightly different states disagree); early stop of the transient
-  only; the scene as shipped (early stop and the scene's lyapunov_rtol); with
+  only; that and the scene's lyapunov_rtol; the scene as shipped (those and the converged stop
+  of the Lyapunov runs, `analysis.lyapunov_converged_stop`); with
   --lyapunov-everywhere also a Lyapunov run at every point (no 'derive when stable').
 - the cascade (configs/bai2006_cascade.toml, swept up and down): reference, its noise floor, as
   shipped, and as shipped with the Fig. 13 scene's lyapunov_rtol.
@@ -34,8 +35,9 @@ from workflows.bench.common import DOCS, ROOT, add_render_options, log, loadavg,
 FIG13 = ROOT / "configs" / "bai2006_fig13.toml"
 CASCADE = ROOT / "configs" / "bai2006_cascade.toml"
 WORK = ROOT / "build" / "attractor_cost"           # the runs' cubes (what --compare-only reads)
-# the diagnostics without this change's shortcuts (transient to its full length, 2 % Lyapunov stop)
-REFERENCE = {"attractor": True, "stop_when_settled": False, "lyapunov_rtol": 0.02}
+# the diagnostics without the shortcuts (transient to its full length, Lyapunov to a 2 % standard
+# error or the cap)
+REFERENCE = {"attractor": True, "stop_when_settled": False, "lyapunov_rtol": 0.02, "lyapunov_converged_stop": False}
 # the reference again from slightly different states (every transient one period longer): how
 # far two equally long runs disagree where the attractor depends on where a run starts
 AGAIN = ("reference, one more transient period", {**REFERENCE, "transient_periods": 201})
@@ -44,7 +46,9 @@ FIG13_RUNS = {
     "reference": ("+ attractor, reference (full transients, Lyapunov to 2 % or the cap)", REFERENCE),
     "again": AGAIN,
     "settle": ("+ attractor, transient stopped when settled", {**REFERENCE, "stop_when_settled": True}),
-    "fast": ("+ attractor, as shipped (settled stop + the scene's lyapunov_rtol)", {"attractor": True}),
+    "settle_rtol": ("+ attractor, settled stop + the scene's lyapunov_rtol",
+                    {"attractor": True, "lyapunov_converged_stop": False}),
+    "fast": ("+ attractor, as shipped (settled stop + the scene's lyapunov_rtol + converged stop)", {"attractor": True}),
 }
 EVERYWHERE = ("+ attractor, Lyapunov run everywhere (no derive when stable)",
               {**REFERENCE, "derive_when_stable": False})

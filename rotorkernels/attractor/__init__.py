@@ -9,7 +9,7 @@ kernels return exponents *per unit tau* (per forcing period); `lyapunov_si` divi
 from rotorkernels.attractor.diagnosis import (  # noqa: F401 (the package's API)
     ATTRACTOR, CHAOTIC, DIVERGED, INTEGRATION_FAILED, LLE_FLOOR, NOT_COMPUTED, NOT_SETTLED, PERIODIC,
     QUASI_PERIODIC, SIGMAS, Attractor, classify, failure_class, closed_curve, diagnose, exponents_of_orbit, periodic_orbit_of,
-    settle_on_orbit, settle_periodic)
+    settle_on_continued_orbit, settle_on_orbit, settle_periodic)
 from rotorkernels.attractor.lyapunov import (  # noqa: F401
     Lyapunov, derived_lle, largest_lyapunov, lyapunov_si, lyapunov_spectrum)
 from rotorkernels.attractor.period import PERIOD_FLOOR, default_period_rtol, detect_period  # noqa: F401

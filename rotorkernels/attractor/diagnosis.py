@@ -151,23 +151,55 @@ def exponents_of_orbit(multipliers, k, period):
     return np.sort(np.log(np.abs(np.asarray(multipliers))))[::-1] / (k * period)
 
 
-def settle_on_orbit(model, u0, p, opts, orbit_state, max_periods, rel_tol):
-    """Integrate from u0 one forcing period at a time until the state is within rel_tol x
-    max(1, max|orbit_state|) of the periodic orbit's state. Returns (state, periods used,
-    reached). A start in the orbit's basin converges like max|lambda|^n; one on another
-    attractor does not, and its periods then count as that attractor's transient."""
+# settle_on_orbit(multipliers=...): an orbit whose multipliers are all within SETTLE_CONTRACTION of 0
+# (its deviations shrink by 10 % or more per period: no bifurcation is near, where the basin
+# could be small) counts as reached once the state is within SETTLE_NEAR x its size and got
+# closer over the last period; a state that close to such an orbit converges onto it (a start
+# on another attractor does not come that close), and the last factor 100 of convergence took
+# half of the settling periods (Fig. 13: 8-16 -> 1-4 periods per point).
+SETTLE_NEAR = 1e-3
+SETTLE_CONTRACTION = 0.9
+
+
+def settle_on_orbit(model, u0, p, opts, orbit_state, max_periods, rel_tol, k=1, multipliers=None):
+    """Integrate from u0 k forcing periods at a time until the state is within rel_tol x
+    max(1, max|orbit_state|) of the period-k orbit's state -- or, given the orbit's multipliers
+    with max|lambda| <= SETTLE_CONTRACTION, within SETTLE_NEAR x that and closer than a period
+    before. Returns (state, periods used, reached). A start in the orbit's basin converges like
+    max|lambda|^n; one on another attractor does not, and its periods then count as that
+    attractor's transient."""
     u = np.asarray(u0, float).copy()
-    scale = rel_tol * max(1.0, float(np.abs(orbit_state).max()))
+    size = max(1.0, float(np.abs(orbit_state).max()))
+    near = multipliers is not None and np.abs(multipliers).max() <= SETTLE_CONTRACTION
     h = 0.0
-    for n in range(int(max_periods) + 1):
-        if np.abs(u - orbit_state).max() <= scale:
-            return u, n, True
-        if n == max_periods:
+    steps = int(max_periods) // k
+    last = -np.inf           # the near test needs one period of contraction
+    for n in range(steps + 1):
+        dist = np.abs(u - orbit_state).max()
+        if dist <= rel_tol * size or (near and dist <= SETTLE_NEAR * size and dist < last):
+            return u, n * k, True
+        if n == steps:
             break
-        u, status, _, h = ig.flow(model.kernel, 0.0, 1.0, u, p, False, opts, h)
+        last = dist
+        u, status, _, h = ig.flow(model.kernel, 0.0, float(k), u, p, False, opts, h)
         if status != ig.STATUS_OK:
             break
-    return u, n, False
+    return u, n * k, False
+
+
+def settle_on_continued_orbit(model, u0, p, opts, k, max_periods, rel_tol):
+    """The 'derive when stable' shortcut for the neighbour's period-k attractor: the period-k
+    orbit through u0 (the neighbour's end state, next to its orbit) refined by shooting on k T,
+    and, when it is stable, the transient integrated k periods at a time until it reaches that
+    orbit (`settle_on_orbit`). Returns (orbit (k, state, multipliers) or None, state reached,
+    periods used): None, 0 periods, when the refinement fails or the orbit is unstable; None,
+    the periods used, when the state did not reach it (another attractor: those periods are its
+    transient)."""
+    orbit = periodic_orbit_of(model, np.asarray(u0, float), p, opts, k, rel_tol)
+    if orbit is None or np.abs(orbit[2]).max() >= 1.0:
+        return None, u0, 0
+    u, used, reached = settle_on_orbit(model, u0, p, opts, orbit[1], max_periods, rel_tol, orbit[0], orbit[2])
+    return (orbit if reached else None), u, used
 
 
 def _on_stable_orbit(model, orbit_state, multipliers, period, n_samples, end_state):
@@ -252,7 +284,8 @@ def _on_settled_orbit(model, orbit, p, period, opts, n_samples, reached):
 def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_period=32,
              period_rtol=None, orbit_lle=True, lyapunov_always=False, stable_orbit=None,
              renorm_periods=1.0, max_periods=2000, n_blocks=10, rtol_stop=0.02, min_periods=None,
-             atol_stop=1e-4, align_periods=20.0, weighted=True, periodic=True, settle_early=False):
+             atol_stop=1e-4, align_periods=20.0, weighted=True, periodic=True, settle_early=False,
+             converged_stop=False, continued_period=0):
     """One parameter point from u0 at tau = 0: Poincare samples after a transient, their period
     (tolerance `default_period_rtol(opts)` unless given), the largest exponent, and `classify`.
 
@@ -265,7 +298,10 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
     orbit (samples = its state) with derived exponents -- the 'derive when stable' shortcut.
     settle_early: the transient stops once the map has settled on a stable period-k orbit
     (`settle_periodic`); the point is that orbit, its samples the orbit's k points repeated,
-    derived exponents.
+    derived exponents; with continued_period = k > 0 (the neighbour's attractor was a period-k
+    orbit) it first refines that orbit from u0 and settles onto it when it is stable
+    (`settle_on_continued_orbit`), as stable_orbit does for period 1. converged_stop: a Lyapunov run also stops once its weighted average has
+    converged (`lyapunov.CONVERGED_FRACTION`: a torus's run no longer goes to max_periods).
     Samples that repeat on an unstable orbit (a start on or next to it) are retaken after a kick
     off it (ESCAPES). Otherwise (no period, the shooting fails, or lyapunov_always) a Lyapunov
     run starts where the samples end (no second transient). Returns an Attractor: code, period k, lle and lle_stderr
@@ -282,11 +318,18 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
     u0 = np.asarray(u0, float)
     if stable_orbit is not None and not lyapunov_always:
         state, lams = stable_orbit
-        u0, used, reached = settle_on_orbit(model, u0, p, opts, state, n_transient, period_rtol)
+        u0, used, reached = settle_on_orbit(model, u0, p, opts, state, n_transient, period_rtol,
+                                            multipliers=lams if settle_early else None)
         if reached:
             return _on_stable_orbit(model, state, lams, period, int(n_samples), state.copy())
         n_transient -= used
     nan = np.full(model.n_state, np.nan)
+    if continued_period > 0 and settle_early and periodic and orbit_lle and not lyapunov_always:
+        orbit, u0, used = settle_on_continued_orbit(model, u0, p, opts, int(continued_period), n_transient,
+                                                    period_rtol)
+        if orbit is not None:
+            return _on_settled_orbit(model, orbit, p, period, opts, int(n_samples), u0)
+        n_transient -= used
     if settle_early and periodic and orbit_lle and not lyapunov_always:
         orbit, u0, used, status = settle_periodic(model, u0, p, opts, int(n_transient), max_period, period_rtol)
         if status != ig.STATUS_OK:
@@ -320,7 +363,7 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
         return Attractor(PERIODIC, k, np.nan, np.nan, samples, end, int(status), 0.0, nan, lams, False)
     expo, stderr, n_done, lstatus, end2, t_end = _run_benettin(
         model, end, p, opts, 0, renorm_periods, max_periods, n_blocks, rtol_stop, min_periods,
-        atol_stop, align_periods, weighted, clock * (n_transient + n_samples - 1), clock)
+        atol_stop, align_periods, weighted, clock * (n_transient + n_samples - 1), clock, converged_stop)
     code, k = classify(samples, expo[0], stderr[0], k, lstatus, forced_torus=not periodic)
     if code == NOT_SETTLED and lstatus == ig.STATUS_OK:
         # a contracting attractor whose samples had not settled: by the end of the Lyapunov run
