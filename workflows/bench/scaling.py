@@ -146,7 +146,7 @@ def scheduler_section(runs, n_tasks):
 
     rates = scheduler_throughput.measure(n_tasks=n_tasks)
     two = [r for r in runs if r["workers"] == 2 and r["chunk_points"] is None and r["tasks"].get("n_tasks")]
-    chunk_s = (statistics.median(r["tasks"]["busy_total_s"] / r["tasks"]["n_tasks"] for r in two)
+    chunk_s = (statistics.median(r["tasks"].get("chunk_busy_s", r["tasks"]["busy_total_s"]) / r["tasks"]["n_tasks"] for r in two)
                if two else None)
     best = max(v["batch_tasks_per_s"] for v in rates.values())
     return dict(by_workers={str(k): v for k, v in rates.items()}, chunk_compute_s=chunk_s,

@@ -71,16 +71,19 @@ def phase_timers():
 
 def task_summary(records, n_workers, phase_start_epoch, phase_seconds):
     """Busy time per worker, span, tail and utilization of the compute phase from the records
-    of dask's task stream (worker clocks are the machine's wall clock)."""
-    tasks = []
+    of dask's task stream (worker clocks are the machine's wall clock): chunk tasks and the
+    boundary refinement tasks that run between them."""
+    tasks, refining = [], []
     for rec in records:
-        if not str(rec.get("key", "")).startswith(("compute_chunk", "('compute_chunk")):
-            continue
-        for ss in rec.get("startstops", ()):
+        key = str(rec.get("key", "")).lstrip("('")
+        kind = tasks if key.startswith("compute_chunk") else refining if key.startswith("refine_brackets") else None
+        for ss in rec.get("startstops", ()) if kind is not None else ():
             if ss.get("action") == "compute":
-                tasks.append((rec["worker"], ss["start"], ss["stop"]))
+                kind.append((rec["worker"], ss["start"], ss["stop"]))
     if not tasks:
         return dict(n_tasks=0)
+    n_chunks, chunk_busy = len(tasks), sum(b - a for _, a, b in tasks)
+    tasks += refining          # the boundary table's tasks run between the chunks: worker work too
     workers = sorted({w for w, _, _ in tasks})
     busy = {w: sum(b - a for ww, a, b in tasks if ww == w) for w in workers}
     last = {w: max(b for ww, _, b in tasks if ww == w) for w in workers}
@@ -93,7 +96,8 @@ def task_summary(records, n_workers, phase_start_epoch, phase_seconds):
     timeline = [dict(worker=workers.index(w), start=round(a - first, 4), stop=round(b - first, 4))
                 for w, a, b in sorted(tasks, key=lambda t: t[1])]
     return dict(
-        n_tasks=len(tasks),
+        n_tasks=n_chunks, chunk_busy_s=round(chunk_busy, 3), n_refine_tasks=len(refining),
+        refine_busy_s=round(sum(b - a for _, a, b in refining), 3),
         busy_s=[round(b, 3) for b in busy_list],
         busy_total_s=round(sum(busy_list), 3),
         span_s=round(end - first, 3),
