@@ -138,8 +138,8 @@ def _interpretation(data):
         f"keeps the best of two. The step-loop loop copies each state into a work array (as a stage is "
         f"written before each evaluation; about 0.7 ns) while C reads it in place: given the same copy, "
         f"C costs 12-14 ns (presumably a store-forwarding stall of its vector loads), so the in-place C loop is the "
-        f"harder floor and the one kept. The plain loop's higher ratio is the reference counting of a "
-        f"row view per call, which the step loops are compiled without.",
+        f"harder floor and the one kept. The plain loop differs from the step-loop one by the reference "
+        f"counting of a row view per call, which the step loops are compiled without.",
         f"- **Variational derivative vs C**: {var} (no target; the Jeffcott model's is 1.3x). Why: the kernels' "
         f"tangent product J Phi runs with the state size as a runtime value above 4 states "
         f"(`models.generate.FAST_PATH_MAX_STATE`: constant-size, unrolled copies only up to 4, to bound compile "
