@@ -415,11 +415,13 @@ def _killed_chunk(chunk, parts):
 
 
 def _close(client, cluster):
-    """Close quietly: after Ctrl-C or an error the nannies warn that they kill workers still busy
-    in a kernel, which is the intent here."""
+    """Close silently: after Ctrl-C or an error the nannies warn that they kill workers still busy
+    in a kernel, and the in-process scheduler logs CRITICAL tracebacks for results of tasks in
+    flight it can no longer send to the closed client; both are the intent here, and the run's
+    outcome is already decided (its part files are written)."""
     logger = logging.getLogger("distributed")
     level = logger.level
-    logger.setLevel(logging.ERROR)
+    logger.setLevel(logging.CRITICAL + 1)
     try:
         client.close()
         if cluster is not None:
