@@ -293,8 +293,12 @@ def test_ctrl_c_prints_one_line_and_no_worker_traceback(tmp_path):
     # come after the run has finished, however the machine schedules this test's polling
     cfg.write_text(LONG.replace("step = 0.5", "step = 0.1"))
     out = tmp_path / "long.nc"
+    # SIGINT at its default, as under a terminal: a CI job started in the background of a
+    # non-interactive shell inherits it ignored, and so would the CLI (which then rightly
+    # ignores Ctrl-C)
     proc = subprocess.Popen(CLI + ["run", str(cfg), "-o", str(out), "--workers", "2", "--chunk-points", "16"],
-                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+                            stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     wait_for_parts(cube.parts_dir(out), proc)
     os.killpg(proc.pid, signal.SIGINT)            # what a terminal's Ctrl-C does: the whole group
     err = proc.communicate(timeout=120)[1]
