@@ -71,6 +71,10 @@ def _lead(real, imag):
     return real[..., 0] + 1j * imag[..., 0]
 
 
+# What the brackets of a cube are built from.
+_LINE_VARS = ("orbit_status", "stable", "orbit_state", "multiplier_real", "multiplier_imag")
+
+
 def _cube_brackets(ds, axis):
     """(where, Bracket) of every stability change in a cube, lines in grid order."""
     others = _others(ds, axis)
@@ -84,10 +88,6 @@ def _cube_brackets(ds, axis):
         out += [(where, b) for b in brackets(line, grid, arrays["orbit_status"][line], arrays["stable"][line],
                                              arrays["orbit_state"][line], lead[line])]
     return out
-
-
-# What a line's refinement reads.
-_LINE_VARS = ("orbit_status", "stable", "orbit_state", "multiplier_real", "multiplier_imag")
 
 
 def refine_brackets(data, axis, items):

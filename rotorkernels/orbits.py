@@ -29,9 +29,8 @@ class ForcedOrbitProblem(NamedTuple):
         """Newton shooting from `guess`: (state, monodromy, status, reason, iterations, residual, n_rhs).
         far: the guess is no neighbour's orbit (a transient, a cold start): staged Newton, whose
         early iterations integrate at a looser tolerance (shooting.shoot_staged)."""
-        early = shooting.early_settings(self.opts) if far else self.opts
-        return shooting.shoot_staged(self.model.kernel, guess, self.p, float(self.periods), self.opts, early,
-                                     tol, max_iter)
+        return shooting.periodic_orbit(self.model, guess, self.p, self.opts, self.periods, tol, max_iter,
+                                       staged=far)
 
     def settle(self, u0, n_periods):
         """(state after n_periods forcing periods from u0, integration ok, n_rhs)."""

@@ -300,8 +300,9 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
     (`settle_periodic`); the point is that orbit, its samples the orbit's k points repeated,
     derived exponents; with continued_period = k > 0 (the neighbour's attractor was a period-k
     orbit) it first refines that orbit from u0 and settles onto it when it is stable
-    (`settle_on_continued_orbit`), as stable_orbit does for period 1. converged_stop: a Lyapunov run also stops once its weighted average has
-    converged (`lyapunov.CONVERGED_FRACTION`: a torus's run no longer goes to max_periods).
+    (`settle_on_continued_orbit`), as stable_orbit does for period 1. converged_stop: a
+    Lyapunov run also stops once its weighted average has converged (`lyapunov.CONVERGED_FRACTION`:
+    a torus's run no longer goes to max_periods).
     Samples that repeat on an unstable orbit (a start on or next to it) are retaken after a kick
     off it (ESCAPES). Otherwise (no period, the shooting fails, or lyapunov_always) a Lyapunov
     run starts where the samples end (no second transient). Returns an Attractor: code, period k, lle and lle_stderr

@@ -87,17 +87,26 @@ def _block_stderr(csum, n_done, n_blocks, dt):
 
 
 @njit(cache=True, nogil=True)
-def _weighted_first(csum, m):
-    """Weighted Birkhoff average of the first exponent's logs over the first m intervals (per
-    interval, not per unit tau)."""
-    acc = 0.0
+def _weighted_sums(csum, m, n):
+    """(sum of w_k log R_ii over the first m intervals for the first n exponents, sum of w_k):
+    the weighted Birkhoff average's numerator and denominator (see WEIGHT_STDERR_FACTOR)."""
+    acc = np.zeros(n)
     wsum = 0.0
     for k in range(m):
         s = (k + 0.5) / m
         w = np.exp(-1.0 / (s * (1.0 - s)))
         wsum += w
-        acc += w * (csum[k + 1, 0] - csum[k, 0])
-    return acc / wsum
+        for i in range(n):
+            acc[i] += w * (csum[k + 1, i] - csum[k, i])
+    return acc, wsum
+
+
+@njit(cache=True, nogil=True)
+def _weighted_first(csum, m):
+    """Weighted Birkhoff average of the first exponent's logs over the first m intervals (per
+    interval, not per unit tau)."""
+    acc, wsum = _weighted_sums(csum, m, 1)
+    return acc[0] / wsum
 
 
 @njit(cache=True, nogil=True)
@@ -125,15 +134,7 @@ def _estimate(csum, n_done, n_blocks, dt, weighted):
     stderr = _block_stderr(csum, n_done, n_blocks, dt)
     if not weighted or n_done < MIN_WEIGHTED:
         return csum[n_done] / (n_done * dt), stderr
-    n = csum.shape[1]
-    acc = np.zeros(n)
-    wsum = 0.0
-    for k in range(n_done):
-        s = (k + 0.5) / n_done
-        w = np.exp(-1.0 / (s * (1.0 - s)))
-        wsum += w
-        for i in range(n):
-            acc[i] += w * (csum[k + 1, i] - csum[k, i])
+    acc, wsum = _weighted_sums(csum, n_done, csum.shape[1])
     return acc / (wsum * dt), stderr * WEIGHT_STDERR_FACTOR
 
 

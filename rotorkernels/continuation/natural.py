@@ -6,7 +6,8 @@ through the two previous converged orbits (the scaled state makes neighbouring o
 the previous orbit itself, a transient settled from that guess, and last a cold start (a
 transient from near static equilibrium); Newton from a transient or a cold start, far from the
 orbit, is staged (its early iterations at a looser tolerance, shooting.shoot_staged). The first
-start that converges wins; failure of all is recorded as data. Everything depends only on the chain, never on how chains are scheduled.
+start that converges wins; failure of all is recorded as data. Everything depends only on the
+chain, never on how chains are scheduled.
 """
 from collections import namedtuple
 
