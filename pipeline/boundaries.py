@@ -177,10 +177,14 @@ class Tracker:
         index = np.asarray(index)
         values = {**{k: results[k] for k in ("orbit_status", "stable", "orbit_state")},
                   "lead": _lead(results["multiplier_real"], results["multiplier_imag"])}
-        keys, which = np.unique(index[:, self.others].reshape(len(index), -1), axis=0, return_inverse=True)
+        # lines by flat index: np.unique(axis=0) compares structured rows, and numpy reports a
+        # KeyboardInterrupt raised in that comparison as a TypeError
+        shape = [len(self.axes[a]) for a in self.other_names]
+        flat = np.ravel_multi_index(tuple(index[:, self.others].T), shape) if shape else np.zeros(len(index), int)
+        keys, which = np.unique(flat, return_inverse=True)
         found = []
-        for j, key in enumerate(tuple(int(v) for v in k) for k in keys):
-            rows = np.flatnonzero(which.ravel() == j)
+        for j, key in enumerate(tuple(int(v) for v in np.unravel_index(k, shape)) for k in keys):
+            rows = np.flatnonzero(which == j)
             pos = index[rows, self.at]
             line = self._line(key, values["orbit_state"].shape[1])
             line["known"][pos] = True

@@ -5,7 +5,9 @@ no traceback."""
 import argparse
 import json
 import os
+import signal
 import sys
+import threading
 
 import numpy as np
 
@@ -400,11 +402,40 @@ def user_errors():
     return (ValueError, *found)
 
 
+def _recording_interrupts(seen):
+    """A SIGINT handler that raises KeyboardInterrupt as Python's does and first appends to `seen`:
+    a library may turn the KeyboardInterrupt into another error (numpy's comparison of structured
+    arrays, in np.unique(axis=0), reports it as a TypeError), and the run must still end as
+    interrupted. The previous handler, or None where SIGINT is not Python's default (ignored by
+    the parent, or a caller's own) or this is not the main thread."""
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+        return None
+
+    def handler(signum, frame):
+        seen.append(signum)
+        signal.default_int_handler(signum, frame)
+
+    return signal.signal(signal.SIGINT, handler)
+
+
 def main(argv=None):
     args = build_parser().parse_args(argv)
+    interrupts = []
+    previous = _recording_interrupts(interrupts)
+    try:
+        return _dispatch(args, interrupts)
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
+
+
+def _dispatch(args, interrupts):
     try:
         return args.func(args)
     except Exception as exc:
+        if interrupts:
+            return _interrupted()
         if isinstance(exc, user_errors()):
             return _error(args, exc)
         if isinstance(exc, BrokenPipeError):      # output piped into head & co.
@@ -414,8 +445,12 @@ def main(argv=None):
             return _error(args, fileio.os_error_text(exc))
         raise
     except KeyboardInterrupt:
-        print("rotorsweep: interrupted; finished chunks are kept, rerun with --resume", file=sys.stderr)
-        return 130
+        return _interrupted()
+
+
+def _interrupted():
+    print("rotorsweep: interrupted; finished chunks are kept, rerun with --resume", file=sys.stderr)
+    return 130
 
 
 def _error(args, message):

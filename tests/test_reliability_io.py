@@ -306,3 +306,27 @@ def test_ctrl_c_prints_one_line_and_no_worker_traceback(tmp_path):
     lines = [line for line in err.splitlines()                 # not the phase and progress lines
              if " points " not in line and not line.startswith(sweep.PHASE)]
     assert lines == ["rotorsweep: interrupted; finished chunks are kept, rerun with --resume"], err
+
+
+def test_ctrl_c_is_an_interrupt_where_a_library_turns_it_into_another_error(tmp_path, monkeypatch, capsys):
+    """numpy's structured comparison (np.unique(axis=0), in the boundary tracker) reports a
+    KeyboardInterrupt raised inside it as a TypeError; the CLI still ends as interrupted."""
+    import signal
+
+    import pipeline
+
+    def run_hit_inside_numpy(*args, **kwargs):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(5)                                  # the handler runs before this ends
+        except BaseException:
+            raise TypeError("Cannot compare structured arrays unless they have a common dtype.") from None
+        raise AssertionError("SIGINT was not delivered")
+
+    cfg = tmp_path / "small.toml"
+    cfg.write_text(SMALL)
+    monkeypatch.setattr(pipeline, "run", run_hit_inside_numpy)
+    before = signal.getsignal(signal.SIGINT)
+    assert cli.main(["run", str(cfg), "-o", str(tmp_path / "x.nc")]) == 130
+    assert capsys.readouterr().err == "rotorsweep: interrupted; finished chunks are kept, rerun with --resume\n"
+    assert signal.getsignal(signal.SIGINT) is before               # the caller's handler is back
