@@ -121,12 +121,22 @@ def write_cube(ds, path, overwrite=False):
     if path.exists() and not overwrite:
         raise CubeError(f"{path} exists; pass --overwrite to replace it")
     path.parent.mkdir(parents=True, exist_ok=True)
-    with fileio.atomic_path(path) as tmp:
+    with fileio.atomic_path(path) as tmp, _local_write_lock():
         try:
             ds.drop_encoding().to_netcdf(tmp, engine="netcdf4", encoding=_encoding(ds))
         except RuntimeError as exc:   # netCDF-C reports a full disk as "NetCDF: HDF error"
             raise OSError(errno.EIO, f"netCDF write failed ({exc}; is the disk full?)", str(path)) from None
     return path
+
+
+def _local_write_lock():
+    """xarray guards each netCDF write with a lock of the active Dask scheduler; with a distributed
+    Client alive in the process (a notebook's, a benchmark's) that is a lock held by the scheduler,
+    a round trip per call (Fig. 13's cube: 0.22 s instead of 0.06 s). A cube is in memory: a
+    process-local lock does."""
+    import dask
+
+    return dask.config.set(scheduler="synchronous")
 
 
 def _encoding(ds):

@@ -122,6 +122,22 @@ def test_existing_cube_needs_overwrite(tmp_path):
     assert_same(cube.open_cube(path), other)
 
 
+def test_a_distributed_client_in_the_process_does_not_lock_the_write_on_its_scheduler(tmp_path, monkeypatch):
+    """xarray would take a lock on the scheduler of an active distributed Client for each netCDF
+    call of the write (a round trip each); the cube is in memory and needs none."""
+    from distributed import Client, Lock
+
+    taken = []
+    acquire = Lock.acquire
+    monkeypatch.setattr(Lock, "acquire", lambda self, *a, **k: taken.append(self.name) or acquire(self, *a, **k))
+    with Client(processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None):
+        cube.write_cube(synthetic_cube(), tmp_path / "c.nc")
+        assert taken == []
+        Lock("probe").acquire(timeout=5)              # the patch sees the scheduler's locks
+        assert taken == ["probe"]
+    assert xr.open_dataset(tmp_path / "c.nc").sizes == synthetic_cube().sizes
+
+
 @pytest.mark.parametrize("interrupt", [OSError("disk full"), KeyboardInterrupt()])
 def test_interrupted_write_keeps_the_previous_cube(tmp_path, monkeypatch, interrupt):
     path = cube.write_cube(four_d(), tmp_path / "c.nc")

@@ -11,8 +11,9 @@ machine, tables, what limits the speed-up, verdict against the target) and scali
 time against chunk size and the task timeline of the two-worker run).
 
 What is measured, every run through the public API `pipeline.run(cfg, output,
-scheduler=<address>, chunk_points=..., overwrite=True)` on a fresh
-`distributed.LocalCluster(n_workers=k, threads_per_worker=1, processes=True)` (`scaling_runs`):
+scheduler=<address>, chunk_points=..., overwrite=True)` on a fresh local cluster of k
+single-threaded worker processes, the one `rotorsweep run` starts (`pipeline.sweep.local_cluster`,
+with its relaxed housekeeping settings; `scaling_runs`):
 
 * wall time of the sweep (`pipeline.run`, from the call to the written cube), separately from
   the cluster start-up and from the workers' warm-up (import + loading Numba's on-disk cache:

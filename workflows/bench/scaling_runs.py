@@ -11,10 +11,6 @@ import numpy as np
 from workflows.bench.common import loadavg
 from workflows.bench.scaling_scene import chunk_plan, first_point, scene_config
 
-WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
-              "MKL_NUM_THREADS": "1"}
-
-
 def driver_max_rss_kib():
     return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
 
@@ -112,13 +108,11 @@ def task_summary(records, n_workers, phase_start_epoch, phase_seconds):
 # --- one run ------------------------------------------------------------------------------------
 
 def start_cluster(n_workers):
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
-    # worker_dashboard_address=None: no per-worker HTTP server (nothing here reads it, and on a
-    # shared machine the default port 8787 is often taken, which only produces warnings)
-    cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                           host="127.0.0.1", dashboard_address=None, worker_dashboard_address=None,
-                           env=dict(WORKER_ENV))
+    from pipeline import sweep
+
+    cluster = sweep.local_cluster(n_workers)        # the cluster `rotorsweep run` starts
     client = Client(cluster)
     client.wait_for_workers(n_workers)
     return cluster, client
