@@ -33,7 +33,18 @@ class SweepError(Exception):
 class Segment:
     id: int
     index: np.ndarray      # (n, n_axes) grid indices of its points, the continued axis varying fastest
-    points: tuple          # dicts {axis parameter: value}
+    line: dict             # the parameters its points share: fixed values, the other axes' values
+    along: str             # the continued axis
+    values: np.ndarray     # (n,) its points' values on it
+
+    def __len__(self):
+        return len(self.values)
+
+    @property
+    def points(self):
+        """One parameter dict per point, built where they are solved (the driver of a 768k-point
+        atlas would otherwise build, hold and ship 768k dicts)."""
+        return tuple({**self.line, self.along: float(v)} for v in self.values)
 
 
 def segments(cfg):
@@ -45,14 +56,17 @@ def segments(cfg):
     length = cfg.data["numerics"]["segment_length"]
     others = [n for n in names if n != along]
     out = []
+    grid = np.asarray(axes[along], float)
+    at = names.index(along)
     for combo in itertools.product(*(range(len(axes[n])) for n in others)):
         where = dict(zip(others, combo))
-        values = {**fixed, **{n: float(axes[n][i]) for n, i in where.items()}}
-        for s0 in range(0, len(axes[along]), length):
-            steps = range(s0, min(s0 + length, len(axes[along])))
-            index = np.array([[k if n == along else where[n] for n in names] for k in steps])
-            points = tuple({**values, along: float(axes[along][k])} for k in steps)
-            out.append(Segment(len(out), index, points))
+        line = {**fixed, **{n: float(axes[n][i]) for n, i in where.items()}}
+        row = np.array([0 if n == along else where[n] for n in names])
+        for s0 in range(0, len(grid), length):
+            steps = np.arange(s0, min(s0 + length, len(grid)))
+            index = np.repeat(row[None], len(steps), axis=0)
+            index[:, at] = steps
+            out.append(Segment(len(out), index, line, along, grid[steps]))
     return out
 
 
@@ -74,11 +88,11 @@ def plan_chunks(segs, n_workers, chunk_points=None):
     chunks per worker (one chunk held a quarter of the work) and 93 s with 47; large first chunks
     save tasks (scheduler and driver time) where balance does not need them."""
     workers = max(1, n_workers)
-    remaining = sum(len(s.points) for s in segs)
+    remaining = sum(len(s) for s in segs)
     chunks, current, size = [], [], 0
     for seg in segs:
         current.append(seg)
-        size += len(seg.points)
+        size += len(seg)
         target = chunk_points or min(MAX_CHUNK_POINTS, max(MIN_CHUNK_POINTS, remaining // (GUIDED_SHARE * workers)))
         if size >= target:
             chunks.append(current)
@@ -277,8 +291,8 @@ def _run_locked(cfg, output, parts, workers, scheduler, chunk_points, stream):
     try:
         if todo:
             client, cluster = _connect(cfg, workers, scheduler, say)
-            total = sum(len(s.points) for s in segs)
-            bar = Progress(total, total - sum(len(s.points) for s in todo), stream) if stream else None
+            total = sum(len(s) for s in segs)
+            bar = Progress(total, total - sum(len(s) for s in todo), stream) if stream else None
             refined = _run_chunks(client, cfg, todo, parts, config_hash, chunk_points, bar, say)
         say("assembling the cube and its boundary table")
         ds = cube.assemble(cfg.axes, _fixed_coords(cfg), cube.iter_parts(parts), _provenance(cfg),
@@ -380,12 +394,15 @@ def _run_chunks(client, cfg, todo, parts, config_hash, chunk_points, bar, say):
 
     n_workers = max(1, len(client.scheduler_info()["workers"]))
     chunks = plan_chunks(todo, n_workers, chunk_points)
-    say(f"sweeping {_count(sum(len(s.points) for s in todo), 'point')} in {_count(len(chunks), 'chunk')}")
+    say(f"sweeping {_count(sum(len(s) for s in todo), 'point')} in {_count(len(chunks), 'chunk')}")
     if bar:
         bar.restart()
     # The config goes with every task (a few kB), not scattered: a scattered copy lives only
-    # on workers and is lost for good once every worker holding it has died.
-    submit = functools.partial(client.submit, compute_chunk, cfg.data, pure=False)
+    # on workers and is lost for good once every worker holding it has died. It rides in the
+    # task's function: Dask scans a task's arguments item by item for futures (Fig. 13's config:
+    # 2476 objects, ~1.5 ms of driver time a task), not its function.
+    submit = functools.partial(client.submit, functools.partial(compute_chunk, cfg.data), pure=False)
+    refine = functools.partial(boundaries.refine_brackets, cfg.data, cfg.continued_axis)
     tracker = boundaries.Tracker(cfg.axes, cfg.continued_axis)
     futures = {submit(chunk): (chunk, 0) for chunk in chunks}
     refining, refined = {}, {}
@@ -408,8 +425,7 @@ def _run_chunks(client, cfg, todo, parts, config_hash, chunk_points, bar, say):
                         {"config_hash": config_hash, "segments": seg_ids})
         found = tracker.add(index, results)
         if found:
-            task = client.submit(boundaries.refine_brackets, cfg.data, cfg.continued_axis, found, pure=False,
-                                 priority=REFINE_PRIORITY)
+            task = client.submit(refine, found, pure=False, priority=REFINE_PRIORITY)
             refining[task] = found
             pending.add(task)
         if bar:

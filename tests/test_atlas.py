@@ -32,13 +32,13 @@ def test_atlas_config_is_the_fig13_grid_and_every_point_builds():
 
 
 def _segments(lengths):
-    return [sweep.Segment(i, np.zeros((n, 1), int), tuple({} for _ in range(n))) for i, n in enumerate(lengths)]
+    return [sweep.Segment(i, np.zeros((n, 1), int), {}, "speed", np.zeros(n)) for i, n in enumerate(lengths)]
 
 
 def test_guided_chunks_shrink_cover_every_segment_once_and_keep_a_floor():
     segs = _segments([32] * 375 + [5])
     chunks = sweep.plan_chunks(segs, n_workers=2)
-    sizes = [sum(len(s.points) for s in c) for c in chunks]
+    sizes = [sum(len(s) for s in c) for c in chunks]
     assert [s.id for c in chunks for s in c] == list(range(len(segs)))
     total = sum(sizes)
     assert sizes[0] >= total // (sweep.GUIDED_SHARE * 2)                 # a first chunk of ~1/8
@@ -46,7 +46,7 @@ def test_guided_chunks_shrink_cover_every_segment_once_and_keep_a_floor():
     assert min(sizes[:-1]) >= sweep.MIN_CHUNK_POINTS
     assert len(chunks) < total // sweep.MIN_CHUNK_POINTS                 # fewer tasks than equal 64s
     assert [len(c) for c in sweep.plan_chunks(segs, 2, chunk_points=64)][:3] == [2, 2, 2]
-    big = [sum(len(s.points) for s in c) for c in sweep.plan_chunks(_segments([32] * 24010), 2)]
+    big = [sum(len(s) for s in c) for c in sweep.plan_chunks(_segments([32] * 24010), 2)]
     assert max(big) <= sweep.MAX_CHUNK_POINTS + 32 and big[0] > sweep.MAX_CHUNK_POINTS - 32
 
 

@@ -123,8 +123,8 @@ def task_costs(cfg, n_workers=2):
     from pipeline import sweep
 
     chunks = sweep.plan_chunks(sweep.segments(cfg), n_workers)
-    chunk = sorted(chunks, key=lambda c: sum(len(s.points) for s in c))[len(chunks) // 2]
-    n = sum(len(s.points) for s in chunk)
+    chunk = sorted(chunks, key=lambda c: sum(len(s) for s in c))[len(chunks) // 2]
+    n = sum(len(s) for s in chunk)
     t0 = time.perf_counter()
     args = pickle.dumps((cfg.data, chunk), protocol=5)
     dumps_s = time.perf_counter() - t0
@@ -132,8 +132,8 @@ def task_costs(cfg, n_workers=2):
     pickle.loads(args)
     loads_s = time.perf_counter() - t0
     one = sweep.compute_chunk(cfg.data, chunk[:1])
-    result_per_point = len(pickle.dumps(one, protocol=5)) / len(chunk[0].points)
-    sizes = [sum(len(s.points) for s in c) for c in chunks]
+    result_per_point = len(pickle.dumps(one, protocol=5)) / len(chunk[0])
+    sizes = [sum(len(s) for s in c) for c in chunks]
     return dict(n_chunks=len(chunks), chunk_points_first=sizes[0], chunk_points_median=int(statistics.median(sizes)),
                 chunk_points_last=sizes[-1], median_chunk_points=n, args_bytes=len(args),
                 args_dumps_ms=round(1e3 * dumps_s, 3), args_loads_ms=round(1e3 * loads_s, 3),

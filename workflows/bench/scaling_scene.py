@@ -63,7 +63,7 @@ def chunk_plan(cfg, n_workers, chunk_points):
     from pipeline import sweep
 
     chunks = sweep.plan_chunks(sweep.segments(cfg), n_workers, chunk_points)
-    sizes = [sum(len(seg.points) for seg in chunk) for chunk in chunks]
+    sizes = [sum(len(seg) for seg in chunk) for chunk in chunks]
     return len(chunks), int(statistics.median(sizes)) if sizes else 0
 
 
