@@ -51,6 +51,7 @@ import time
 from pathlib import Path
 
 from workflows.bench.common import DOCS, ROOT, add_render_options, log, loadavg, machine_info
+from workflows.bench import scaling_ceiling
 from workflows.bench.scaling_analysis import analyse, verdict_text
 from workflows.bench.scaling_md import markdown
 from workflows.bench.scaling_plots import write_plot
@@ -63,7 +64,7 @@ RUN_KEYS = ("label", "workers", "chunk_points", "chunk_points_used", "n_chunks",
             "point_compute_s", "n_not_converged", "worker_max_rss_kib", "worker_rss_before_kib", "driver_max_rss_kib",
             "driver_cpu_s", "worker_cpu_s", "loadavg_before", "loadavg_after")
 RESULT_KEYS = ("benchmark", "mode", "created", "git", "scene", "machine", "load_average",
-               "warmup", "runs", "scaling", "chunk_sensitivity", "limits", "task_costs", "scheduler",
+               "warmup", "runs", "scaling", "ceiling", "chunk_sensitivity", "limits", "task_costs", "scheduler",
                "verdict", "command")
 
 
@@ -171,6 +172,9 @@ def run_benchmark(cfg, out_dir, *, worker_counts=(1, 2), chunk_sizes="auto", rep
         warm = warm_up(work_dir)
         log(f"  warm-up: kernels {warm['driver_kernels_s']:.1f} s, tiny sweep {warm['tiny_sweep_s']:.1f} s")
         runs = _measure_runs(cfg, work_dir, worker_counts, chunk_sizes, repeats)
+        ceiling = scaling_ceiling.measure(cfg, repeats=max(3, repeats))
+        log(f"  without Dask: 1 process {ceiling['wall_1_s']:.2f} s, 2 processes {ceiling['wall_2_s']:.2f} s "
+            f"({ceiling['speedup']:.2f}x)")
         costs = task_costs(cfg)
         sched = scheduler_section(runs, scheduler_tasks)
     finally:
@@ -182,9 +186,9 @@ def run_benchmark(cfg, out_dir, *, worker_counts=(1, 2), chunk_sizes="auto", rep
         created=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         git=git_info(), scene=scene_info(cfg), machine=scaling_machine_info(),
         load_average=dict(start=load_start, end=loadavg()),
-        warmup=warm, runs=runs, scaling=scaling, chunk_sensitivity=sens, limits=limits,
+        warmup=warm, runs=runs, scaling=scaling, ceiling=ceiling, chunk_sensitivity=sens, limits=limits,
         task_costs=costs, scheduler=sched,
-        verdict=verdict_text(scaling, limits, sens, mode),
+        verdict=verdict_text(scaling, limits, sens, mode, ceiling),
         command=command or "python -m workflows.bench.scaling" + (" --quick" if mode == "quick" else ""),
         total_s=round(time.perf_counter() - t_all, 1),
     )

@@ -103,7 +103,7 @@ def analyse(runs, worker_counts):
     return scaling, sens, limits
 
 
-def verdict_text(scaling, limits, sens, mode):
+def verdict_text(scaling, limits, sens, mode, ceiling=None):
     if not scaling:
         return "No 1- and 2-worker pair was measured: no speed-up to judge."
     s = scaling["speedup"]
@@ -116,6 +116,10 @@ def verdict_text(scaling, limits, sens, mode):
                      f"{limits['amdahl_limit']:.2f}x (Amdahl).")
         if scaling["speedup"] > limits["amdahl_limit"] * 1.02:
             parts.append("The measured speed-up exceeds that cap: the runs were disturbed by other load.")
+    if ceiling:
+        parts.append(f"Without Dask (a multiprocessing pool, the same chunks) two processes reach "
+                     f"{ceiling['speedup']:.2f}x on this machine; the sweep reaches "
+                     f"{s / ceiling['speedup']:.0%} of that.")
     if limits.get("cpu_speedup"):
         parts.append(f"Counted in CPU seconds (the workers' own work, which other processes on the machine "
                      f"do not inflate) the speed-up is {limits['cpu_speedup']:.2f}x.")

@@ -65,11 +65,22 @@ def speedup_section(res):
         driver_cpu=f"{lim['driver_cpu_2_s']:.1f}", gaps_cost=fmt(lim.get("gaps_cost_s")),
         serial=fmt(lim.get("serial_s")), amdahl=f"{lim['amdahl_limit']:.2f}",
         utilization=_pct(lim.get("utilization_2")))
-    text += "\n\n"
+    text += "\n\n" + ceiling_section(res)
     if sc["speedup"] > lim["amdahl_limit"] * 1.02:
         text += part("scaling", "inconsistent", serial_1=f"{lim['serial_1_worker_s']:.2f}",
                      serial_2=f"{lim['serial_2_workers_s']:.2f}") + "\n\n"
     return text
+
+
+def ceiling_section(res):
+    """The same chunks on a bare multiprocessing pool ('' for a JSON written before it was measured)."""
+    c = res.get("ceiling")
+    if not c:
+        return ""
+    return part("scaling", "ceiling", repeats=c["repeats"], wall_1=f"{c['wall_1_s']:.2f}",
+                wall_2=f"{c['wall_2_s']:.2f}", speedup=f"{c['speedup']:.2f}", cpu_1=f"{c['cpu_1_s']:.2f}",
+                cpu_2=f"{c['cpu_2_s']:.2f}", cpu_ratio=f"{c['cpu_2_s'] / c['cpu_1_s']:.3f}",
+                share=f"{res['scaling']['speedup'] / c['speedup']:.0%}") + "\n\n"
 
 
 def chunk_section(sens):

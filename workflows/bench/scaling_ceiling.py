@@ -1,0 +1,58 @@
+"""What two busy cores give on this machine without Dask: the sweep's chunks solved by a
+`multiprocessing` pool of 1 and of 2 processes (a bare queue: no scheduler, part files, boundary
+table or cube). Shared caches, clock boost and the hypervisor slow each process when both cores
+are busy; the pool's speed-up is the ceiling of any scheduler here, the yardstick for the
+2-worker Dask sweep."""
+import multiprocessing
+import statistics
+import time
+
+
+def _warm(data, point):
+    """Pool initializer: imports and Numba's on-disk cache loaded once per process, untimed."""
+    from pipeline import compute
+
+    compute.solve_segment(data, [point])
+
+
+def _solve(args):
+    from pipeline import sweep
+
+    data, chunk = args
+    start = time.process_time()
+    sweep.compute_chunk(data, chunk)
+    return time.process_time() - start
+
+
+def _timed(pool, data, chunks):
+    """(wall, CPU seconds of the pool's processes) of solving every chunk, the next chunk going to
+    whichever process is free."""
+    start = time.perf_counter()
+    cpu = sum(pool.imap_unordered(_solve, [(data, c) for c in chunks], chunksize=1))
+    return time.perf_counter() - start, cpu
+
+
+def measure(cfg, repeats=3):
+    """Median wall and CPU seconds with 1 and with 2 processes (their pools started and warmed
+    first, the runs interleaved so that a drift of the machine's speed hits both), each on the
+    pipeline's default chunk plan for that many workers."""
+    from pipeline import sweep
+
+    segs = sweep.segments(cfg)
+    # spawn: the benchmark process runs Dask's threads, which a forked child would inherit locked
+    ctx = multiprocessing.get_context("spawn")
+    point = segs[0].points[0]
+    pools = {k: ctx.Pool(k, initializer=_warm, initargs=(cfg.data, point)) for k in (1, 2)}
+    try:
+        runs = {k: [] for k in pools}
+        for _ in range(repeats):
+            for k, pool in pools.items():
+                runs[k].append(_timed(pool, cfg.data, sweep.plan_chunks(segs, k)))
+    finally:
+        for pool in pools.values():
+            pool.terminate()
+    wall = {k: statistics.median(w for w, _ in r) for k, r in runs.items()}
+    cpu = {k: statistics.median(c for _, c in r) for k, r in runs.items()}
+    return dict(repeats=repeats, wall_1_s=round(wall[1], 4), wall_2_s=round(wall[2], 4),
+                cpu_1_s=round(cpu[1], 4), cpu_2_s=round(cpu[2], 4), speedup=round(wall[1] / wall[2], 3),
+                walls_1_s=[round(w, 4) for w, _ in runs[1]], walls_2_s=[round(w, 4) for w, _ in runs[2]])
