@@ -73,7 +73,8 @@ def run_lines(cfg, task, lines, workers, scheduler, stream, summary):
     client, cluster = sweep._client(workers, scheduler)
     try:
         warmup.compile_scene(cfg.data, lambda text: say(stream, text))
-        submit = functools.partial(client.submit, task, cfg.data, pure=False)
+        # the config in the task's function, which Dask does not scan for futures (sweep._run_chunks)
+        submit = functools.partial(client.submit, functools.partial(task, cfg.data), pure=False)
         futures = {submit(where): k for k, where in enumerate(lines)}
         results = [None] * len(lines)
         for done, future in enumerate(as_completed(futures), 1):
