@@ -2,7 +2,6 @@
 `result_kind` attribute) and running a task per line of the swept axes on a Dask cluster, the
 scene's kernels compiled first in the driver."""
 import contextlib
-import functools
 import os
 
 import xarray as xr
@@ -73,8 +72,7 @@ def run_lines(cfg, task, lines, workers, scheduler, stream, summary):
     client, cluster = sweep._client(workers, scheduler)
     try:
         warmup.compile_scene(cfg.data, lambda text: say(stream, text))
-        # the config in the task's function, which Dask does not scan for futures (sweep._run_chunks)
-        submit = functools.partial(client.submit, functools.partial(task, cfg.data), pure=False)
+        submit = sweep.submitter(client, task, cfg.data)
         futures = {submit(where): k for k, where in enumerate(lines)}
         results = [None] * len(lines)
         for done, future in enumerate(as_completed(futures), 1):

@@ -318,7 +318,8 @@ def _map_tasks_on(client, stream=None):
     def map_tasks(data, axis, tasks):
         if not client.scheduler_info()["workers"]:      # an external cluster scaled to nothing
             return [boundaries.refine_brackets(data, axis, task) for task in tasks]
-        futures = [client.submit(boundaries.refine_brackets, data, axis, task, pure=False) for task in tasks]
+        refine = submitter(client, boundaries.refine_brackets, data, axis)
+        futures = [refine(task) for task in tasks]
         bar = Progress(len(tasks), stream=stream, unit="boundary lines") if stream and tasks else None
         out = []
         for task, future in zip(tasks, futures):
@@ -382,6 +383,15 @@ def _connect(cfg, workers, scheduler, say):
     return client, cluster
 
 
+def submitter(client, fn, *fixed, **options):
+    """submit(*args) -> the future of fn(*fixed, *args) on the cluster. The fixed arguments (the
+    config: a few kB) go with every task, not scattered: a scattered copy lives only on workers
+    and is lost for good once every worker holding it has died. They ride in the task's function,
+    which Dask does not scan for futures as it scans a task's arguments, item by item (Fig. 13's
+    config: 2476 objects, ~1.5 ms of driver time a task)."""
+    return functools.partial(client.submit, functools.partial(fn, *fixed), pure=False, **options)
+
+
 # Refinement tasks run before the chunks still queued: the boundary table is then done when the
 # last chunk is, instead of after it (Fig. 13 on 2 workers: 0.75 s of 4.8 s).
 REFINE_PRIORITY = 1
@@ -397,12 +407,8 @@ def _run_chunks(client, cfg, todo, parts, config_hash, chunk_points, bar, say):
     say(f"sweeping {_count(sum(len(s) for s in todo), 'point')} in {_count(len(chunks), 'chunk')}")
     if bar:
         bar.restart()
-    # The config goes with every task (a few kB), not scattered: a scattered copy lives only
-    # on workers and is lost for good once every worker holding it has died. It rides in the
-    # task's function: Dask scans a task's arguments item by item for futures (Fig. 13's config:
-    # 2476 objects, ~1.5 ms of driver time a task), not its function.
-    submit = functools.partial(client.submit, functools.partial(compute_chunk, cfg.data), pure=False)
-    refine = functools.partial(boundaries.refine_brackets, cfg.data, cfg.continued_axis)
+    submit = submitter(client, compute_chunk, cfg.data)
+    refine = submitter(client, boundaries.refine_brackets, cfg.data, cfg.continued_axis, priority=REFINE_PRIORITY)
     tracker = boundaries.Tracker(cfg.axes, cfg.continued_axis)
     futures = {submit(chunk): (chunk, 0) for chunk in chunks}
     refining, refined = {}, {}
@@ -425,7 +431,7 @@ def _run_chunks(client, cfg, todo, parts, config_hash, chunk_points, bar, say):
                         {"config_hash": config_hash, "segments": seg_ids})
         found = tracker.add(index, results)
         if found:
-            task = client.submit(refine, found, pure=False, priority=REFINE_PRIORITY)
+            task = refine(found)
             refining[task] = found
             pending.add(task)
         if bar:
