@@ -325,13 +325,14 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
             return _on_stable_orbit(model, state, lams, period, int(n_samples), state.copy())
         n_transient -= used
     nan = np.full(model.n_state, np.nan)
-    if continued_period > 0 and settle_early and periodic and orbit_lle and not lyapunov_always:
+    settling = settle_early and periodic and orbit_lle and not lyapunov_always
+    if settling and continued_period > 0:
         orbit, u0, used = settle_on_continued_orbit(model, u0, p, opts, int(continued_period), n_transient,
                                                     period_rtol)
         if orbit is not None:
             return _on_settled_orbit(model, orbit, p, period, opts, int(n_samples), u0)
         n_transient -= used
-    if settle_early and periodic and orbit_lle and not lyapunov_always:
+    if settling:
         orbit, u0, used, status = settle_periodic(model, u0, p, opts, int(n_transient), max_period, period_rtol)
         if status != ig.STATUS_OK:
             return Attractor(failure_class(status), 0, np.nan, np.nan, np.full((int(n_samples), model.n_state), np.nan),
