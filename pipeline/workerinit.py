@@ -4,6 +4,7 @@ Ctrl-C in a terminal sends SIGINT to the whole process group: the driver and eve
 driver turns it into one line and closes the cluster; a worker would instead die with a
 KeyboardInterrupt traceback each (~70 lines for 2 workers). Workers therefore ignore SIGINT and
 are stopped by the driver's cluster.close() (or with it, when the driver is killed)."""
+import gc
 import logging
 import signal
 
@@ -16,5 +17,8 @@ def dask_setup(worker):
     # and scipy.optimize (0.15-0.3 s), which the boundary refinement imports on its first bracket
     # (each worker's first refinement task took 0.16 s instead of 0.02 s)
     import scipy.optimize  # noqa: F401
+    # The imports left ~200k objects, which the first full garbage collection would walk in
+    # the first task (60 ms, once per worker); they live as long as the worker does.
+    gc.freeze()
     # its warnings at close are about the tasks the driver cancels; task errors reach the driver
     logging.getLogger("distributed.worker.state_machine").setLevel(logging.ERROR)

@@ -1,4 +1,5 @@
 """End to end: the CLI as a user runs it (subprocesses), and sweep invariances."""
+import gc
 import json
 import os
 import subprocess
@@ -85,6 +86,19 @@ def test_results_do_not_depend_on_workers_or_chunking(small_config, small_cube, 
     other = data_vars(one)
     for name in reference.data_vars:
         np.testing.assert_array_equal(reference[name].values, other[name].values, err_msg=name)
+
+
+def test_the_driver_leaves_its_heap_out_of_gc_during_a_sweep_only(small_config, tmp_path, monkeypatch):
+    frozen, write_part = [], cube.write_part
+
+    def recording(*args, **kwargs):
+        frozen.append(gc.get_freeze_count())
+        return write_part(*args, **kwargs)
+    monkeypatch.setattr(cube, "write_part", recording)
+    assert gc.get_freeze_count() == 0
+    sweep.run(config.load_config(small_config), tmp_path / "f.nc", workers=1, progress=False)
+    assert frozen and min(frozen) > 10_000          # the imported modules' objects, at least
+    assert gc.get_freeze_count() == 0               # the caller's heap as it was
 
 
 def test_query_and_info_and_report(small_cube, tmp_path):

@@ -1,5 +1,6 @@
 """Reliability: resume after SIGKILL, worker loss, refusal of a changed config, numerical
 faults as data, localhost-only cluster, no silent overwrite."""
+import gc
 import os
 import re
 import signal
@@ -122,13 +123,15 @@ def test_existing_cube_is_not_overwritten_without_flag(tmp_path):
     assert out.read_text() == "precious"
 
 
-def test_local_cluster_binds_to_localhost():
+def test_local_cluster_binds_to_localhost_and_its_workers_keep_their_imports_out_of_gc():
     client, cluster = sweep._client(2, None)
     try:
         assert client.scheduler.address.startswith("tcp://127.0.0.1:")
         assert "127.0.0.1" in client.dashboard_link
         for addr in client.scheduler_info()["workers"]:
             assert addr.startswith("tcp://127.0.0.1:")
+        # the preload froze what the imports left (a fresh process: nothing frozen otherwise)
+        assert all(n > 10_000 for n in client.run(gc.get_freeze_count).values())
     finally:
         client.close()
         cluster.close()
