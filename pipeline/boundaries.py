@@ -102,6 +102,21 @@ def refine_brackets(data, axis, items):
     return rows
 
 
+def refine_within(data, axes, axis, index, results):
+    """[[line, i, row], ...]: the refined stability changes between two points of one chunk (its
+    grid `index` and `results`), in plain JSON types: a chunk's task refines them with its points,
+    and its part file keeps them, so a resumed sweep does not refine them again."""
+    found = Tracker(axes, axis).add(index, results)
+    rows = refine_brackets(data, axis, found)
+    return [[list(b.line), b.i, {k: v.item() if isinstance(v, np.generic) else v for k, v in row.items()}]
+            for (_, b), row in zip(found, rows)]
+
+
+def keyed(entries):
+    """refine_within's entries as {(line, i): row}, boundary_rows' `done`."""
+    return {(tuple(line), int(i)): row for line, i, row in entries}
+
+
 def boundary_rows(data, ds, map_tasks=None, done=None):
     """One dict per stability change in the cube, in grid order. done: {(line, i): row} refined
     already (a sweep refines brackets while it computes); the others are refined one task per

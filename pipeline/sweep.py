@@ -105,13 +105,15 @@ def plan_chunks(segs, n_workers, chunk_points=None):
     return chunks
 
 
-def compute_chunk(data, chunk):
-    """Worker task: solve every segment of a chunk. A plain function of an importable module so
-    Dask ships it by reference and workers reuse Numba's on-disk cache."""
+def compute_chunk(data, axes, axis, chunk):
+    """Worker task: solve every segment of a chunk and refine the stability changes between two
+    of its points along `axis` (boundaries.refine_within; those between two chunks are left to
+    the driver, which sees both). A plain function of an importable module so Dask ships it by
+    reference and workers reuse Numba's on-disk cache."""
     index = np.concatenate([seg.index for seg in chunk])
     parts = [compute.solve_segment(data, list(seg.points)) for seg in chunk]
     results = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
-    return [seg.id for seg in chunk], index, results
+    return [seg.id for seg in chunk], index, results, boundaries.refine_within(data, axes, axis, index, results)
 
 
 class Progress:
@@ -153,9 +155,10 @@ def _fmt_seconds(s):
     return f"{s // 3600}h{s // 60 % 60:02d}m" if s >= 3600 else f"{s // 60}m{s % 60:02d}s"
 
 
-def _done_segments(parts_dir, config_hash):
-    """Segment ids already held by part files of the same config; refuse parts of another."""
-    done = set()
+def _earlier_parts(parts_dir, config_hash):
+    """(segment ids, {(line, i): refined boundary row}) that part files of the same config hold
+    already; refuse parts of another config."""
+    done, refined = set(), {}
     for meta in cube.part_metas(parts_dir):
         if meta.get("config_hash") != config_hash:
             raise SweepError(
@@ -163,7 +166,8 @@ def _done_segments(parts_dir, config_hash):
                 f"{meta.get('config_hash', '?')[:12]}, this config {config_hash[:12]}); "
                 "use another output path or pass --overwrite to discard them")
         done.update(meta["segments"])
-    return done
+        refined.update(boundaries.keyed(meta.get("boundaries", ())))
+    return done, refined
 
 
 def _prepare_output(output, cfg, resume, overwrite):
@@ -307,16 +311,15 @@ def _sweep_into(cfg, output, parts, workers, scheduler, chunk_points, stream):
     say = phase_printer(stream)
     config_hash = cfg.hash()
     segs = segments(cfg)
-    done = _done_segments(parts, config_hash)
+    done, refined = _earlier_parts(parts, config_hash)
     todo = [s for s in segs if s.id not in done]
     client = cluster = None
-    refined = {}
     try:
         if todo:
             client, cluster = _connect(cfg, workers, scheduler, say)
             total = sum(len(s) for s in segs)
             bar = Progress(total, total - sum(len(s) for s in todo), stream) if stream else None
-            refined = _run_chunks(client, cfg, todo, parts, config_hash, chunk_points, bar, say)
+            refined.update(_run_chunks(client, cfg, todo, parts, config_hash, chunk_points, bar, say))
         say("assembling the cube and its boundary table")
         ds = cube.assemble(cfg.axes, _fixed_coords(cfg), cube.iter_parts(parts), _provenance(cfg),
                            n_multipliers=compute.model_of(cfg.data).n_state, config_hash=config_hash)
@@ -415,14 +418,17 @@ def submitter(client, fn, *fixed, **options):
     return functools.partial(client.submit, functools.partial(fn, *fixed), pure=False, **options)
 
 
-# Refinement tasks run before the chunks still queued: the boundary table is then done when the
-# last chunk is, instead of after it (Fig. 13 on 2 workers: 0.75 s of 4.8 s).
+# Refinement tasks (of the stability changes between two chunks) run before the chunks still
+# queued: the boundary table is then done when the last chunk is, instead of after it.
 REFINE_PRIORITY = 1
 
 
 def _run_chunks(client, cfg, todo, parts, config_hash, chunk_points, bar, say):
-    """Compute the chunks into part files, refining each stability change on the workers as soon
-    as the chunks holding its two grid points are done: {(line, i): boundary row}."""
+    """Compute the chunks into part files, each refining the stability changes between its own
+    points; one between two chunks is refined by a task of its own as soon as both are done
+    (a task per chunk and its result's round trip cost ~10 ms of CPU on the driver and the
+    worker: Fig. 13 on 2 workers had 11 refinement tasks besides 31 chunks):
+    {(line, i): boundary row}."""
     from dask.distributed import KilledWorker, as_completed
 
     n_workers = max(1, len(client.scheduler_info()["workers"]))
@@ -430,7 +436,7 @@ def _run_chunks(client, cfg, todo, parts, config_hash, chunk_points, bar, say):
     say(f"sweeping {_count(sum(len(s) for s in todo), 'point')} in {_count(len(chunks), 'chunk')}")
     if bar:
         bar.restart()
-    submit = submitter(client, compute_chunk, cfg.data)
+    submit = submitter(client, compute_chunk, cfg.data, cfg.axes, cfg.continued_axis)
     refine = submitter(client, boundaries.refine_brackets, cfg.data, cfg.continued_axis, priority=REFINE_PRIORITY)
     tracker = boundaries.Tracker(cfg.axes, cfg.continued_axis)
     futures = {submit(chunk): (chunk, 0) for chunk in chunks}
@@ -442,7 +448,7 @@ def _run_chunks(client, cfg, todo, parts, config_hash, chunk_points, bar, say):
             continue
         chunk, resubmits = futures.pop(future)
         try:
-            seg_ids, index, results = future.result()
+            seg_ids, index, results, inside = future.result()
         except KilledWorker:
             if resubmits == RESUBMITS:
                 raise SweepError(_killed_chunk(chunk, parts)) from None
@@ -451,8 +457,10 @@ def _run_chunks(client, cfg, todo, parts, config_hash, chunk_points, bar, say):
             pending.add(retry)
             continue
         cube.write_part(parts, f"seg{seg_ids[0]:06d}", index, results,
-                        {"config_hash": config_hash, "segments": seg_ids})
-        found = tracker.add(index, results)
+                        {"config_hash": config_hash, "segments": seg_ids, "boundaries": inside})
+        inside = boundaries.keyed(inside)
+        refined.update(inside)
+        found = [(where, b) for where, b in tracker.add(index, results) if (b.line, b.i) not in inside]
         if found:
             task = refine(found)
             refining[task] = found

@@ -28,7 +28,7 @@ def tiny_run(tmp_path_factory):
     """(cube path, the chunk's results as the workers return them) of the TINY_SCENE sweep."""
     from pipeline import boundaries, config, cube, sweep
     cfg = config.parse_config(TINY_SCENE)
-    ids, index, results = sweep.compute_chunk(cfg.data, sweep.segments(cfg))
+    ids, index, results, _ = sweep.compute_chunk(cfg.data, cfg.axes, cfg.continued_axis, sweep.segments(cfg))
     ds = cube.assemble(cfg.axes, sweep._fixed_coords(cfg), [(ids, index, results, None)],
                        sweep._provenance(cfg), n_multipliers=4)
     ds = boundaries.add_boundary_table(cfg.data, ds)

@@ -8,6 +8,7 @@ import pytest
 
 from pipeline import boundaries, compute, config, cube, schema, sweep
 from pipeline.report.figures import atlas
+from tests.test_pipeline import SMALL
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEEDS = np.array([10.0, 11.0, 12.0, 13.0, 14.0, 15.0])
@@ -72,6 +73,25 @@ def test_boundary_rows_are_the_same_for_any_map_and_rows_refined_during_the_swee
     assert boundaries.boundary_rows(data, plain, recording, done) == serial
     assert (first[1].line, first[1].i) not in {(b.line, b.i) for b in mapped}
     assert len(mapped) == len(serial) - 1
+
+
+def test_a_chunk_refines_the_stability_changes_between_its_own_points_only(tmp_path):
+    """Solved as one chunk, the small scene's one stability change (between its first two
+    segments) is refined by the chunk, to the row the cube's table gives it; with the chunks cut
+    between those segments, by neither (the driver's tracker gives it a task of its own). The rows
+    survive a part file's JSON meta, from which a resumed sweep takes them."""
+    cfg = config.parse_config(SMALL)
+    segs = sweep.segments(cfg)
+    ids, index, results, inside = sweep.compute_chunk(cfg.data, cfg.axes, "speed", segs)
+    assert [(tuple(line), i) for line, i, _ in inside] == [((0,), 3)]
+    ds = cube.assemble(cfg.axes, sweep._fixed_coords(cfg), [(ids, index, results, None)],
+                       sweep._provenance(cfg), n_multipliers=4)
+    (row,) = boundaries.boundary_rows(cfg.data, ds)
+    assert inside[0][2].items() <= row.items()
+    assert sweep.compute_chunk(cfg.data, cfg.axes, "speed", segs[:1])[3] == []
+    assert sweep.compute_chunk(cfg.data, cfg.axes, "speed", segs[1:])[3] == []
+    cube.write_part(tmp_path, "seg000000", index, results, {"config_hash": "h", "segments": ids, "boundaries": inside})
+    assert sweep._earlier_parts(tmp_path, "h") == (set(ids), boundaries.keyed(inside))
 
 
 def test_tracker_finds_each_stability_change_once_in_any_chunk_order():

@@ -20,8 +20,9 @@ with its relaxed housekeeping settings; `scaling_runs`):
   paid once per worker process, in parallel, by every real run too);
 * its phases, timed by wrapping the pipeline's own functions (nothing in pipeline/ changes):
   driver warm-up, the distributed compute phase (scatter, tasks, part files), cube assembly,
-  what is left of the boundary table after it (the workers refine each stability change as soon
-  as its two grid points are computed, ahead of the queued chunks), cube write;
+  what is left of the boundary table after it (each chunk task refines the stability changes
+  between its own points; one between two chunks gets a task of its own as soon as both are
+  computed, ahead of the queued chunks), cube write;
 * from Dask's task stream: busy time per worker, the span of the compute phase, its tail (how
   long the first worker to finish waits for the last), and worker utilization;
 * points per second, the sum of the per-point compute times stored in the cube;
@@ -132,7 +133,7 @@ def task_costs(cfg, n_workers=2):
     t0 = time.perf_counter()
     pickle.loads(args)
     loads_s = time.perf_counter() - t0
-    one = sweep.compute_chunk(cfg.data, chunk[:1])
+    one = sweep.compute_chunk(cfg.data, cfg.axes, cfg.continued_axis, chunk[:1])
     result_per_point = len(pickle.dumps(one, protocol=5)) / len(chunk[0])
     sizes = [sum(len(s) for s in c) for c in chunks]
     return dict(n_chunks=len(chunks), chunk_points_first=sizes[0], chunk_points_median=int(statistics.median(sizes)),

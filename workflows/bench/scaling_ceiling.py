@@ -1,6 +1,7 @@
 """What two busy cores give on this machine without Dask: the sweep's chunks solved by a
-`multiprocessing` pool of 1 and of 2 processes (a bare queue: no scheduler, part files, boundary
-table or cube). Shared caches, clock boost and the hypervisor slow each process when both cores
+`multiprocessing` pool of 1 and of 2 processes (a bare queue: each chunk solved and the stability
+changes between its own points refined, as in a sweep's chunk task; no scheduler, part files,
+refinement between chunks or cube). Shared caches, clock boost and the hypervisor slow each process when both cores
 are busy; the pool's speed-up is the ceiling of any scheduler here, the yardstick for the
 2-worker Dask sweep."""
 import multiprocessing
@@ -18,17 +19,16 @@ def _warm(data, point):
 def _solve(args):
     from pipeline import sweep
 
-    data, chunk = args
     start = time.process_time()
-    sweep.compute_chunk(data, chunk)
+    sweep.compute_chunk(*args)
     return time.process_time() - start
 
 
-def _timed(pool, data, chunks):
+def _timed(pool, cfg, chunks):
     """(wall, CPU seconds of the pool's processes) of solving every chunk, the next chunk going to
     whichever process is free."""
     start = time.perf_counter()
-    cpu = sum(pool.imap_unordered(_solve, [(data, c) for c in chunks], chunksize=1))
+    cpu = sum(pool.imap_unordered(_solve, [(cfg.data, cfg.axes, cfg.continued_axis, c) for c in chunks], chunksize=1))
     return time.perf_counter() - start, cpu
 
 
@@ -47,7 +47,7 @@ def measure(cfg, repeats=3):
         runs = {k: [] for k in pools}
         for _ in range(repeats):
             for k, pool in pools.items():
-                runs[k].append(_timed(pool, cfg.data, sweep.plan_chunks(segs, k)))
+                runs[k].append(_timed(pool, cfg, sweep.plan_chunks(segs, k)))
     finally:
         for pool in pools.values():
             pool.terminate()
