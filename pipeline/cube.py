@@ -328,35 +328,52 @@ def _read_part(path):
         return path.stem, f["index"], results, json.loads(str(f["meta"]))
 
 
-def assemble(axes, fixed, parts, attrs, n_multipliers, allow_missing=False, config_hash=None):
-    """The cube of a sweep from its parts: full-grid arrays (NaN / INT_FILL where no part has
-    the point). A point no part holds is an error unless allow_missing. With config_hash, a part
-    of another config (another run writing into the same directory) is an error, never mixed in."""
-    shape = tuple(len(v) for v in axes.values())
-    variables = schema.variables_of(schema.model_of(attrs))
-    have = np.zeros(shape, bool)
-    full = {}
-    seen, foreign = 0, []
-    for chunk_id, index, results, meta in parts:
-        seen += 1
-        if config_hash is not None and (meta or {}).get("config_hash") != config_hash:
-            foreign.append(chunk_id)
-            continue
+class Assembly:
+    """The full-grid arrays of a cube (NaN / INT_FILL where no part has the point), filled part by
+    part: a sweep adds each chunk as it arrives instead of reading its part file back at the end.
+    With config_hash, a part of another config (another run writing into the same directory)
+    is an error at dataset(), never mixed in."""
+
+    def __init__(self, axes, model, n_multipliers, config_hash=None):
+        self.axes, self.n_multipliers, self.config_hash = axes, n_multipliers, config_hash
+        self.shape = tuple(len(v) for v in axes.values())
+        self.variables = schema.variables_of(schema.model_of({"model": model}))
+        self.have = np.zeros(self.shape, bool)
+        self.full, self.seen, self.foreign = {}, 0, []
+
+    def add(self, chunk_id, index, results, meta):
+        self.seen += 1
+        if self.config_hash is not None and (meta or {}).get("config_hash") != self.config_hash:
+            self.foreign.append(chunk_id)
+            return
         at = tuple(np.asarray(index).T)
-        have[at] = True
+        self.have[at] = True
         for name, values in results.items():
-            if name not in full:
-                full[name] = _empty(name, shape, values, n_multipliers, variables)
-            full[name][at] = values
-    if foreign:
-        raise CubeError(f"{len(foreign)} of {seen} part files (first: {foreign[0]}.npz) belong to "
-                        f"another config than this run's (hash {config_hash[:12]}); their results are "
-                        "not mixed into the cube: rerun with --overwrite into a path no other run uses")
-    missing = int((~have).sum())
-    if missing and not allow_missing:
-        raise CubeError(f"{missing} of {have.size} grid points have no result in the part files "
-                        f"(first: {_point(axes, np.argwhere(~have)[0])})")
-    return build_dataset(axes, fixed, full, attrs)
+            if name not in self.full:
+                self.full[name] = _empty(name, self.shape, values, self.n_multipliers, self.variables)
+            self.full[name][at] = values
+
+    def dataset(self, fixed, attrs, allow_missing=False):
+        """The cube; a point no part holds is an error unless allow_missing."""
+        if self.foreign:
+            raise CubeError(f"{len(self.foreign)} of {self.seen} part files (first: {self.foreign[0]}.npz) "
+                            f"belong to another config than this run's (hash {self.config_hash[:12]}); their "
+                            "results are not mixed into the cube: rerun with --overwrite into a path no other "
+                            "run uses")
+        missing = int((~self.have).sum())
+        if missing and not allow_missing:
+            raise CubeError(f"{missing} of {self.have.size} grid points have no result in the part files "
+                            f"(first: {_point(self.axes, np.argwhere(~self.have)[0])})")
+        return build_dataset(self.axes, fixed, self.full, attrs)
+
+
+def assemble(axes, fixed, parts, attrs, n_multipliers, allow_missing=False, config_hash=None):
+    """The cube of a sweep from its parts ((chunk_id, index, results, meta) each): an Assembly
+    of them."""
+    assembly = Assembly(axes, attrs.get("model", schema.DEFAULT_MODEL), n_multipliers, config_hash)
+    for part in parts:
+        assembly.add(*part)
+    return assembly.dataset(fixed, attrs, allow_missing)
 
 
 def _empty(name, shape, values, n_multipliers, variables):

@@ -313,16 +313,21 @@ def _sweep_into(cfg, output, parts, workers, scheduler, chunk_points, stream):
     segs = segments(cfg)
     done, refined = _earlier_parts(parts, config_hash)
     todo = [s for s in segs if s.id not in done]
+    # the cube's arrays take each chunk as it arrives (the parts of an earlier run first): no
+    # part file is read back at the end (Fig. 13: 0.04-0.06 s; the 4-D atlas: 186 MB)
+    assembly = cube.Assembly(cfg.axes, cfg.data["scene"]["model"], compute.model_of(cfg.data).n_state,
+                             config_hash)
+    for part in cube.iter_parts(parts):
+        assembly.add(*part)
     client = cluster = None
     try:
         if todo:
             client, cluster = _connect(cfg, workers, scheduler, say)
             total = sum(len(s) for s in segs)
             bar = Progress(total, total - sum(len(s) for s in todo), stream) if stream else None
-            refined.update(_run_chunks(client, cfg, todo, parts, config_hash, chunk_points, bar, say))
+            refined.update(_run_chunks(client, cfg, todo, parts, assembly, chunk_points, bar, say))
         say("assembling the cube and its boundary table")
-        ds = cube.assemble(cfg.axes, _fixed_coords(cfg), cube.iter_parts(parts), _provenance(cfg),
-                           n_multipliers=compute.model_of(cfg.data).n_state, config_hash=config_hash)
+        ds = assembly.dataset(_fixed_coords(cfg), _provenance(cfg))
         ds = boundaries.add_boundary_table(cfg.data, ds, _map_tasks_on(client, stream) if client else None,
                                            refined)
     finally:
@@ -423,8 +428,8 @@ def submitter(client, fn, *fixed, **options):
 REFINE_PRIORITY = 1
 
 
-def _run_chunks(client, cfg, todo, parts, config_hash, chunk_points, bar, say):
-    """Compute the chunks into part files, each refining the stability changes between its own
+def _run_chunks(client, cfg, todo, parts, assembly, chunk_points, bar, say):
+    """Compute the chunks into part files and `assembly`, each refining the stability changes between its own
     points; one between two chunks is refined by a task of its own as soon as both are done
     (a task per chunk and its result's round trip cost ~10 ms of CPU on the driver and the
     worker: Fig. 13 on 2 workers had 11 refinement tasks besides 31 chunks):
@@ -456,8 +461,10 @@ def _run_chunks(client, cfg, todo, parts, config_hash, chunk_points, bar, say):
             futures[retry] = (chunk, resubmits + 1)
             pending.add(retry)
             continue
-        cube.write_part(parts, f"seg{seg_ids[0]:06d}", index, results,
-                        {"config_hash": config_hash, "segments": seg_ids, "boundaries": inside})
+        chunk_id, meta = f"seg{seg_ids[0]:06d}", {"config_hash": assembly.config_hash, "segments": seg_ids,
+                                                  "boundaries": inside}
+        cube.write_part(parts, chunk_id, index, results, meta)
+        assembly.add(chunk_id, index, results, meta)
         inside = boundaries.keyed(inside)
         refined.update(inside)
         found = [(where, b) for where, b in tracker.add(index, results) if (b.line, b.i) not in inside]

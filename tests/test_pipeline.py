@@ -88,17 +88,20 @@ def test_results_do_not_depend_on_workers_or_chunking(small_config, small_cube, 
         np.testing.assert_array_equal(reference[name].values, other[name].values, err_msg=name)
 
 
-def test_the_driver_leaves_its_heap_out_of_gc_during_a_sweep_only(small_config, tmp_path, monkeypatch):
+def test_the_driver_reads_no_part_back_and_leaves_its_heap_out_of_gc_during_a_sweep_only(
+        small_config, tmp_path, monkeypatch):
     frozen, write_part = [], cube.write_part
 
     def recording(*args, **kwargs):
         frozen.append(gc.get_freeze_count())
         return write_part(*args, **kwargs)
     monkeypatch.setattr(cube, "write_part", recording)
+    monkeypatch.setattr(cube, "_read_part", lambda path: pytest.fail(f"{path} read back"))
     assert gc.get_freeze_count() == 0
-    sweep.run(config.load_config(small_config), tmp_path / "f.nc", workers=1, progress=False)
+    out = sweep.run(config.load_config(small_config), tmp_path / "f.nc", workers=1, progress=False)
     assert frozen and min(frozen) > 10_000          # the imported modules' objects, at least
     assert gc.get_freeze_count() == 0               # the caller's heap as it was
+    assert (cube.open_cube(out)["orbit_status"].values == 0).all()     # every point, from memory
 
 
 def test_query_and_info_and_report(small_cube, tmp_path):

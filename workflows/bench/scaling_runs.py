@@ -22,7 +22,7 @@ def driver_max_rss_kib():
 # compute phase (in the driver, while the workers compute).
 PHASES = (("driver_warmup", "pipeline.warmup", "compile_scene"),
           ("compute", "pipeline.sweep", "_run_chunks"),
-          ("assemble", "pipeline.cube", "assemble"),
+          ("assemble", "pipeline.cube", "Assembly.dataset"),
           ("boundaries", "pipeline.boundaries", "add_boundary_table"),
           ("write", "pipeline.cube", "write_cube"),
           ("connect", "pipeline.sweep", "_client"),
@@ -52,17 +52,20 @@ def phase_timers():
         return timed
 
     for phase, module_name, attr in PHASES:
-        module = importlib.import_module(module_name)
-        fn = getattr(module, attr, None)
+        owner = importlib.import_module(module_name)
+        *path, attr = attr.split(".")           # a method: "Class.method"
+        for name in path:
+            owner = getattr(owner, name, None)
+        fn = getattr(owner, attr, None)
         if fn is None:
             continue
-        setattr(module, attr, wrap(phase, fn))
-        patched.append((module, attr, fn))
+        setattr(owner, attr, wrap(phase, fn))
+        patched.append((owner, attr, fn))
     try:
         yield times
     finally:
-        for module, attr, fn in patched:
-            setattr(module, attr, fn)
+        for owner, attr, fn in patched:
+            setattr(owner, attr, fn)
 
 
 def task_summary(records, n_workers, phase_start_epoch, phase_seconds):
