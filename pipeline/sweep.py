@@ -4,8 +4,8 @@ one result cube.
 Segments (fixed by the config) carry the numerics; chunks (groups of whole segments, sized for
 scheduling) carry only the work distribution, so the cube is the same for any worker count or
 chunk size. Every finished chunk is written at once as a part file next to the output; a
-re-run with `resume` computes only the segments no part holds, and the parts are assembled
-into the cube (atomically written) at the end.
+re-run with `resume` computes only the segments no part holds. The cube's arrays take the
+earlier parts and then each chunk as it arrives; the cube is written (atomically) at the end.
 """
 import contextlib
 import functools
@@ -429,11 +429,11 @@ REFINE_PRIORITY = 1
 
 
 def _run_chunks(client, cfg, todo, parts, assembly, chunk_points, bar, say):
-    """Compute the chunks into part files and `assembly`, each refining the stability changes between its own
-    points; one between two chunks is refined by a task of its own as soon as both are done
-    (a task per chunk and its result's round trip cost ~10 ms of CPU on the driver and the
-    worker: Fig. 13 on 2 workers had 11 refinement tasks besides 31 chunks):
-    {(line, i): boundary row}."""
+    """Compute the chunks into part files and `assembly`, each refining the stability changes
+    between its own points; one between two chunks is refined by a task of its own as soon as
+    both are done (a task and its result's round trip cost ~10 ms of CPU on the driver and the
+    worker: Fig. 13 on 2 workers had 11 refinement tasks besides 31 chunks when every finished
+    chunk's changes were one): {(line, i): boundary row}."""
     from dask.distributed import KilledWorker, as_completed
 
     n_workers = max(1, len(client.scheduler_info()["workers"]))
