@@ -259,7 +259,7 @@ def run(cfg, output, workers=None, scheduler=None, resume=False, overwrite=False
     progress lines go to `stream` (default: sys.stderr at the time of the call)."""
     compute.require_forced(cfg.data, "run")
     output = os.path.abspath(output)
-    with fileio.output_lock(output, cfg.path or "<default scene>"):
+    with fileio.output_lock(output, cfg.path or "<default scene>"), _heap_frozen():
         if scheduler:
             check_scheduler(scheduler)
         output, parts = _prepare_output(output, cfg, resume, overwrite)
@@ -303,11 +303,6 @@ def _heap_frozen():
 
 
 def _run_locked(cfg, output, parts, workers, scheduler, chunk_points, stream):
-    with _heap_frozen():
-        return _sweep_into(cfg, output, parts, workers, scheduler, chunk_points, stream)
-
-
-def _sweep_into(cfg, output, parts, workers, scheduler, chunk_points, stream):
     say = phase_printer(stream)
     config_hash = cfg.hash()
     segs = segments(cfg)
