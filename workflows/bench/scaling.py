@@ -128,7 +128,7 @@ def task_costs(cfg, n_workers=2):
     chunk = sorted(chunks, key=lambda c: sum(len(s) for s in c))[len(chunks) // 2]
     n = sum(len(s) for s in chunk)
     t0 = time.perf_counter()
-    args = pickle.dumps((cfg.data, chunk), protocol=5)
+    args = pickle.dumps((cfg.data, cfg.axes, cfg.continued_axis, chunk), protocol=5)
     dumps_s = time.perf_counter() - t0
     t0 = time.perf_counter()
     pickle.loads(args)
