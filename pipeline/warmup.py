@@ -26,6 +26,7 @@ from rotorkernels import integrators as ig, models, shooting
 from rotorkernels.attractor.lyapunov import _benettin
 from rotorkernels.attractor.period import _detect_period
 from rotorkernels.attractor.poincare import _poincare
+from rotorkernels.models import dispatch
 
 
 INTEGRATORS = ig.METHODS
@@ -34,25 +35,33 @@ INTEGRATORS = ig.METHODS
 def entry_points(spec, attractor=True, integrator="dop853"):
     """(jitted function, example arguments) of each kernel that Python code calls for `spec`
     with `integrator`, with the types of those calls (rotorkernels.orbits, attractor.diagnosis,
-    pipeline.compute); without `attractor`, only those of periodic orbits."""
+    pipeline.compute); without `attractor`, only those of periodic orbits. Each costs about a
+    second of compiling, so a scene gets only those it calls: a conservative model's backbone
+    neither shoots at a fixed period nor settles a transient."""
     kernel, n = spec.kernel, spec.n_state
     u, p, opts = np.zeros(n), np.zeros(1), ig.settings(integrator)
     orbits = [
-        (shooting.shoot, (kernel, u, p, 1.0, opts, 1e-9, 1)),
-        (shooting.shoot_staged, (kernel, u, p, 1.0, opts, opts, 1e-9, 1)),
-        (shooting.settle, (kernel, u, p, 1.0, opts)),
         (shooting.sample_orbit, (kernel, u, p, 1.0, 1, opts)),
         (ig.flow, (kernel, 0.0, 1.0, u, p, False, opts, 0.0)),     # Python's bool, either value
         (ig.initial_state, (u, n, False)),       # continuation (the boundaries' refinement)
     ]
-    if not spec.forced:     # the autonomous orbits' vector field at the period's end (backbones)
-        orbits.append((ig.derivative, (kernel, 0.0, u, p, False, u, np.zeros((n, n)))))
+    if spec.forced:
+        orbits += [     # shoot_staged is also `shoot` (plain Newton: an attractor's orbit refined)
+            (shooting.shoot_staged, (kernel, u, p, 1.0, opts, opts, 1e-9, 1)),
+            (shooting.settle, (kernel, u, p, 1.0, opts)),
+        ]
+    else:   # backbones: the vector field at the period's end, the linear modes at rest
+        orbits += [
+            (ig.derivative, (kernel, 0.0, u, p, False, u, np.zeros((n, n)))),
+            (dispatch.jac, (kernel[0], 0.0, u, p, np.zeros((n, n)))),
+        ]
     attractors = [
         (_poincare, (kernel, u, p, opts, 0, 1, 0.0, 0.0)),
         (_benettin, (kernel, u, p, opts, 0, 0, 1.0, 1, 2, 2, 1e-3, 1e-4, True, 0.0, 0.0, False)),
         (_detect_period, (np.zeros((2, n)), 1, 1e-6, 1e-3)),     # the same for every model
     ]
-    return orbits + attractors if attractor else orbits
+    # the attractor diagnostics sample a forcing period: a conservative model has none
+    return orbits + attractors if attractor and spec.forced else orbits
 
 
 @contextlib.contextmanager

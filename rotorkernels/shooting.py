@@ -121,12 +121,12 @@ def early_settings(opts):
     return ig.loosened(opts, EARLY_RTOL)
 
 
-@njit(cache=True, nogil=True)
 def shoot(kernel, guess, p, periods, opts, tol, max_iter):
     """Newton shooting for an orbit of period `periods` (scaled time) from `guess`.
 
     Returns (state, monodromy, status, reason, iterations, residual, n_rhs). The monodromy is
-    evaluated at the returned state."""
+    evaluated at the returned state. Plain Newton is `shoot_staged` with the configured settings
+    throughout, called from Python: a jitted wrapper was a second compilation (~1 s) of it."""
     return shoot_staged(kernel, guess, p, periods, opts, opts, tol, max_iter)
 
 

@@ -8,7 +8,7 @@ is generated for the extended registry into the Numba cache directory instead of
 committed `dispatch.py`.
 
 Kernels are compiled per kernel group (`ModelSpec.group`: the model alone unless it names one;
-the validation models share one), so a scene compiles only its own model's group and adding a
+the two test-only validation models share one), so a scene compiles only its own model's group and adding a
 model does not slow the first result of another (see `models.generate`).
 """
 import importlib

@@ -31,6 +31,81 @@ def _fill_nan_2d(out):
             out[i, j] = np.nan
 
 
+class Asymmetric5(NamedTuple):
+    """Kernel tag of the group `asymmetric5`: asymmetric5 (6)."""
+    id: int
+
+
+class _Asymmetric5Kernels:
+    """The bodies of the dispatch functions for Asymmetric5 tags."""
+
+    def rhs(tag, tau, u, p, du):
+        if tag.id == 6:
+            m6.rhs(tau, u, p, du)
+        else:
+            _fill_nan(du)
+
+    def jac(tag, tau, u, p, out):
+        if tag.id == 6:
+            m6.jac(tau, u, p, out)
+        else:
+            _fill_nan_2d(out)
+
+    def rhs_jac(tag, tau, u, p, du, out):
+        if tag.id == 6:
+            m6.rhs_jac(tau, u, p, du, out)
+        else:
+            _fill_nan(du)
+
+    def known(tag):
+        return tag.id == 6
+
+    def tangent(tag, velocity_form, z, n, jbuf, dz):
+        stages.tangent_product(velocity_form, z, n, jbuf, dz)
+
+    def combine(tag, K, coef, n_terms, z, step, out):
+        stages.combine(K, coef, n_terms, z, step, out, z.size)
+
+
+class Duffing(NamedTuple):
+    """Kernel tag of the group `duffing`: duffing (3)."""
+    id: int
+
+
+class _DuffingKernels:
+    """The bodies of the dispatch functions for Duffing tags."""
+
+    def rhs(tag, tau, u, p, du):
+        if tag.id == 3:
+            m3.rhs(tau, u, p, du)
+        else:
+            _fill_nan(du)
+
+    def jac(tag, tau, u, p, out):
+        if tag.id == 3:
+            m3.jac(tau, u, p, out)
+        else:
+            _fill_nan_2d(out)
+
+    def rhs_jac(tag, tau, u, p, du, out):
+        if tag.id == 3:
+            m3.rhs_jac(tau, u, p, du, out)
+        else:
+            _fill_nan(du)
+
+    def known(tag):
+        return tag.id == 3
+
+    def tangent(tag, velocity_form, z, n, jbuf, dz):
+        stages.tangent_product(velocity_form, z, 2, jbuf, dz)
+
+    def combine(tag, K, coef, n_terms, z, step, out):
+        if z.size == 2:
+            stages.combine(K, coef, n_terms, z, step, out, 2)
+        else:
+            stages.combine(K, coef, n_terms, z, step, out, z.size)
+
+
 class JeffcottClearance(NamedTuple):
     """Kernel tag of the group `jeffcott_clearance`: jeffcott_clearance (0)."""
     id: int
@@ -106,40 +181,34 @@ class _RigidPreloadedKernels:
         stages.combine(K, coef, n_terms, z, step, out, z.size)
 
 
-class SeriesRotor(NamedTuple):
-    """Kernel tag of the group `series_rotor`: symmetric4 (5), asymmetric5 (6)."""
+class Symmetric4(NamedTuple):
+    """Kernel tag of the group `symmetric4`: symmetric4 (5)."""
     id: int
 
 
-class _SeriesRotorKernels:
-    """The bodies of the dispatch functions for SeriesRotor tags."""
+class _Symmetric4Kernels:
+    """The bodies of the dispatch functions for Symmetric4 tags."""
 
     def rhs(tag, tau, u, p, du):
         if tag.id == 5:
             m5.rhs(tau, u, p, du)
-        elif tag.id == 6:
-            m6.rhs(tau, u, p, du)
         else:
             _fill_nan(du)
 
     def jac(tag, tau, u, p, out):
         if tag.id == 5:
             m5.jac(tau, u, p, out)
-        elif tag.id == 6:
-            m6.jac(tau, u, p, out)
         else:
             _fill_nan_2d(out)
 
     def rhs_jac(tag, tau, u, p, du, out):
         if tag.id == 5:
             m5.rhs_jac(tau, u, p, du, out)
-        elif tag.id == 6:
-            m6.rhs_jac(tau, u, p, du, out)
         else:
             _fill_nan(du)
 
     def known(tag):
-        return tag.id == 5 or tag.id == 6
+        return tag.id == 5
 
     def tangent(tag, velocity_form, z, n, jbuf, dz):
         stages.tangent_product(velocity_form, z, n, jbuf, dz)
@@ -149,7 +218,7 @@ class _SeriesRotorKernels:
 
 
 class Validation(NamedTuple):
-    """Kernel tag of the group `validation`: linear_oscillator (1), damped_mathieu (2), duffing (3)."""
+    """Kernel tag of the group `validation`: linear_oscillator (1), damped_mathieu (2)."""
     id: int
 
 
@@ -161,8 +230,6 @@ class _ValidationKernels:
             m1.rhs(tau, u, p, du)
         elif tag.id == 2:
             m2.rhs(tau, u, p, du)
-        elif tag.id == 3:
-            m3.rhs(tau, u, p, du)
         else:
             _fill_nan(du)
 
@@ -171,8 +238,6 @@ class _ValidationKernels:
             m1.jac(tau, u, p, out)
         elif tag.id == 2:
             m2.jac(tau, u, p, out)
-        elif tag.id == 3:
-            m3.jac(tau, u, p, out)
         else:
             _fill_nan_2d(out)
 
@@ -181,35 +246,29 @@ class _ValidationKernels:
             m1.rhs_jac(tau, u, p, du, out)
         elif tag.id == 2:
             m2.rhs_jac(tau, u, p, du, out)
-        elif tag.id == 3:
-            m3.rhs_jac(tau, u, p, du, out)
         else:
             _fill_nan(du)
 
     def known(tag):
-        return tag.id == 1 or tag.id == 2 or tag.id == 3
+        return tag.id == 1 or tag.id == 2
 
     def tangent(tag, velocity_form, z, n, jbuf, dz):
-        if n == 2:
-            stages.tangent_product(velocity_form, z, 2, jbuf, dz)
-        elif n == 4:
+        if n == 4:
             stages.tangent_product(velocity_form, z, 4, jbuf, dz)
         else:
             stages.tangent_product(velocity_form, z, n, jbuf, dz)
 
     def combine(tag, K, coef, n_terms, z, step, out):
-        if z.size == 2:
-            stages.combine(K, coef, n_terms, z, step, out, 2)
-        elif z.size == 4:
+        if z.size == 4:
             stages.combine(K, coef, n_terms, z, step, out, 4)
         else:
             stages.combine(K, coef, n_terms, z, step, out, z.size)
 
 
 # tag class -> the bodies of its group
-_GROUPS = {JeffcottClearance: _JeffcottClearanceKernels, RigidPreloaded: _RigidPreloadedKernels, SeriesRotor: _SeriesRotorKernels, Validation: _ValidationKernels}
+_GROUPS = {Asymmetric5: _Asymmetric5Kernels, Duffing: _DuffingKernels, JeffcottClearance: _JeffcottClearanceKernels, RigidPreloaded: _RigidPreloadedKernels, Symmetric4: _Symmetric4Kernels, Validation: _ValidationKernels}
 # model name -> its kernel tag (ModelSpec.kernel[0])
-TAGS = {'jeffcott_clearance': JeffcottClearance(0), 'linear_oscillator': Validation(1), 'damped_mathieu': Validation(2), 'duffing': Validation(3), 'rigid_preloaded': RigidPreloaded(4), 'symmetric4': SeriesRotor(5), 'asymmetric5': SeriesRotor(6)}
+TAGS = {'jeffcott_clearance': JeffcottClearance(0), 'linear_oscillator': Validation(1), 'damped_mathieu': Validation(2), 'duffing': Duffing(3), 'rigid_preloaded': RigidPreloaded(4), 'symmetric4': Symmetric4(5), 'asymmetric5': Asymmetric5(6)}
 
 
 def _kernels(tag):

@@ -4,7 +4,7 @@ and autonomous (free oscillation, backbone); hardening for gamma > 0, softening 
 import numpy as np
 from numba import njit
 
-from rotorkernels.models.spec import VALIDATION_GROUP, Built, ModelSpec, Observable, Parameter
+from rotorkernels.models.spec import Built, ModelSpec, Observable, Parameter
 from rotorkernels.models.velocity import upper_rows, velocity_rows
 
 P_T2, P_DAMP, P_GAMMA, P_FORCE = range(4)   # T^2, 2 zeta T, gamma, F
@@ -49,5 +49,7 @@ SPEC = ModelSpec(
     continuation=("omega",),
     build=build, cold_guess=lambda p: np.zeros(2), length_scale=1.0,
     observables=(Observable("x", (1.0,), "1", "displacement"),),
-    kernel_group=VALIDATION_GROUP,
+    # its own kernel group, not the test-only validation models': it has a scene of its own
+    # (configs/duffing_resonance.toml), whose first point would otherwise compile their
+    # equations too (docs/benchmarks/compile.md)
 )

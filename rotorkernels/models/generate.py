@@ -8,10 +8,10 @@ added compile time to all others. The tag instead is an instance of a small Name
 *kernel group* (`ModelSpec.group`): its type tells Numba the group, so every kernel is
 specialised, compiled and disk-cached per group and holds only that group's models (and only
 the constant-size stage code for their state sizes), chosen at typing time by the `overload`s
-below. Within a group the tag's `id` selects the model at run time: the validation models share
-one group, so the tests compile the kernels once for all of them. An id that is no model of its
-group reaches no model (`known` is false, the integrators report STATUS_UNKNOWN_MODEL); a spec
-that is not in the dispatch has no tag (`models.kernel_tag` raises ModelError).
+below. Within a group the tag's `id` selects the model at run time: the test-only validation
+models share one group, so the tests compile the kernels once for both. An id that is no model
+of its group reaches no model (`known` is false, the integrators report STATUS_UNKNOWN_MODEL);
+a spec that is not in the dispatch has no tag (`models.kernel_tag` raises ModelError).
 
 The branches are generated so that no list of models is kept by hand:
 

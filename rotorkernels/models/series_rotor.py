@@ -232,11 +232,6 @@ DERIVED = {
     "contact_constant": ("N m-1.5", "ball contact constant K"),
 }
 REFERENCES = "Filipkovsky S.V. (2010), nonlinear normal modes of a rotor on ball bearings (symmetric, axial)"
-# symmetric4 and asymmetric5 share one compiled kernel set (their bodies differ only in n): one
-# compile of the integrators for both (models.dispatch, kernel groups).
-KERNEL_GROUP = "series_rotor"
-
-
 def observables(n):
     names = (("x_A", "journal A horizontal displacement"), ("y_A", "journal A vertical displacement"),
              ("x_B", "journal B horizontal displacement"), ("y_B", "journal B vertical displacement"),

@@ -136,7 +136,7 @@ VALIDATION_GROUP = "validation"
 def validation_spec(name, id, module, names, description):
     """The spec of a 2-DOF validation model in scaled time (period 1) whose kernel parameters are
     its values `names` in order; such a model has no sweep axis and is used by the kernels' tests.
-    The validation models share one kernel group: compiled once for all of them."""
+    The validation models share one kernel group: compiled once for both."""
     def build(v):
         return Built(np.array([float(v[k]) for k in names]), 1.0, {})
     return ModelSpec(name=name, id=id, module=module, n_position=2, description=description,

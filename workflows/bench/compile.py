@@ -24,12 +24,10 @@ from pathlib import Path
 from workflows.bench import render
 from workflows.bench.common import DOCS, ROOT, loadavg, log, provenance
 
-# The first point of each model's scene: linear_oscillator and damped_mathieu have no scene and
-# share duffing's kernels (the validation group), so duffing's times are theirs. A conservative
-# model has no `point` (no forcing period): symmetric4's first result is its scene's backbones
-# (`rotorsweep backbone`, every mode by manifold and continuation, one Dask worker), which
-# asymmetric5 shares the kernels of (the series_rotor group); {out} is a file in the run's cache
-# directory.
+# The first point of each model's scene (linear_oscillator and damped_mathieu have none: tests
+# only). A conservative model has no `point` (no forcing period): symmetric4's and asymmetric5's
+# first result is their scene's backbones (`rotorsweep backbone`, every mode by manifold and
+# continuation, one Dask worker); {out} is a file in the run's cache directory.
 POINTS = {
     "jeffcott_clearance": ["point", "--speed", "100", "--clearance", "7.6e-6", "--json"],
     "duffing": ["point", "--config", "configs/duffing_resonance.toml", "--at", "omega=1.0", "--json"],
@@ -37,6 +35,8 @@ POINTS = {
                         "--at", "support_frequency=150", "--json"],
     "symmetric4": ["backbone", "configs/filipkovsky2010_symmetric.toml", "--workers", "1", "-q", "--overwrite",
                    "-o", "{out}"],
+    "asymmetric5": ["backbone", "configs/filipkovsky2010_axial.toml", "--workers", "1", "-q", "--overwrite",
+                    "-o", "{out}"],
 }
 WORKTREE = "worktree"
 
