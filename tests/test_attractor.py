@@ -445,6 +445,35 @@ def test_continued_period_two_orbit_is_the_full_transients_attractor():
     assert orbit is None and used == 0 and reached is p1.state
 
 
+def test_just_past_a_flip_the_transient_goes_on_from_the_period_two_orbit_born_there():
+    """Fig. 13 at 93.1 Hz, 3.8 um: the period-1 orbit has flipped (multiplier -1.0018) and is
+    left so slowly (x1.0018 a period) that a kicked 200-period transient still repeats on it:
+    the diagnosis read period 1 with a positive exponent. `escape_from` starts the next transient
+    on the stable period-2 orbit born at the flip (Newton on 2 T from the period-1 state offset
+    along the flip's eigenvector). Independent value: a brute-force transient of 6000 periods
+    from a 1e-3 offset along that eigenvector (about ln(30) / 0.0018 = 1900 periods to get away,
+    then the period-2 orbit's multiplier 0.9927 every 2 periods: its distance to the orbit ends
+    below 1e-6 of the state's size), whose last two samples are the orbit's two points."""
+    p, period = bai_params(BaiPoint(93.1, 3.8e-6))
+    p1 = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=jc.static_guess, tol=1e-10)
+    lams, vecs = np.linalg.eig(shooting.periodic_orbit(JEFF, p1.state, p, OPTS, tol=1e-10).monodromy)
+    flip = int(np.argmax(np.abs(lams)))
+    assert p1.bifurcation == floquet.PERIOD_DOUBLING and -1.01 < lams[flip].real < -1.0
+    size = np.abs(p1.state).max()
+    v = vecs[:, flip].real / np.abs(vecs[:, flip].real).max()
+    brute, status = at.poincare(JEFF, p1.state + 1e-3 * size * v, p, OPTS, 6000, 2)
+    assert status == ig.STATUS_OK
+    assert np.abs(brute[1] - brute[0]).max() > 1e-2 * size          # period 2, not 1
+    res = at.diagnose(JEFF, p1.state, p, period, OPTS, n_transient=200)
+    assert (res.code, res.period, res.derived) == (at.PERIODIC, 2, True) and res.lle < 0
+    gaps = np.abs(res.samples[-2:, None, :] - brute[None, :, :]).max(axis=2).min(axis=1)
+    assert gaps.max() <= 1e-6 * size, gaps
+    with pytest.MonkeyPatch.context() as mp:       # the plain kick: still on the period-1 orbit
+        mp.setattr(at.diagnosis, "FLIP_OFFSETS", ())
+        kicked = at.diagnose(JEFF, p1.state, p, period, OPTS, n_transient=200)
+    assert (kicked.code, kicked.period) == (at.PERIODIC, 1)
+
+
 @pytest.mark.parametrize("point, expected", [
     (BaiPoint(148.0, 7.6e-6), (at.QUASI_PERIODIC, 0)),   # past the Neimark-Sacker: a torus
     (BaiPoint(84.0, 7.6e-6), (at.PERIODIC, 2)),          # past the period doubling
