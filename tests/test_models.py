@@ -5,6 +5,7 @@ import os
 import subprocess
 import sys
 import textwrap
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -46,7 +47,6 @@ def test_models_are_compiled_in_their_kernel_groups():
     for n in tags:
         groups.setdefault(models.get(n).group, set()).add(n)
     assert groups["validation"] == {"linear_oscillator", "damped_mathieu"}
-    import tomllib
     with_scene = {tomllib.loads(p.read_text())["scene"]["model"] for p in (ROOT / "configs").glob("*.toml")}
     assert with_scene >= {"jeffcott_clearance", "duffing", "rigid_preloaded", "symmetric4", "asymmetric5"}
     assert all(groups[models.get(n).group] == {n} for n in with_scene)
@@ -260,21 +260,20 @@ def compiled_by(run):
         run()
     return [ev.data["dispatcher"].py_func.__qualname__ for _, ev in rec.buffer]
 
-def scene(cfg):
-    warmup.compile_model(compute.model_of(cfg.data), attractor=cfg.data["analysis"]["attractor"],
-                         integrators=(cfg.data["numerics"]["integrator"],))
+def scene(data):
+    warmup.compile_scene(data, lambda text: None)   # what the driver does before the workers start
 
 fig13 = scene_config()                          # orbits only
 segs = sweep.segments(fig13)
-scene(fig13)
+scene(fig13.data)
 chunk = lambda: sweep.compute_chunk(fig13.data, fig13.axes, fig13.continued_axis, segs[:2])
 print("sweep", compiled_by(chunk))
 sym = pipeline._config(sys.argv[1])
-scene(sym)
+scene(sym.data)
 print("backbone", compiled_by(lambda: backbone.backbone_line(sym.data, backbone.plan(sym.data).lines[0])))
 duff = pipeline._config(sys.argv[2])
 data = {**duff.data, "analysis": {**duff.data["analysis"], "attractor": True}}
-warmup.compile_model(compute.model_of(data), integrators=(data["numerics"]["integrator"],))
+scene(data)
 print("attractor", compiled_by(lambda: compute.point_detail(data, compute.point_values(duff, {"omega": 1.0}),
                                                             periods=4, steps_per_period=8)))
 """
