@@ -108,8 +108,12 @@ def layout(hv, panels, backend, columns, title, fig_inches=None, hspace=0.25):
             obj = obj.opts(fig_inches=fig_inches, backend=backend)
         return obj
     # bokeh: separate figures in a grid; matplotlib: one figure, one title, no A/B/C labels
-    lay = hv.Layout(panels).cols(columns)
     if backend == "bokeh":
-        return lay.opts(title=title, shared_axes=False, backend=backend)
-    return lay.opts(title=title, sublabel_format="", fig_inches=fig_inches, hspace=hspace,
-                    vspace=0.35, fontsize={"title": 13}, backend=backend)
+        opts = dict(title=title, shared_axes=False)
+    else:
+        opts = dict(title=title, sublabel_format="", fig_inches=fig_inches, hspace=hspace, vspace=0.35,
+                    fontsize={"title": 13})
+    # set on an empty layout, which then takes the panels (a clone keeps its options): .opts() on
+    # the full layout walks the element tree once per element (the 4-D atlas: 1.1-1.8 s per facet
+    # figure and backend; the report 80 -> 77 s, its PNGs and HTML unchanged)
+    return hv.Layout([]).opts(backend=backend, **opts).clone(panels).cols(columns)
