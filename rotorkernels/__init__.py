@@ -54,3 +54,12 @@ _OWN = "ROTORSWEEP_NUMBA_CACHE_DIR"
 if os.environ.get("NUMBA_CACHE_DIR", "") in ("", os.environ.get(_OWN)):
     os.environ["NUMBA_CACHE_DIR"] = os.environ[_OWN] = _cache_dir()
     numba.config.CACHE_DIR = os.environ[_OWN]
+
+
+# Compile options of a body that an `overload` picks at typing time (a group's model equations
+# for a kernel tag, an integrator for a settings class). To type the call Numba compiles the
+# picked body in full, even for an overload inlined at its IR (inline="always"), whose inlined
+# copy every caller then compiles again: Jeffcott's step loop took ~5 s that way. A body that
+# is called instead is compiled once, cached on disk like the kernels, and inlined by LLVM
+# (forceinline), with the same machine speed.
+PICKED_BODY = {"forceinline": True, "cache": True}

@@ -26,7 +26,7 @@ from numba import njit
 from numba.core.errors import TypingError
 from numba.extending import overload
 
-from rotorkernels import dop853_tableau as _dop
+from rotorkernels import PICKED_BODY, dop853_tableau as _dop
 from rotorkernels.models import dispatch
 
 STATUS_OK, STATUS_NAN, STATUS_AMPLITUDE, STATUS_STEP_UNDERFLOW, STATUS_UNKNOWN_MODEL = range(5)
@@ -294,7 +294,7 @@ def _integrate(kernel, t0, t1, z0, p, variational, opts, h0):
     raise TypeError("jitted code only: the overload below picks the method")
 
 
-@overload(_integrate, inline="always")
+@overload(_integrate, jit_options=PICKED_BODY)
 def _integrate_by_method(kernel, t0, t1, z0, p, variational, opts, h0):
     method = getattr(opts, "instance_class", None)
     if method is RK4Settings:

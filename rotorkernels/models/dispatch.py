@@ -7,7 +7,7 @@ from numba import njit
 from numba.core.errors import TypingError
 from numba.extending import overload
 
-from rotorkernels import stages
+from rotorkernels import PICKED_BODY, stages
 import rotorkernels.models.jeffcott_clearance as m0
 import rotorkernels.models.linear_oscillator as m1
 import rotorkernels.models.damped_mathieu as m2
@@ -283,7 +283,7 @@ def _rhs(tag, tau, u, p, du):
     raise TypeError('jitted code only: the overload below picks the body')
 
 
-@overload(_rhs, inline="always")
+@overload(_rhs, jit_options=PICKED_BODY)
 def _rhs_of_group(tag, tau, u, p, du):
     return _kernels(tag).rhs
 
@@ -298,7 +298,7 @@ def _jac(tag, tau, u, p, out):
     raise TypeError('jitted code only: the overload below picks the body')
 
 
-@overload(_jac, inline="always")
+@overload(_jac, jit_options=PICKED_BODY)
 def _jac_of_group(tag, tau, u, p, out):
     return _kernels(tag).jac
 
@@ -313,7 +313,7 @@ def _rhs_jac(tag, tau, u, p, du, out):
     raise TypeError('jitted code only: the overload below picks the body')
 
 
-@overload(_rhs_jac, inline="always")
+@overload(_rhs_jac, jit_options=PICKED_BODY)
 def _rhs_jac_of_group(tag, tau, u, p, du, out):
     return _kernels(tag).rhs_jac
 
@@ -328,7 +328,7 @@ def _known(tag):
     raise TypeError('jitted code only: the overload below picks the body')
 
 
-@overload(_known, inline="always")
+@overload(_known, jit_options=PICKED_BODY)
 def _known_of_group(tag):
     return _kernels(tag).known
 
@@ -343,7 +343,7 @@ def _tangent(tag, velocity_form, z, n, jbuf, dz):
     raise TypeError('jitted code only: the overload below picks the body')
 
 
-@overload(_tangent, inline="always")
+@overload(_tangent, jit_options=PICKED_BODY)
 def _tangent_of_group(tag, velocity_form, z, n, jbuf, dz):
     return _kernels(tag).tangent
 
@@ -358,7 +358,7 @@ def _combine(tag, K, coef, n_terms, z, step, out):
     raise TypeError('jitted code only: the overload below picks the body')
 
 
-@overload(_combine, inline="always")
+@overload(_combine, jit_options=PICKED_BODY)
 def _combine_of_group(tag, K, coef, n_terms, z, step, out):
     return _kernels(tag).combine
 

@@ -100,7 +100,7 @@ def _dispatch_function(name, args, doc):
     params = f"tag, {args}" if args else "tag"
     return ["", "", f"def _{name}({params}):",
             "    raise TypeError('jitted code only: the overload below picks the body')",
-            "", "", f'@overload(_{name}, inline="always")', f"def _{name}_of_group({params}):",
+            "", "", f"@overload(_{name}, jit_options=PICKED_BODY)", f"def _{name}_of_group({params}):",
             f"    return _kernels(tag).{name}",
             "", "", _NJIT, f"def {name}({params}):", f'    """{doc}"""', f"    return _{name}({params})"]
 
@@ -111,7 +111,7 @@ def dispatch_source(specs):
     groups = [(g, list(members)) for g, members in groupby(specs, key=lambda s: s.group)]
     lines = [HEADER.rstrip("\n"), "from typing import NamedTuple", "", "import numpy as np",
              "from numba import njit", "from numba.core.errors import TypingError",
-             "from numba.extending import overload", "", "from rotorkernels import stages"]
+             "from numba.extending import overload", "", "from rotorkernels import PICKED_BODY, stages"]
     lines += [f"import {s.module} as m{s.id}" for s in sorted(specs, key=lambda s: s.id)]
     lines += ["", "", _NJIT, "def _fill_nan(du):",
               '    """What an unknown id gets: NaN, never another model\'s equations."""',
