@@ -123,7 +123,10 @@ def _jacobian(out, p, a, b):
             out[N_POS + i, N_POS + j] = -p[P_DAMP + N_POS * i + j]
 
 
-@njit(cache=True, nogil=True, inline="always")
+# `_load` and `_force` run once per bearing (A and B) in each kernel: `forceinline` lowers the
+# ball sum once and lets LLVM inline both calls, where `inline="always"` lowered it at each call
+# (rhs_jac's first compile 2.4 -> 1.3 s CPU, rhs 1.9 -> 0.7 s; the same machine code speed).
+@njit(cache=True, nogil=True, forceinline=True)
 def _load(x, y, z, p):
     """One bearing's forces and stiffness (`ring_load` layout): the ball sum, or the cubic series."""
     if p[P_LAW] > 0.0:
@@ -132,7 +135,7 @@ def _load(x, y, z, p):
                      1.0, 0.0, p[P_COS_D], p[P_SIN_D])
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, forceinline=True)
 def _force(x, y, z, p):
     """One bearing's forces only (the ball sum skips its stiffness)."""
     if p[P_LAW] > 0.0:
