@@ -124,7 +124,10 @@ def _error_norm(K, h, z, znew, rtol, atol, w5, w3):
     return abs(h) * e5 / np.sqrt((e5 + 0.01 * e3) * m)
 
 
-@njit(cache=True, nogil=True)
+# `dop853` and `rk4` are inlined into their one caller, the body `flow` picks (`_flow_dop853`,
+# `_flow_rk4`): a function of their own was one more compilation of the step loop beneath it
+# (each jitted function re-optimizes and emits the code it calls: ~0.9 s of a first point).
+@njit(cache=True, nogil=True, inline="always")
 def dop853(kernel, t0, t1, z0, p, variational, rtol, atol, h0, max_steps, amplitude_limit):
     """Integrate z from t0 to t1 > t0 with adaptive Dormand-Prince 8(5,3)."""
     m = z0.size
@@ -198,7 +201,7 @@ def _dop853_steps(kernel, t0, t1, z, p, variational, rtol, atol, h0, max_steps, 
     return STATUS_STEP_UNDERFLOW, n_rhs, h
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def rk4(kernel, t0, t1, z0, p, variational, n_steps, amplitude_limit):
     """Integrate z from t0 to t1 with n_steps classical RK4 steps."""
     m = z0.size
