@@ -45,11 +45,8 @@ def entry_points(spec, attractor=True, integrator="dop853"):
         (ig.flow, (kernel, 0.0, 1.0, u, p, False, opts, 0.0)),     # Python's bool, either value
         (ig.initial_state, (u, n, False)),       # continuation (the boundaries' refinement)
     ]
-    if spec.forced:
-        orbits += [     # shoot_staged is also `shoot` (plain Newton: an attractor's orbit refined)
-            (shooting.shoot_staged, (kernel, u, p, 1.0, opts, opts, 1e-9, 1)),
-            (shooting.settle, (kernel, u, p, 1.0, opts)),
-        ]
+    if spec.forced:     # shoot_staged is also `shoot` (plain Newton: an attractor's orbit refined)
+        orbits.append((shooting.shoot_staged, (kernel, u, p, 1.0, opts, opts, 1e-9, 1)))
     else:   # backbones: the vector field at the period's end, the linear modes at rest
         orbits += [
             (ig.derivative, (kernel, 0.0, u, p, False, u, np.zeros((n, n)))),
