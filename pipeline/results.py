@@ -71,14 +71,15 @@ def run_lines(cfg, task, lines, workers, scheduler, stream, summary):
 
     client, cluster = sweep._client(workers, scheduler)
     try:
-        warmup.compile_scene(cfg.data, lambda text: say(stream, text))
-        submit = sweep.submitter(client, task, cfg.data)
-        futures = {submit(where): k for k, where in enumerate(lines)}
-        results = [None] * len(lines)
-        for done, future in enumerate(as_completed(futures), 1):
-            k = futures[future]
-            results[k] = future.result()
-            say(stream, f"[{done}/{len(lines)}] {_line_label(lines[k])}: {summary(results[k])}")
+        with sweep.heap_frozen():     # the imports' and the cluster's objects (see sweep.heap_frozen)
+            warmup.compile_scene(cfg.data, lambda text: say(stream, text))
+            submit = sweep.submitter(client, task, cfg.data)
+            futures = {submit(where): k for k, where in enumerate(lines)}
+            results = [None] * len(lines)
+            for done, future in enumerate(as_completed(futures), 1):
+                k = futures[future]
+                results[k] = future.result()
+                say(stream, f"[{done}/{len(lines)}] {_line_label(lines[k])}: {summary(results[k])}")
     finally:
         sweep._close(client, cluster)
     return results
