@@ -292,7 +292,8 @@ def heap_frozen():
     the kernels loaded) out of garbage collections until the outermost such block ends: each
     full collection walked them all (0.1 s, once or twice a sweep, with the workers waiting for
     the next task). A nested block adds what was created since (a local cluster started inside
-    the run) and leaves the unfreezing to the outermost one."""
+    the run) and leaves the unfreezing to the outermost one; a heap the caller froze before
+    counts as an outer block (what the run adds stays frozen until the caller unfreezes)."""
     outermost = not gc.get_freeze_count()
     gc.freeze()
     try:
