@@ -22,3 +22,11 @@ def dask_setup(worker):
     gc.freeze()
     # its warnings at close are about the tasks the driver cancels; task errors reach the driver
     logging.getLogger("distributed.worker.state_machine").setLevel(logging.ERROR)
+
+
+def dask_teardown(worker):
+    # Called when the worker starts closing (the driver's cluster.close() after Ctrl-C or an
+    # error): a heartbeat still in flight when it closes its connections then logs "Failed to
+    # communicate with scheduler" with a ~50-line traceback. From here on the worker logs only
+    # its own shutdown; the run's outcome is the driver's to report (as its own `_close` does).
+    logging.getLogger("distributed").setLevel(logging.CRITICAL + 1)
