@@ -19,8 +19,11 @@ Every figure is built by one function `fig_*(ds, backend)` that returns a HoloVi
 for that backend. The HTML page (bokeh, JavaScript inlined so it opens offline) and the PNGs
 (matplotlib, no browser) call the same functions, building each figure anew per backend: a
 bokeh-styled object saved with matplotlib silently loses its colormap, limits and colorbar.
+With 2 or more usable CPUs the PNGs are drawn by a second Python process while this one draws the
+HTML, and this one then helps with the PNGs left (pngs.py; make_report(parallel=False) draws all
+here).
 
-Modules import only downward: driver -> figures -> registry, page, points, tables, branches ->
+Modules import only downward: driver -> pngs -> figures -> registry, page, points, tables, branches ->
 plan, stability -> cubeinfo, style.
 """
 from pipeline.report.branches import SPECIAL_LABELS, Special, branch_elements, stability_runs

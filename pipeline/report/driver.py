@@ -3,7 +3,7 @@ from pathlib import Path
 
 from pipeline import query, schema
 from pipeline.report import figures  # noqa: F401  (registers the figures)
-from pipeline.report import page, style
+from pipeline.report import page, pngs, style
 from pipeline.report.cubeinfo import scene_name
 from pipeline.report.figures.point import fig_point
 from pipeline.report.plan import axes_plan
@@ -40,42 +40,36 @@ def _resolve_all(ds, points):
     return resolved
 
 
-def make_report(ds, out_dir, title=None, points=None):
+def make_report(ds, out_dir, title=None, points=None, parallel=None):
     """Write report.html, the figures as PNGs (those of the figure registry that apply to the
     cube, e.g. stability_map.png, max_multiplier.png, multiplier_paths.png, and for cubes with
     attractor diagnostics bifurcation.png and lle.png) and unstable_intervals.csv into out_dir.
     points: grid points to show in detail ({axis: value} dicts or AXIS=VALUE strings, nearest
-    grid point, see resolve_point), one point_<speed>Hz_<clearance>um.png each. Returns
-    {"html": Path, "png": [Path, ...] (figures, then points), "csv": Path, "points": [Path, ...]}."""
+    grid point, see resolve_point), one point_<speed>Hz_<clearance>um.png each. parallel
+    (default: with 2 or more usable CPUs): the PNGs are drawn by a second process while this one
+    draws the HTML, then helps with those left (pipeline.report.pngs). Returns {"html": Path, "png": [Path, ...] (figures,
+    then points), "csv": Path, "points": [Path, ...]}."""
     resolved = _resolve_all(ds, points)
-    scene = scene_data(ds) if resolved else None
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    data = _load(ds)
-    title = title or f"Stability report: {scene_name(ds)}"
-    intervals = query.unstable_intervals(data)
-    csv_path = out / "unstable_intervals.csv"
-    write_csv(csv_path, *interval_rows(data, intervals, machine=True))
-    details = [compute_point(ds, scene, r) for r in resolved]
-    chosen = figures_for(data)
+    with pngs.drawer(parallel) as draw_pngs:
+        scene = scene_data(ds) if resolved else None
+        data = _load(ds)
+        title = title or f"Stability report: {scene_name(ds)}"
+        intervals = query.unstable_intervals(data)
+        csv_path = out / "unstable_intervals.csv"
+        write_csv(csv_path, *interval_rows(data, intervals, machine=True))
+        details = [compute_point(ds, scene, r) for r in resolved]
+        point_pngs = [out / point_filename(ds, r) for r in resolved]
+        chosen = figures_for(data)
+        figure_pngs = draw_pngs(data, intervals, chosen, list(zip(details, point_pngs)), out)
 
-    pngs, point_pngs = [], []
-    with style.backend("matplotlib") as hv:
-        for fig in chosen:
-            hv.save(fig.build(data, "matplotlib", intervals), out / fig.filename, backend="matplotlib",
-                    dpi=style.DPI)
-            pngs.append(out / fig.filename)
-        for pt in details:
-            path = out / point_filename(ds, pt["resolved"])
-            hv.save(fig_point(pt, "matplotlib"), path, backend="matplotlib", dpi=style.DPI)
-            point_pngs.append(path)
-
-    html_path = out / "report.html"
-    with style.backend("bokeh"):
-        figs = [(fig.caption(data), fig.build(data, "bokeh", intervals)) for fig in chosen]
-        point_sections = [(point_title(pt), fig_point(pt, "bokeh"), page.point_table_html(point_rows(pt)))
-                          for pt in details]
-        page.save_html(html_path, title, page.header_html(data, title, axes_plan(data)), figs,
-                       page.intervals_html(data, *interval_rows(data, intervals)),
-                       ds.attrs.get("config_toml", ""), point_sections)
-    return {"html": html_path, "png": pngs + point_pngs, "csv": csv_path, "points": point_pngs}
+        html_path = out / "report.html"
+        with style.backend("bokeh"):
+            figs = [(fig.caption(data), fig.build(data, "bokeh", intervals)) for fig in chosen]
+            point_sections = [(point_title(pt), fig_point(pt, "bokeh"), page.point_table_html(point_rows(pt)))
+                              for pt in details]
+            page.save_html(html_path, title, page.header_html(data, title, axes_plan(data)), figs,
+                           page.intervals_html(data, *interval_rows(data, intervals)),
+                           ds.attrs.get("config_toml", ""), point_sections)
+    return {"html": html_path, "png": figure_pngs + point_pngs, "csv": csv_path, "points": point_pngs}

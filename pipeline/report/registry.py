@@ -51,3 +51,11 @@ def register(figure):
 def figures_for(ds):
     """The registered figures that apply to the cube, in report order."""
     return [f for f in _FIGURES.values() if f.applies(ds)]
+
+
+def figure_named(name):
+    """The registered figure called `name`."""
+    try:
+        return _FIGURES[name]
+    except KeyError:
+        raise ValueError(f"no report figure {name!r}; registered: {', '.join(_FIGURES)}") from None

@@ -1,0 +1,150 @@
+"""The report's PNGs (matplotlib), drawn by a second Python process while this one draws the HTML
+page (bokeh); whichever finishes first helps with the PNGs left. The halves take about as long
+as each other (the 4-D atlas: 29 s of PNGs, 35 s of HTML) and share nothing but the cube's data.
+
+The second process is a fresh interpreter with this one's sys.path (`python -c`, main() here),
+not a multiprocessing child: forking a process that holds Dask's or bokeh's threads can inherit a
+lock held by one of them, and spawning re-imports the caller's __main__, which a script without
+an `if __name__ == "__main__"` guard does not survive. It starts first and imports HoloViews
+while this process loads the cube; then it reads the path of a job file (pickled data, figure
+names, file names) from its stdin and draws the PNGs in order, each one it claims first. After
+the HTML this process claims and draws from the other end, then waits. A claim is a file created
+with O_EXCL in the job's directory, so each PNG is drawn once. The drawer's stderr (warnings, a
+traceback) is kept in a file and passed on when it ends. Where no process can be started, or
+with one usable CPU, every PNG is drawn here.
+"""
+import contextlib
+import json
+import os
+import pickle
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from pipeline.report import style
+from pipeline.report.figures.point import fig_point
+from pipeline.report.registry import figure_named
+
+_CHILD = "import json, sys; sys.path[:] = json.loads(sys.argv[1]); from pipeline.report.pngs import main; main()"
+_STDERR_TAIL = 4000                                   # characters of a failed drawer's stderr to show
+
+
+def write_pngs(data, intervals, figures, points, out, claim=lambda i: True, reverse=False):
+    """Draw the figures (registry Figures) as out/<figure.filename>, then the points in detail
+    ([(point detail, path)]) with matplotlib, each one for which claim(its index) is true, in
+    reverse order if asked; returns the figures' paths."""
+    out = Path(out)
+    jobs = [(fig.build, out / fig.filename) for fig in figures]
+    jobs += [(_point_build(pt), Path(path)) for pt, path in points]
+    order = range(len(jobs))
+    with style.backend("matplotlib") as hv:
+        for i in reversed(order) if reverse else order:
+            if claim(i):
+                build, path = jobs[i]
+                hv.save(build(data, "matplotlib", intervals), path, backend="matplotlib", dpi=style.DPI)
+    return [out / fig.filename for fig in figures]
+
+
+def _point_build(pt):
+    """A point in detail with a figure's build signature."""
+    return lambda data, backend, intervals: fig_point(pt, backend)
+
+
+def usable_cpus():
+    with contextlib.suppress(AttributeError):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
+
+
+@contextlib.contextmanager
+def drawer(parallel=None):
+    """Yield draw(data, intervals, figures, points, out) -> the figures' PNG paths (as
+    write_pngs). parallel (default: when this process may use 2 or more CPUs): draw hands the
+    PNGs to a second process, and the end of the block draws those it has not begun, then waits
+    for it; a failure there raises RuntimeError with its stderr. A block left by an exception
+    stops the second process."""
+    if parallel is None:
+        parallel = usable_cpus() >= 2
+    with tempfile.TemporaryDirectory(prefix="rotorsweep-pngs-") as tmp:
+        proc = _start(Path(tmp) / "stderr.txt") if parallel else None
+        if proc is None:
+            yield write_pngs
+            return
+        sent = []
+        try:
+            yield lambda *job: _send(proc, Path(tmp), job, sent)
+            if sent:
+                write_pngs(*sent[0], claim=_claimer(tmp), reverse=True)
+            _finish(proc, Path(tmp) / "stderr.txt")
+        finally:
+            _stop(proc)
+
+
+def _claimer(directory):
+    """claim(i): True for the first process to ask for PNG i (an O_EXCL file in `directory`)."""
+    def claim(i):
+        try:
+            os.close(os.open(os.path.join(directory, f"claim{i}"), os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+        except FileExistsError:
+            return False
+        return True
+    return claim
+
+
+def _start(err_path):
+    """The drawing process (its stderr into err_path), None where it cannot be started."""
+    try:
+        with open(err_path, "wb") as err:
+            return subprocess.Popen([sys.executable, "-c", _CHILD, json.dumps(sys.path)],
+                                    stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=err)
+    except (OSError, ValueError):         # no executable (embedded Python), no process left
+        return None
+
+
+def _send(proc, tmp, job, sent):
+    """Hand `job` (write_pngs' arguments) to the drawer; keep it in `sent` for this process's help."""
+    data, intervals, figures, points, out = job
+    job_path = tmp / "job.pickle"
+    with open(job_path, "wb") as f:
+        pickle.dump({"data": data, "intervals": intervals, "figures": [fig.name for fig in figures],
+                     "points": [(pt, str(path)) for pt, path in points], "out": str(out)},
+                    f, protocol=pickle.HIGHEST_PROTOCOL)
+    with contextlib.suppress(BrokenPipeError):     # it has ended already: _finish says why
+        proc.stdin.write(f"{job_path}\n".encode())
+        proc.stdin.close()
+    sent.append(job)
+    return [Path(out) / fig.filename for fig in figures]
+
+
+def _stop(proc):
+    """Kill the drawer unless it has ended (an exception left the block), then reap it."""
+    if proc.poll() is None:
+        proc.kill()
+    with contextlib.suppress(OSError):
+        proc.stdin.close()
+    proc.wait()
+
+
+def _finish(proc, err_path):
+    with contextlib.suppress(OSError):     # no job sent: the drawer reads EOF and exits
+        proc.stdin.close()
+    code = proc.wait()
+    err = err_path.read_text(errors="replace")
+    if code != 0:
+        raise RuntimeError(f"drawing the report's PNGs (its own process) failed with "
+                           f"exit status {code}:\n{err[-_STDERR_TAIL:]}")
+    sys.stderr.write(err)
+
+
+def main():
+    """Import HoloViews (while the caller loads the cube), read a job file's path from stdin
+    (nothing: exit), draw the PNGs it claims first."""
+    style.holoviews()
+    job_path = sys.stdin.readline().strip()
+    if not job_path:
+        return
+    with open(job_path, "rb") as f:
+        job = pickle.load(f)
+    write_pngs(job["data"], job["intervals"], [figure_named(n) for n in job["figures"]],
+               job["points"], job["out"], claim=_claimer(os.path.dirname(job_path)))
