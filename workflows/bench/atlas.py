@@ -11,8 +11,9 @@ angles x 8 preloads = 768,320 points, orbits + Floquet multipliers) on a local 2
 Measured through the public `pipeline.run` (phases timed by wrapping the pipeline's functions,
 as workflows.bench.scaling does): wall time per phase, points per second, part-file bytes, cube
 size and write time, read times of one speed line, one (contact angle, preload) slice and the
-whole cube, the report's time on the cube, peak memory (driver and workers), CPU seconds and
-the load average. atlas.md is templates/atlas.md filled from atlas.json.
+whole cube, the report's time on the cube (PNGs in a second process, and all in one), peak
+memory (driver and workers), CPU seconds and the load average. atlas.md is templates/atlas.md
+filled from atlas.json.
 """
 import argparse
 import datetime
@@ -159,12 +160,14 @@ def full_size_io(path, work_dir):
     return {**write, **read_times(out)}
 
 
-def report_time(path, out_dir):
+def report_time(path, out_dir, parallel):
+    """Seconds of make_report on the cube (parallel: the PNGs in a second process, the default on
+    2 cores) and the PNGs' names."""
     from pipeline import cube
     from pipeline.report import make_report
 
     t0 = time.perf_counter()
-    res = make_report(cube.open_cube(path), out_dir)
+    res = make_report(cube.open_cube(path), out_dir, parallel=parallel)
     return round(time.perf_counter() - t0, 2), [p.name for p in res["png"]]
 
 
@@ -216,7 +219,8 @@ def markdown(res):
                 part_mb=f"{run['part_bytes'] / 1e6:.1f}", n_parts=run["part_files"],
                 write_s=f"{ph.get('write', 0):.2f}", line_s=f"{1e3 * reads['speed_line_s']:.0f}",
                 slice_s=f"{1e3 * reads['angle_preload_slice_s']:.0f}", whole_s=f"{reads['whole_cube_s']:.2f}",
-                report_s=res["report_s"], driver_rss=f"{run['driver_max_rss_kib'] / 1024:.0f}",
+                report_s=res["report_s"], report_serial_s=res.get("report_serial_s", "(not measured)"),
+                driver_rss=f"{run['driver_max_rss_kib'] / 1024:.0f}",
                 worker_rss=" / ".join(f"{k / 1024:.0f}" for k in run["worker_max_rss_kib"]),
                 driver_cpu=run["driver_cpu_s"], worker_cpu=" / ".join(map(str, run["worker_cpu_s"])),
                 utilization=f"{100 * (run['tasks'].get('utilization') or 0):.0f}",
@@ -252,8 +256,9 @@ def main(argv=None):
         run = run_atlas(cfg, work)
         log(f"  run {run['wall_s']} s, {run['points_per_s']} pts/s, phases {run['phases']}")
         reads = read_times(run["cube"])
-        report_s, pngs = report_time(run["cube"], work / "report")
-        log(f"  reads {reads}; report {report_s} s")
+        report_s, pngs = report_time(run["cube"], work / "report", parallel=True)
+        report_serial_s, _ = report_time(run["cube"], work / "report_serial", parallel=False)
+        log(f"  reads {reads}; report {report_s} s (in one process {report_serial_s} s)")
         full_io = full_size_io(run["cube"], work) if counts != FULL else None
         log(f"  full-size cube I/O {full_io}")
     finally:
@@ -263,7 +268,7 @@ def main(argv=None):
     res = dict(benchmark="atlas", mode="reduced" if reduced else "full",
                created=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
                git=git_info(), machine=scaling_machine_info(), axes={k: len(v) for k, v in cfg.axes.items()},
-               run=run, reads=reads, report_s=report_s, report_figures=pngs, full_size_io=full_io,
+               run=run, reads=reads, report_s=report_s, report_serial_s=report_serial_s, report_figures=pngs, full_size_io=full_io,
                extrapolated=extrapolate(run) if reduced else None,
                command="python -m workflows.bench.atlas " + " ".join(sys.argv[1:] if argv is None else argv))
     res["verdict"] = verdict(res)
