@@ -1,13 +1,13 @@
 """The report's PNGs drawn in a process of their own (pipeline.report.pngs) while the HTML is drawn
 here: the same pixels as drawn here, failures raised with the drawer's own traceback, the drawer
-stopped when the caller fails, and drawing here where there is one CPU or no process to start."""
+stopped when the caller fails, and drawing here where there is one CPU, no process to start or
+nothing that pickles."""
 import importlib
 import subprocess
 
 import matplotlib.image as mpimg
 import numpy as np
 import pytest
-import xarray as xr
 
 from pipeline import cube
 from pipeline.report import pngs
@@ -30,15 +30,30 @@ def test_the_png_process_draws_the_pixels_drawn_here(tiny_cube, tmp_path):
         assert a.shape == b.shape and np.array_equal(a, b), name
 
 
-def test_a_failure_in_the_png_process_is_raised_with_its_traceback(tmp_path):
-    """A figure this process knows and the drawer does not (never registered there): this
-    process draws it, the drawer fails looking it up, and its traceback is the error."""
-    hv = report.holoviews()
-    unknown = report.Figure(name="no_such_figure", filename="x.png", title="x",
-                            build=lambda ds, backend, intervals: hv.Curve([(0, 0), (1, 1)]))
-    with pytest.raises(RuntimeError, match="(?s)exit status 1.*no report figure 'no_such_figure'"):
+def _line(data, backend, intervals):
+    return report.holoviews().Curve([(0, 0), (1, 1)])
+
+
+@pytest.fixture
+def only_here(monkeypatch):
+    """A figure registered in this process only (the drawer's registry lacks it)."""
+    fig = report.Figure(name="only_here", filename="only_here.png", title="x", build=_line)
+    monkeypatch.setitem(report.registry._FIGURES, fig.name, fig)
+    return fig
+
+
+def test_a_failure_in_the_png_process_is_raised_with_its_traceback(tmp_path, only_here):
+    with pytest.raises(RuntimeError, match="(?s)exit status 1.*ValueError: no report figure 'only_here'"):
         with pngs.drawer(True) as draw:
-            draw(xr.Dataset(), [], [unknown], [], tmp_path)
+            draw(pngs.CubePngs(None, [], [only_here.name], []), tmp_path)
+    assert (tmp_path / "only_here.png").exists()    # drawn here, which takes what the drawer left
+
+
+def test_what_cannot_be_pickled_is_drawn_here(tmp_path, only_here):
+    """The drawer is told there is no job (it would fail, not knowing the figure)."""
+    with pngs.drawer(True) as draw:
+        draw(pngs.CubePngs(None, [lambda: None], [only_here.name], []), tmp_path)
+    assert [p.name for p in tmp_path.iterdir()] == ["only_here.png"]
 
 
 def test_an_error_here_stops_the_png_process(monkeypatch):

@@ -62,7 +62,8 @@ def make_report(ds, out_dir, title=None, points=None, parallel=None):
         details = [compute_point(ds, scene, r) for r in resolved]
         point_pngs = [out / point_filename(ds, r) for r in resolved]
         chosen = figures_for(data)
-        figure_pngs = draw_pngs(data, intervals, chosen, list(zip(details, point_pngs)), out)
+        draw_pngs(pngs.CubePngs(data, intervals, [fig.name for fig in chosen],
+                                [(pt, path.name) for pt, path in zip(details, point_pngs)]), out)
 
         html_path = out / "report.html"
         with style.backend("bokeh"):
@@ -72,4 +73,5 @@ def make_report(ds, out_dir, title=None, points=None, parallel=None):
             page.save_html(html_path, title, page.header_html(data, title, axes_plan(data)), figs,
                            page.intervals_html(data, *interval_rows(data, intervals)),
                            ds.attrs.get("config_toml", ""), point_sections)
-    return {"html": html_path, "png": figure_pngs + point_pngs, "csv": csv_path, "points": point_pngs}
+    return {"html": html_path, "png": [out / fig.filename for fig in chosen] + point_pngs, "csv": csv_path,
+            "points": point_pngs}

@@ -6,14 +6,15 @@ The second process is a fresh interpreter with this one's sys.path (`python -c`,
 not a multiprocessing child: forking a process that holds Dask's or bokeh's threads can inherit a
 lock held by one of them, and spawning re-imports the caller's __main__, which a script without
 an `if __name__ == "__main__"` guard does not survive. It starts first and imports HoloViews
-while this process loads the cube; then it reads the path of a job file (pickled data, figure
-names, file names) from its stdin and draws the PNGs in order, each one it claims first. After
+while this process loads the cube; then it reads the path of a job file (what to draw, pickled:
+a CubePngs) from its stdin and draws the PNGs in order, each one it claims first. After
 the HTML this process claims and draws from the other end, then waits. A claim is a file created
 with O_EXCL in the job's directory, so each PNG is drawn once. The drawer's stderr (warnings, a
 traceback) is kept in a file and passed on when it ends. Where no process can be started, or
 with one usable CPU, every PNG is drawn here.
 """
 import contextlib
+import functools
 import json
 import os
 import pickle
@@ -30,25 +31,30 @@ _CHILD = "import json, sys; sys.path[:] = json.loads(sys.argv[1]); from pipeline
 _STDERR_TAIL = 4000                                   # characters of a failed drawer's stderr to show
 
 
-def write_pngs(data, intervals, figures, points, out, claim=lambda i: True, reverse=False):
-    """Draw the figures (registry Figures) as out/<figure.filename>, then the points in detail
-    ([(point detail, path)]) with matplotlib, each one for which claim(its index) is true, in
-    reverse order if asked; returns the figures' paths."""
-    out = Path(out)
-    jobs = [(fig.build, out / fig.filename) for fig in figures]
-    jobs += [(_point_build(pt), Path(path)) for pt, path in points]
-    order = range(len(jobs))
+class CubePngs:
+    """The PNGs of a cube's report: figures of the registry (by name) drawn from the report's data
+    and unstable intervals, then the points in detail ([(point detail, file name)])."""
+
+    def __init__(self, data, intervals, names, points):
+        self.data, self.intervals, self.names, self.points = data, intervals, names, points
+
+    def __call__(self, backend):
+        """[(file name, build() -> the figure for backend)]; each figure is built when drawn."""
+        figs = [figure_named(name) for name in self.names]
+        return ([(fig.filename, functools.partial(fig.build, self.data, backend, self.intervals)) for fig in figs]
+                + [(name, functools.partial(fig_point, pt, backend)) for pt, name in self.points])
+
+
+def write_pngs(pngs, out, claim=lambda i: True, reverse=False):
+    """Draw pngs("matplotlib") (a CubePngs) into the directory `out`, each one for which
+    claim(its index) is true, in reverse order if asked."""
     with style.backend("matplotlib") as hv:
+        items = pngs("matplotlib")
+        order = range(len(items))
         for i in reversed(order) if reverse else order:
             if claim(i):
-                build, path = jobs[i]
-                hv.save(build(data, "matplotlib", intervals), path, backend="matplotlib", dpi=style.DPI)
-    return [out / fig.filename for fig in figures]
-
-
-def _point_build(pt):
-    """A point in detail with a figure's build signature."""
-    return lambda data, backend, intervals: fig_point(pt, backend)
+                name, build = items[i]
+                hv.save(build(), Path(out) / name, backend="matplotlib", dpi=style.DPI)
 
 
 def usable_cpus():
@@ -59,11 +65,11 @@ def usable_cpus():
 
 @contextlib.contextmanager
 def drawer(parallel=None):
-    """Yield draw(data, intervals, figures, points, out) -> the figures' PNG paths (as
-    write_pngs). parallel (default: when this process may use 2 or more CPUs): draw hands the
-    PNGs to a second process, and the end of the block draws those it has not begun, then waits
-    for it; a failure there raises RuntimeError with its stderr. A block left by an exception
-    stops the second process."""
+    """Yield draw(pngs, out), which draws pngs (a CubePngs) into the directory `out`.
+    parallel (default: when this process may use 2 or more CPUs): draw hands them to a second
+    process, and the end of the block draws those it has not begun, then waits for it; a failure
+    there raises RuntimeError with its stderr. A block left by an exception stops the second
+    process."""
     if parallel is None:
         parallel = usable_cpus() >= 2
     with tempfile.TemporaryDirectory(prefix="rotorsweep-pngs-") as tmp:
@@ -73,9 +79,9 @@ def drawer(parallel=None):
             return
         sent = []
         try:
-            yield lambda *job: _send(proc, Path(tmp), job, sent)
-            if sent:
-                write_pngs(*sent[0], claim=_claimer(tmp), reverse=True)
+            yield lambda pngs, out: _send(proc, Path(tmp), pngs, out, sent)
+            for pngs, out in sent:
+                write_pngs(pngs, out, claim=_claimer(tmp), reverse=True)
             _finish(proc, Path(tmp) / "stderr.txt")
         finally:
             _stop(proc)
@@ -102,19 +108,21 @@ def _start(err_path):
         return None
 
 
-def _send(proc, tmp, job, sent):
-    """Hand `job` (write_pngs' arguments) to the drawer; keep it in `sent` for this process's help."""
-    data, intervals, figures, points, out = job
+def _send(proc, tmp, pngs, out, sent):
+    """Hand the drawing of pngs into `out` to the drawer; keep it in `sent` for this process's
+    help. What cannot be pickled is left to that help: the drawer is told there is no job."""
+    if sent:
+        raise RuntimeError("a PNG drawer takes one job")
     job_path = tmp / "job.pickle"
-    with open(job_path, "wb") as f:
-        pickle.dump({"data": data, "intervals": intervals, "figures": [fig.name for fig in figures],
-                     "points": [(pt, str(path)) for pt, path in points], "out": str(out)},
-                    f, protocol=pickle.HIGHEST_PROTOCOL)
+    try:
+        with open(job_path, "wb") as f:
+            pickle.dump({"pngs": pngs, "out": str(out)}, f, protocol=pickle.HIGHEST_PROTOCOL)
+    except (pickle.PicklingError, AttributeError, TypeError):   # a lambda, a local function in it
+        job_path = ""
     with contextlib.suppress(BrokenPipeError):     # it has ended already: _finish says why
         proc.stdin.write(f"{job_path}\n".encode())
         proc.stdin.close()
-    sent.append(job)
-    return [Path(out) / fig.filename for fig in figures]
+    sent.append((pngs, out))
 
 
 def _stop(proc):
@@ -146,5 +154,4 @@ def main():
         return
     with open(job_path, "rb") as f:
         job = pickle.load(f)
-    write_pngs(job["data"], job["intervals"], [figure_named(n) for n in job["figures"]],
-               job["points"], job["out"], claim=_claimer(os.path.dirname(job_path)))
+    write_pngs(job["pngs"], job["out"], claim=_claimer(os.path.dirname(job_path)))
