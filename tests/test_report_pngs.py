@@ -4,6 +4,7 @@ stopped when the caller fails, and drawing here where there is one CPU, no proce
 nothing that pickles."""
 import importlib
 import subprocess
+import tempfile
 
 import matplotlib.image as mpimg
 import numpy as np
@@ -68,10 +69,18 @@ def test_an_error_here_stops_the_png_process(monkeypatch):
     assert not err_path.parent.exists()         # its temporary directory is gone
 
 
-def test_one_cpu_or_no_process_to_start_draws_here(monkeypatch):
+def test_one_cpu_no_temporary_directory_or_no_process_to_start_draws_here(monkeypatch):
     monkeypatch.setattr(pngs, "usable_cpus", lambda: 1)
     with pngs.drawer() as draw:
         assert draw is pngs.write_pngs
+
+    def no_room(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    with monkeypatch.context() as m:
+        m.setattr(tempfile, "mkdtemp", no_room)
+        with pngs.drawer(True) as draw:
+            assert draw is pngs.write_pngs
 
     def no_process(*args, **kwargs):
         raise OSError(11, "Resource temporarily unavailable")

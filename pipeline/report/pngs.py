@@ -18,6 +18,7 @@ import functools
 import json
 import os
 import pickle
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -72,19 +73,31 @@ def drawer(parallel=None):
     process."""
     if parallel is None:
         parallel = usable_cpus() >= 2
-    with tempfile.TemporaryDirectory(prefix="rotorsweep-pngs-") as tmp:
-        proc = _start(Path(tmp) / "stderr.txt") if parallel else None
-        if proc is None:
-            yield write_pngs
-            return
-        sent = []
-        try:
-            yield lambda pngs, out: _send(proc, Path(tmp), pngs, out, sent)
-            for pngs, out in sent:
-                write_pngs(pngs, out, claim=_claimer(tmp), reverse=True)
-            _finish(proc, Path(tmp) / "stderr.txt")
-        finally:
-            _stop(proc)
+    tmp = _job_dir() if parallel else None
+    proc = _start(tmp / "stderr.txt") if tmp else None
+    if proc is None:
+        if tmp:
+            shutil.rmtree(tmp, ignore_errors=True)
+        yield write_pngs
+        return
+    sent = []
+    try:
+        yield lambda pngs, out: _send(proc, tmp, pngs, out, sent)
+        for pngs, out in sent:
+            write_pngs(pngs, out, claim=_claimer(tmp), reverse=True)
+        _finish(proc, tmp / "stderr.txt")
+    finally:
+        _stop(proc)
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _job_dir():
+    """A new temporary directory for the job, its claims and the drawer's stderr; None where none
+    can be made (then every PNG is drawn here)."""
+    try:
+        return Path(tempfile.mkdtemp(prefix="rotorsweep-pngs-"))
+    except OSError:
+        return None
 
 
 def _claimer(directory):
@@ -110,14 +123,15 @@ def _start(err_path):
 
 def _send(proc, tmp, pngs, out, sent):
     """Hand the drawing of pngs into `out` to the drawer; keep it in `sent` for this process's
-    help. What cannot be pickled is left to that help: the drawer is told there is no job."""
+    help. What cannot be pickled or written is left to that help: the drawer is told there is no
+    job."""
     if sent:
         raise RuntimeError("a PNG drawer takes one job")
     job_path = tmp / "job.pickle"
     try:
         with open(job_path, "wb") as f:
             pickle.dump({"pngs": pngs, "out": str(out)}, f, protocol=pickle.HIGHEST_PROTOCOL)
-    except (pickle.PicklingError, AttributeError, TypeError):   # a lambda, a local function in it
+    except (pickle.PicklingError, AttributeError, TypeError, OSError):   # a lambda in it; a full disk
         job_path = ""
     with contextlib.suppress(BrokenPipeError):     # it has ended already: _finish says why
         proc.stdin.write(f"{job_path}\n".encode())
