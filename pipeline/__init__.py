@@ -58,14 +58,16 @@ def unstable_intervals(cube_or_path):
     return query.unstable_intervals(_dataset(cube_or_path))
 
 
-def make_report(cube_or_path, out_dir, points=None, overwrite=False, over=None):
+def make_report(cube_or_path, out_dir, points=None, overwrite=False, over=None, stream=None):
     """HTML + PNG report of a cube (rotorsweep report); returns the written paths.
     points: grid points to show in detail (orbit, Poincare section, spectrum, table), each a
     dict {axis: value} or "speed=36 clearance=19e-6" (nearest grid point). A directory holding
     the report of another cube is refused unless overwrite; the report is built next to it and
     then takes its place, so no file of the earlier report is left. over: for a backbone result,
-    a continuation result (path) of a forced response to draw the backbones over."""
-    from pipeline import backbone, continuation, fileio, report, results
+    a continuation result (path) of a forced response to draw the backbones over. stream: where a
+    sweep cube's report writes its phase lines (what it draws where, when the HTML page and the
+    PNGs are written; None: nowhere)."""
+    from pipeline import backbone, continuation, fileio, report, results, sweep
 
     is_path = isinstance(cube_or_path, (str, bytes)) or hasattr(cube_or_path, "__fspath__")
     if is_path and results.is_result_file(cube_or_path, continuation.RESULT_KIND):
@@ -93,7 +95,7 @@ def make_report(cube_or_path, out_dir, points=None, overwrite=False, over=None):
             from pipeline.report import backbone_result
             files = backbone_result.make_report(ds, tmp, forced=forced)
         else:
-            files = report.make_report(ds, tmp, points=points)
+            files = report.make_report(ds, tmp, points=points, say=sweep.phase_printer(stream))
         (tmp / fileio.REPORT_MARKER).write_text(json.dumps(identity, indent=2) + "\n")
     return fileio.moved(files, tmp, out_dir)
 

@@ -49,8 +49,9 @@ def cmd_run(args):
     print(f"cube: {path}")
     if args.report:
         from pipeline import sweep
-        sweep.phase_printer(None if args.quiet else sys.stderr)(f"writing the report into {args.report}")
-        files = pipeline.make_report(path, args.report, overwrite=args.overwrite)
+        stream = None if args.quiet else sys.stderr
+        sweep.phase_printer(stream)(f"writing the report into {args.report}")
+        files = pipeline.make_report(path, args.report, overwrite=args.overwrite, stream=stream)
         print(f"report: {files['html']}")
     return 0
 
@@ -247,7 +248,8 @@ def cmd_report(args):
 
     out = args.output or str(args.cube).rsplit(".", 1)[0] + "_report"
     points = [report_mod.parse_point(items) for items in args.point or []]
-    files = pipeline.make_report(args.cube, out, points=points or None, overwrite=args.overwrite, over=args.over)
+    files = pipeline.make_report(args.cube, out, points=points or None, overwrite=args.overwrite, over=args.over,
+                                 stream=None if args.quiet else sys.stderr)
     print(f"report: {files['html']}")
     for png in files["png"]:
         print(f"figure: {png}")
@@ -358,6 +360,7 @@ def build_parser():
     rp.add_argument("--point", action="append", nargs="+", metavar="AXIS=VALUE",
                     help="a grid point to show in detail (orbit, Poincare section, spectrum): "
                          "speed=36 clearance=19e-6 (cube units; nearest grid point); repeatable")
+    rp.add_argument("-q", "--quiet", action="store_true", help="no phase lines")
     rp.add_argument("--overwrite", action="store_true",
                     help="replace a report of another cube in the directory")
     rp.add_argument("--over", metavar="CONTINUATION_NC",

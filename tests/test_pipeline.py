@@ -132,7 +132,8 @@ def test_query_and_info_and_report(small_cube, tmp_path):
     assert isinstance(json.loads(intervals), list)
     info = rotorsweep("info", small_cube).stdout
     assert "speed" in info and "clearance" in info
-    rotorsweep("report", small_cube, "-o", tmp_path / "rep")
+    quiet = rotorsweep("report", small_cube, "-o", tmp_path / "rep", "-q")
+    assert "==" not in quiet.stderr                     # -q: no phase lines
     assert (tmp_path / "rep" / "report.html").exists()
     assert (tmp_path / "rep" / "stability_map.png").exists()
 

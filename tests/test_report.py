@@ -460,6 +460,9 @@ def test_point_detail_on_a_real_attractor_cube(tiny_cube, tmp_path, capsys):
     code, stdout, err = _cli(["report", tiny_cube, "-o", out, "--point", "speed=63.4",
                               "clearance=19e-6"], capsys)
     assert code == 0, err
+    phases = [line for line in err.splitlines() if line.startswith("== ")]
+    assert phases[0].startswith("== drawing the figures (8) and the points in detail (1): ")
+    assert sorted(p.split(" (")[0] for p in phases[1:]) == ["== HTML page written", "== PNGs written"]
     png = out / "point_64Hz_19um.png"
     assert f"figure: {png}" in stdout
     img = mpimg.imread(png)

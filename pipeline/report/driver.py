@@ -1,4 +1,5 @@
 """make_report: the report of one cube, every figure the registry says applies to it."""
+import time
 from pathlib import Path
 
 from pipeline import query, schema
@@ -40,7 +41,7 @@ def _resolve_all(ds, points):
     return resolved
 
 
-def make_report(ds, out_dir, title=None, points=None, parallel=None):
+def make_report(ds, out_dir, title=None, points=None, parallel=None, say=None):
     """Write report.html, the figures as PNGs (those of the figure registry that apply to the
     cube, e.g. stability_map.png, max_multiplier.png, multiplier_paths.png, and for cubes with
     attractor diagnostics bifurcation.png and lle.png) and unstable_intervals.csv into out_dir.
@@ -48,7 +49,10 @@ def make_report(ds, out_dir, title=None, points=None, parallel=None):
     grid point, see resolve_point), one point_<speed>Hz_<clearance>um.png each. parallel
     (default: with 2 or more usable CPUs): the PNGs are drawn by a second process while this one
     draws the HTML, then helps with those left (pipeline.report.pngs). Returns {"html": Path, "png": [Path, ...] (figures,
-    then points), "csv": Path, "points": [Path, ...]}."""
+    then points), "csv": Path, "points": [Path, ...]}. say(text): where phase lines go (none if
+    None)."""
+    say = say or (lambda text: None)
+    start = time.perf_counter()
     resolved = _resolve_all(ds, points)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -62,8 +66,13 @@ def make_report(ds, out_dir, title=None, points=None, parallel=None):
         details = [compute_point(ds, scene, r) for r in resolved]
         point_pngs = [out / point_filename(ds, r) for r in resolved]
         chosen = figures_for(data)
+        here = draw_pngs is pngs.write_pngs
+        say(f"drawing the figures ({len(chosen)})" + (f" and the points in detail ({len(details)})" if details else "")
+            + (": the PNGs, then the HTML page" if here else ": the PNGs in a second process, the HTML page here"))
         draw_pngs(pngs.CubePngs(data, intervals, [fig.name for fig in chosen],
                                 [(pt, path.name) for pt, path in zip(details, point_pngs)]), out)
+        if here:
+            say(f"PNGs written ({time.perf_counter() - start:.1f} s)")
 
         html_path = out / "report.html"
         with style.backend("bokeh"):
@@ -73,5 +82,8 @@ def make_report(ds, out_dir, title=None, points=None, parallel=None):
             page.save_html(html_path, title, page.header_html(data, title, axes_plan(data)), figs,
                            page.intervals_html(data, *interval_rows(data, intervals)),
                            ds.attrs.get("config_toml", ""), point_sections)
+        say(f"HTML page written ({time.perf_counter() - start:.1f} s)" + ("" if here else "; the PNGs left are drawn here"))
+    if not here:
+        say(f"PNGs written ({time.perf_counter() - start:.1f} s)")
     return {"html": html_path, "png": [out / fig.filename for fig in chosen] + point_pngs, "csv": csv_path,
             "points": point_pngs}
