@@ -184,7 +184,10 @@ def test_boundary_table_refines_each_stability_change(small_cube):
 
 PHASES = ("starting 1 local Dask worker (127.0.0.1)", "1 worker; Dask dashboard: http://127.0.0.1:",
           "compiling the kernels of jeffcott_clearance", "kernels ready", "sweeping 2 points in 1 chunk",
-          "assembling the cube and its boundary table", "writing the cube", "writing the report into")
+          "assembling the cube and its boundary table", "writing the cube", "writing the report into",
+          "drawing the figures (6)")
+# the report's last two, in either order (the PNGs drawn in a second process or all before the HTML)
+LAST_PHASES = ["HTML page written", "PNGs written"]
 
 
 def test_run_prints_its_phases_before_the_progress_lines(tmp_path, capsys):
@@ -201,7 +204,8 @@ def test_run_prints_its_phases_before_the_progress_lines(tmp_path, capsys):
     assert code == 0, err
     lines = err.splitlines()
     phases = [line for line in lines if line.startswith(sweep.PHASE)]
-    assert len(phases) == len(PHASES) and all(p[len(sweep.PHASE):].startswith(w) for p, w in zip(phases, PHASES)), err
+    assert len(phases) == len(PHASES) + 2 and all(p[len(sweep.PHASE):].startswith(w) for p, w in zip(phases, PHASES)), err
+    assert sorted(p[len(sweep.PHASE):].split(" (")[0] for p in phases[len(PHASES):]) == LAST_PHASES, err
     progress = [i for i, line in enumerate(lines) if " points " in line and line.startswith("[")]
     assert progress and lines.index(phases[4]) < progress[0] < lines.index(phases[5])
     # the stability changes were refined on the worker while the sweep ran: none is left for the
