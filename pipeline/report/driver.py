@@ -48,9 +48,9 @@ def make_report(ds, out_dir, title=None, points=None, parallel=None, say=None):
     points: grid points to show in detail ({axis: value} dicts or AXIS=VALUE strings, nearest
     grid point, see resolve_point), one point_<speed>Hz_<clearance>um.png each. parallel
     (default: with 2 or more usable CPUs): the PNGs are drawn by a second process while this one
-    draws the HTML, then helps with those left (pipeline.report.pngs). Returns {"html": Path, "png": [Path, ...] (figures,
-    then points), "csv": Path, "points": [Path, ...]}. say(text): where phase lines go (none if
-    None)."""
+    draws the HTML, then helps with those left (pipeline.report.pngs). say(text): where phase
+    lines go (None: nowhere). Returns {"html": Path, "png": [Path, ...] (figures, then points),
+    "csv": Path, "points": [Path, ...]}."""
     say = say or (lambda text: None)
     start = time.perf_counter()
     resolved = _resolve_all(ds, points)

@@ -10,8 +10,8 @@ while this process loads the cube; then it reads the path of a job file (what to
 a CubePngs) from its stdin and draws the PNGs in order, each one it claims first. After
 the HTML this process claims and draws from the other end, then waits. A claim is a file created
 with O_EXCL in the job's directory, so each PNG is drawn once. The drawer's stderr (warnings, a
-traceback) is kept in a file and passed on when it ends. Where no process can be started, or
-with one usable CPU, every PNG is drawn here.
+traceback) is kept in a file and passed on when it ends. With one usable CPU, and where no
+process or temporary directory can be made or the job does not pickle, every PNG is drawn here.
 """
 import contextlib
 import functools
