@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow upgrade bench bench-scaling bench-atlas bench-attractor bench-revisions bench-continuation bench-reductions bench-compile bench-backbone bench-models fig13 cascade fold backbone clean
+.PHONY: demo test test-slow upgrade bench bench-scaling bench-atlas bench-chunk-plans bench-attractor bench-revisions bench-continuation bench-reductions bench-compile bench-backbone bench-models fig13 cascade fold backbone clean
 
 # CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
 CONSTRAINTS ?= constraints.txt
@@ -43,6 +43,9 @@ bench: $(STAMP)  ## work-precision and baseline benchmarks -> docs/benchmarks/
 
 bench-scaling: $(STAMP)  ## 1 vs 2 workers, chunk sizes, memory of the Fig. 13 sweep (~7 min, quiet machine) -> docs/benchmarks/scaling.*
 	$(BIN)/python -m workflows.bench.scaling
+
+bench-chunk-plans: $(STAMP)  ## per-point cost spread of Fig. 13 (orbits, attractors) and the guided chunk plans simulated on it (~1 min) -> docs/benchmarks/chunk_plans.*
+	$(BIN)/python -m workflows.bench.chunk_plans
 
 bench-revisions: $(STAMP)  ## per-point cost before/after the model registry (cc006f3 vs HEAD, one run) -> docs/benchmarks/revisions.*
 	$(BIN)/python -m workflows.bench.revisions

@@ -74,35 +74,49 @@ def segments(cfg):
 
 MIN_CHUNK_POINTS = 64
 # Default chunks shrink towards the end (guided self-scheduling): each takes about a
-# 1 / (GUIDED_SHARE * workers) share of the points still unplanned, at least MIN_CHUNK_POINTS
-# and at most MAX_CHUNK_POINTS (seconds of work orbits-only, a minute with attractors: progress
-# lines, part files and what a lost worker takes with it stay small on a 768k-point atlas).
-GUIDED_SHARE = 4
+# 1 / (share * workers) share of the points still unplanned, at least MIN_CHUNK_POINTS and at
+# most MAX_CHUNK_POINTS (seconds of work orbits-only, a minute with attractors: progress lines,
+# part files and what a lost worker takes with it stay small on a 768k-point atlas). The share
+# follows how unevenly points cost (docs/benchmarks/chunk_plans.md: list schedules of the plans
+# on the per-point times of Fig. 13 sweeps, over 40 orders of its lines): orbits-only segments
+# cost within ~5x of each other, and share 2 gives the shortest sweeps on 2, 4 and 8 workers
+# (fewer tasks of ~10 ms CPU each, balance as good); attractor diagnostics make a segment cost up
+# to ~23x the mean one, where share 4 is within 1% of the best on 2 workers and the best on 8.
+GUIDED_SHARE = 2
+GUIDED_SHARE_ATTRACTORS = 4
 MAX_CHUNK_POINTS = 4096
 
 
-def plan_chunks(segs, n_workers, chunk_points=None):
+def guided_share(data):
+    """The guided plan's share for a config's data (see GUIDED_SHARE)."""
+    return GUIDED_SHARE_ATTRACTORS if data["analysis"]["attractor"] else GUIDED_SHARE
+
+
+def plan_chunks(segs, n_workers, chunk_points=None, share=GUIDED_SHARE):
     """Group segments into chunks: of about chunk_points points each when given, else guided
-    chunks that shrink from about total / (GUIDED_SHARE * n_workers) (at most MAX_CHUNK_POINTS)
-    to MIN_CHUNK_POINTS (~0.1 s of orbits-only work; a task costs ~10 ms of CPU besides its own
-    work, about 5 in the driver's scheduler and client and 4 in the worker's event loop, measured
-    with no-op tasks of 0.3 s on 2 cores). Point costs vary 100-fold (a
-    stable orbit ~5 ms, a chaotic attractor ~400 ms) and cluster along speed, so the last chunks
-    must be small for balance: Fig. 13 with attractors on 2 workers took 115 s with 8 equal
-    chunks per worker (one chunk held a quarter of the work) and 93 s with 47; large first chunks
-    save tasks (scheduler and driver time) where balance does not need them."""
+    chunks that shrink from about total / (share * n_workers) (at most MAX_CHUNK_POINTS)
+    to MIN_CHUNK_POINTS (~0.05 s of orbits-only work; a task costs ~10 ms of CPU besides its own
+    work, about 6 in the driver's scheduler and client and 4 in the worker's event loop, measured
+    with no-op tasks of 50 ms on 2 cores); a remainder below that joins the last chunk. Point
+    costs vary 100-fold (a stable orbit ~5 ms, a chaotic attractor ~400 ms) and cluster along
+    speed, so the last chunks must be small for balance: Fig. 13 with attractors on 2 workers
+    took 115 s with 8 equal chunks per worker (one chunk held a quarter of the work) and 93 s
+    with 47; large first chunks save tasks (scheduler and driver time) where balance does not
+    need them."""
     workers = max(1, n_workers)
     remaining = sum(len(s) for s in segs)
     chunks, current, size = [], [], 0
     for seg in segs:
         current.append(seg)
         size += len(seg)
-        target = chunk_points or min(MAX_CHUNK_POINTS, max(MIN_CHUNK_POINTS, remaining // (GUIDED_SHARE * workers)))
+        target = chunk_points or min(MAX_CHUNK_POINTS, max(MIN_CHUNK_POINTS, remaining // (share * workers)))
         if size >= target:
             chunks.append(current)
             remaining -= size
             current, size = [], 0
-    if current:
+    if current and chunks and not chunk_points and size < MIN_CHUNK_POINTS:
+        chunks[-1].extend(current)      # not a task of its own: Fig. 13's last line ends in 1 point
+    elif current:
         chunks.append(current)
     return chunks
 
@@ -438,7 +452,7 @@ def _run_chunks(client, cfg, todo, parts, assembly, chunk_points, bar, say):
     from dask.distributed import KilledWorker, as_completed
 
     n_workers = max(1, len(client.scheduler_info()["workers"]))
-    chunks = plan_chunks(todo, n_workers, chunk_points)
+    chunks = plan_chunks(todo, n_workers, chunk_points, guided_share(cfg.data))
     say(f"sweeping {_count(sum(len(s) for s in todo), 'point')} in {_count(len(chunks), 'chunk')}")
     if bar:
         bar.restart()

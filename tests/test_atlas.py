@@ -38,17 +38,28 @@ def _segments(lengths):
 
 def test_guided_chunks_shrink_cover_every_segment_once_and_keep_a_floor():
     segs = _segments([32] * 375 + [5])
-    chunks = sweep.plan_chunks(segs, n_workers=2)
-    sizes = [sum(len(s) for s in c) for c in chunks]
-    assert [s.id for c in chunks for s in c] == list(range(len(segs)))
-    total = sum(sizes)
-    assert sizes[0] >= total // (sweep.GUIDED_SHARE * 2)                 # a first chunk of ~1/8
-    assert all(b <= a + 32 for a, b in zip(sizes, sizes[1:]))            # shrinking (to a segment)
-    assert min(sizes[:-1]) >= sweep.MIN_CHUNK_POINTS
-    assert len(chunks) < total // sweep.MIN_CHUNK_POINTS                 # fewer tasks than equal 64s
+    total = 375 * 32 + 5
+    plans = {share: sweep.plan_chunks(segs, n_workers=2, share=share) for share in (2, 4)}
+    for share, chunks in plans.items():
+        sizes = [sum(len(s) for s in c) for c in chunks]
+        assert [s.id for c in chunks for s in c] == list(range(len(segs)))
+        assert sizes[0] >= total // (share * 2)                          # a first chunk of ~1/(2 share)
+        assert all(b <= a + 32 for a, b in zip(sizes, sizes[1:-1]))      # shrinking (to a segment)
+        assert sizes[-1] < sizes[-2] + sweep.MIN_CHUNK_POINTS             # the last: and the rest
+        assert min(sizes) >= sweep.MIN_CHUNK_POINTS                      # the 5-point rest is no task
+        assert len(chunks) < total // sweep.MIN_CHUNK_POINTS             # fewer tasks than equal 64s
+    assert len(plans[2]) < len(plans[4])
     assert [len(c) for c in sweep.plan_chunks(segs, 2, chunk_points=64)][:3] == [2, 2, 2]
+    assert sum(len(s) for s in sweep.plan_chunks(segs, 2, chunk_points=64)[-1]) == 37  # as asked: no merge
     big = [sum(len(s) for s in c) for c in sweep.plan_chunks(_segments([32] * 24010), 2)]
     assert max(big) <= sweep.MAX_CHUNK_POINTS + 32 and big[0] > sweep.MAX_CHUNK_POINTS - 32
+
+
+def test_guided_share_is_larger_where_attractor_diagnostics_make_point_costs_uneven():
+    data = config.parse_config((ROOT / "configs" / "bai2006_fig13.toml").read_text(), allow_large=True).data
+    assert data["analysis"]["attractor"] is True
+    orbits = {**data, "analysis": {**data["analysis"], "attractor": False}}
+    assert sweep.guided_share(data) == sweep.GUIDED_SHARE_ATTRACTORS > sweep.guided_share(orbits) == sweep.GUIDED_SHARE
 
 
 def test_boundary_rows_are_the_same_for_any_map_and_rows_refined_during_the_sweep(tiny_cube):

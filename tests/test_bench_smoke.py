@@ -27,6 +27,30 @@ def test_shipped_writeups_are_their_json_rendered():
     assert markdown(scaling, DOCS / "scaling.png") == (DOCS / "scaling.md").read_text()
     from workflows.bench import atlas
     assert atlas.markdown(json.loads((DOCS / "atlas.json").read_text())) == (DOCS / "atlas.md").read_text()
+    from workflows.bench import chunk_plans
+    assert chunk_plans.markdown(json.loads((DOCS / "chunk_plans.json").read_text())) == \
+        (DOCS / "chunk_plans.md").read_text()
+
+
+def test_chunk_plan_simulation_on_known_schedules():
+    """The list schedule: 4 equal chunks on 2 workers end at 2 chunks + 2 task overheads; a
+    first chunk as long as the other three together leaves those three to the other worker.
+    Equal segment costs on one line: every plan is within its task overheads and a last chunk
+    (<= 4 segments at the 64-point floor and its 32-point steps) of the ideal."""
+    import numpy as np
+
+    from pipeline import sweep
+    from workflows.bench import chunk_plans as cp
+
+    o = cp.TASK_OVERHEAD_S
+    assert cp.makespan([1.0] * 4, 2) == pytest.approx(2 + 2 * o)
+    assert cp.makespan([3.0, 1.0, 1.0, 1.0], 2) == pytest.approx(3 + 3 * o)     # 3 | 1 + 1 + 1
+    segs = [sweep.Segment(i, np.zeros((32, 1), int), {}, "speed", np.zeros(32)) for i in range(96)]
+    plans = cp.simulate([[(seg, 1.0) for seg in segs]], np.random.default_rng(0))
+    for p, by_share in plans.items():
+        for v in by_share.values():
+            bound = 1.0 + (v["chunks"] * o / p + 4.0) / (96.0 / p)
+            assert 1.0 <= v["mean"] <= v["worst"] <= bound
 
 
 @pytest.mark.timeout(180)

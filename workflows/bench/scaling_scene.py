@@ -62,7 +62,7 @@ def chunk_plan(cfg, n_workers, chunk_points):
     scene's segments for n_workers (chunk_points None: the pipeline's default)."""
     from pipeline import sweep
 
-    chunks = sweep.plan_chunks(sweep.segments(cfg), n_workers, chunk_points)
+    chunks = sweep.plan_chunks(sweep.segments(cfg), n_workers, chunk_points, sweep.guided_share(cfg.data))
     sizes = [sum(len(seg) for seg in chunk) for chunk in chunks]
     return len(chunks), int(statistics.median(sizes)) if sizes else 0
 
