@@ -79,9 +79,10 @@ MIN_CHUNK_POINTS = 64
 # part files and what a lost worker takes with it stay small on a 768k-point atlas). The share
 # follows how unevenly points cost (docs/benchmarks/chunk_plans.md: list schedules of the plans
 # on the per-point times of Fig. 13 sweeps, over 40 orders of its lines): orbits-only segments
-# cost within ~5x of each other, and share 2 gives the shortest sweeps on 2, 4 and 8 workers
-# (fewer tasks of ~10 ms CPU each, balance as good); attractor diagnostics make a segment cost up
-# to ~23x the mean one, where share 4 is within 1% of the best on 2 workers and the best on 8.
+# cost within ~5x of each other, and share 2 has the best worst case on 2, 4 and 8 workers and
+# the best mean on 4 and 8 (half the tasks of share 4, ~10 ms of CPU each, balance as good);
+# attractor diagnostics make a segment cost up to ~23x the mean one, where share 4 is within 1%
+# of the best mean on 2 workers and the best on 8.
 GUIDED_SHARE = 2
 GUIDED_SHARE_ATTRACTORS = 4
 MAX_CHUNK_POINTS = 4096

@@ -103,11 +103,17 @@ def analyse(runs, worker_counts):
     return scaling, sens, limits
 
 
+def ratio_text(s):
+    """A speed-up to 2 decimals, or 3 where 2 would round a miss of the target up to it."""
+    text = f"{s:.2f}"
+    return f"{s:.3f}" if s < TARGET_SPEEDUP <= float(text) else text
+
+
 def verdict_text(scaling, limits, sens, mode, ceiling=None):
     if not scaling:
         return "No 1- and 2-worker pair was measured: no speed-up to judge."
     s = scaling["speedup"]
-    parts = [f"2 workers are {s:.2f}x faster than 1 (efficiency {100 * scaling['efficiency']:.0f} %): "
+    parts = [f"2 workers are {ratio_text(s)}x faster than 1 (efficiency {100 * scaling['efficiency']:.0f} %): "
              + (f"the {TARGET_SPEEDUP}x target is met." if scaling["meets_target"] else
                 f"below the {TARGET_SPEEDUP}x target.")]
     if scaling.get("compute_speedup"):

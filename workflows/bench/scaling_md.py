@@ -2,7 +2,7 @@
 from pathlib import Path
 
 from workflows.bench.render import fill, part
-from workflows.bench.scaling_analysis import TARGET_SPEEDUP, median_run
+from workflows.bench.scaling_analysis import TARGET_SPEEDUP, median_run, ratio_text
 
 
 def _mib(kib):
@@ -46,7 +46,7 @@ def speedup_section(res):
     r1, r2 = median_run(res["runs"], 1, None)[0], median_run(res["runs"], 2, None)[0]
     text = part(
         "scaling", "speedup", wall_1=f"{sc['wall_1_worker_s']:.2f}", wall_2=f"{sc['wall_2_workers_s']:.2f}",
-        speedup=f"{sc['speedup']:.2f}", efficiency=f"{sc['efficiency']:.0%}",
+        speedup=ratio_text(sc["speedup"]), efficiency=f"{sc['efficiency']:.0%}",
         pps_1=f"{sc['points_per_s_1']:.0f}", pps_2=f"{sc['points_per_s_2']:.0f}",
         compute_1=fmt(r1["phases"].get("compute")), compute_2=fmt(r2["phases"].get("compute")),
         compute_speedup=fmt(sc.get("compute_speedup")), span_1=fmt(r1["tasks"].get("span_s")),
