@@ -45,7 +45,7 @@ def test_guided_chunks_shrink_cover_every_segment_once_and_keep_a_floor():
         assert [s.id for c in chunks for s in c] == list(range(len(segs)))
         assert sizes[0] >= total // (share * 2)                          # a first chunk of ~1/(2 share)
         assert all(b <= a + 32 for a, b in zip(sizes, sizes[1:-1]))      # shrinking (to a segment)
-        assert sizes[-1] < sizes[-2] + sweep.MIN_CHUNK_POINTS             # the last: and the rest
+        assert sizes[-1] < sizes[-2] + sweep.MIN_CHUNK_POINTS             # the last takes the rest
         assert min(sizes) >= sweep.MIN_CHUNK_POINTS                      # the 5-point rest is no task
         assert len(chunks) < total // sweep.MIN_CHUNK_POINTS             # fewer tasks than equal 64s
     assert len(plans[2]) < len(plans[4])
