@@ -93,6 +93,11 @@ def guided_share(data):
     return GUIDED_SHARE_ATTRACTORS if data["analysis"]["attractor"] else GUIDED_SHARE
 
 
+def chunks_for(cfg, segs, n_workers, chunk_points=None):
+    """The chunks a sweep of cfg makes of segs: plan_chunks with the config's guided share."""
+    return plan_chunks(segs, n_workers, chunk_points, guided_share(cfg.data))
+
+
 def plan_chunks(segs, n_workers, chunk_points=None, share=GUIDED_SHARE):
     """Group segments into chunks: of about chunk_points points each when given, else guided
     chunks that shrink from about total / (share * n_workers) (at most MAX_CHUNK_POINTS)
@@ -453,7 +458,7 @@ def _run_chunks(client, cfg, todo, parts, assembly, chunk_points, bar, say):
     from dask.distributed import KilledWorker, as_completed
 
     n_workers = max(1, len(client.scheduler_info()["workers"]))
-    chunks = plan_chunks(todo, n_workers, chunk_points, guided_share(cfg.data))
+    chunks = chunks_for(cfg, todo, n_workers, chunk_points)
     say(f"sweeping {_count(sum(len(s) for s in todo), 'point')} in {_count(len(chunks), 'chunk')}")
     if bar:
         bar.restart()

@@ -69,10 +69,12 @@ def makespan(chunk_costs, workers):
 
 
 def simulate(lines, rng):
-    """{workers: {share: (mean, worst makespan / ideal, chunks)}} over ORDERS orders of the lines."""
+    """{workers: {share: {"mean", "worst": makespan / ideal, "chunks"}}} over ORDERS orders of
+    the lines."""
     from pipeline import sweep
 
-    total = sum(c for line in lines for _, c in line)
+    cost = {seg.id: c for line in lines for seg, c in line}
+    total = sum(cost.values())
     orders = []
     for _ in range(ORDERS):
         order = [lines[i] if rng.random() < 0.5 else lines[i][::-1] for i in rng.permutation(len(lines))]
@@ -83,7 +85,6 @@ def simulate(lines, rng):
         for share in SHARES:
             ratios, n = [], None
             for segs in orders:
-                cost = {seg.id: c for seg, c in segs}
                 chunks = sweep.plan_chunks([seg for seg, _ in segs], p, share=share)
                 ratios.append(makespan([sum(cost[s.id] for s in ch) for ch in chunks], p) / (total / p))
                 n = n or len(chunks)

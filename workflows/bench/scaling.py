@@ -124,7 +124,7 @@ def task_costs(cfg, n_workers=2):
 
     from pipeline import sweep
 
-    chunks = sweep.plan_chunks(sweep.segments(cfg), n_workers, share=sweep.guided_share(cfg.data))
+    chunks = sweep.chunks_for(cfg, sweep.segments(cfg), n_workers)
     chunk = sorted(chunks, key=lambda c: sum(len(s) for s in c))[len(chunks) // 2]
     n = sum(len(s) for s in chunk)
     t0 = time.perf_counter()

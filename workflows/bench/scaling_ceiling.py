@@ -47,7 +47,7 @@ def measure(cfg, repeats=3):
         runs = {k: [] for k in pools}
         for _ in range(repeats):
             for k, pool in pools.items():
-                runs[k].append(_timed(pool, cfg, sweep.plan_chunks(segs, k, share=sweep.guided_share(cfg.data))))
+                runs[k].append(_timed(pool, cfg, sweep.chunks_for(cfg, segs, k)))
     finally:
         for pool in pools.values():
             pool.terminate()

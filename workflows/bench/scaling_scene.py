@@ -58,11 +58,11 @@ def scene_info(cfg):
 
 
 def chunk_plan(cfg, n_workers, chunk_points):
-    """(number of chunks, median points per chunk) that pipeline.sweep.plan_chunks makes of the
+    """(number of chunks, median points per chunk) that pipeline.sweep.chunks_for makes of the
     scene's segments for n_workers (chunk_points None: the pipeline's default)."""
     from pipeline import sweep
 
-    chunks = sweep.plan_chunks(sweep.segments(cfg), n_workers, chunk_points, sweep.guided_share(cfg.data))
+    chunks = sweep.chunks_for(cfg, sweep.segments(cfg), n_workers, chunk_points)
     sizes = [sum(len(seg) for seg in chunk) for chunk in chunks]
     return len(chunks), int(statistics.median(sizes)) if sizes else 0
 
