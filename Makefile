@@ -41,8 +41,8 @@ backbone: $(STAMP)  ## Filipkovsky 2010 nonlinear normal modes: manifold vs cont
 bench: $(STAMP)  ## work-precision and baseline benchmarks -> docs/benchmarks/
 	$(BIN)/python -m workflows.bench.kernels
 
-bench-scaling: $(STAMP)  ## 1 vs 2 workers, chunk sizes, memory of the Fig. 13 sweep (3 repeats, ~4 min, quiet machine) -> docs/benchmarks/scaling.*
-	$(BIN)/python -m workflows.bench.scaling --repeats 3
+bench-scaling: $(STAMP)  ## 1 vs 2 workers, chunk sizes, memory of the Fig. 13 sweep (5 repeats, ~7 min, quiet machine) -> docs/benchmarks/scaling.*
+	$(BIN)/python -m workflows.bench.scaling --repeats 5
 
 bench-chunk-plans: $(STAMP)  ## per-point cost spread of Fig. 13 (orbits, attractors) and the guided chunk plans simulated on it (~1 min) -> docs/benchmarks/chunk_plans.*
 	$(BIN)/python -m workflows.bench.chunk_plans

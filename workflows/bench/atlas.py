@@ -27,7 +27,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from workflows.bench.common import DOCS, ROOT, log, loadavg
+from workflows.bench.common import DOCS, ROOT, log, loadavg, peak_rss_kib
 from workflows.bench.render import fill, table
 from workflows.bench.scaling import git_info, scaling_machine_info
 from workflows.bench.scaling_runs import phase_timers, start_cluster, task_summary
@@ -52,15 +52,11 @@ def atlas_config(counts=None):
     return config.parse_config(text, path=CONFIG.name, allow_large=True)
 
 
-def _rss_kib():
-    return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
-
-
 def _worker_stats():
     def stats():
         import resource as r
         u = r.getrusage(r.RUSAGE_SELF)
-        return u.ru_maxrss, u.ru_utime + u.ru_stime
+        return peak_rss_kib(), u.ru_utime + u.ru_stime
     return stats
 
 
@@ -107,7 +103,7 @@ def run_atlas(cfg, work_dir, n_workers=2):
                 tasks=tasks, part_files=len(part_bytes), part_bytes=sum(part_bytes),
                 cube_bytes=out.stat().st_size, driver_cpu_s=round(driver_cpu, 2),
                 worker_cpu_s=[round(after[w][1] - cpu0[w][1], 2) for w in after],
-                worker_max_rss_kib=[after[w][0] for w in after], driver_max_rss_kib=_rss_kib(),
+                worker_max_rss_kib=[after[w][0] for w in after], driver_max_rss_kib=peak_rss_kib(),
                 loadavg_before=before, loadavg_after=loadavg(), cube=str(out))
 
 

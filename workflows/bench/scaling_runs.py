@@ -2,17 +2,13 @@
 any timed run: wall time, phases, task stream, memory and CPU time."""
 import contextlib
 import os
-import resource
 import time
 from pathlib import Path
 
 import numpy as np
 
-from workflows.bench.common import loadavg
+from workflows.bench.common import loadavg, peak_rss_kib
 from workflows.bench.scaling_scene import chunk_plan, first_point, scene_config
-
-def driver_max_rss_kib():
-    return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
 
 
 # --- instrumentation ----------------------------------------------------------------------------
@@ -122,23 +118,20 @@ def start_cluster(n_workers):
 
 
 def _worker_calls():
-    """Functions run on the workers; closures so that cloudpickle ships them by value (the
-    workers need not import this module)."""
+    """Functions run on the workers: warm and cpu_seconds are closures, which cloudpickle ships by
+    value (the workers need not import this module); peak_rss_kib is imported there from
+    workflows.bench.common (worker processes start with the driver's sys.path)."""
     def warm(data, point):
         from pipeline import compute, sweep  # noqa: F401  (what a real run's worker preload imports)
         compute.solve_segment(data, [point])
         return True
-
-    def max_rss():
-        import resource as r
-        return int(r.getrusage(r.RUSAGE_SELF).ru_maxrss)
 
     def cpu_seconds():
         import resource as r
         u = r.getrusage(r.RUSAGE_SELF)
         return u.ru_utime + u.ru_stime
 
-    return warm, max_rss, cpu_seconds
+    return warm, peak_rss_kib, cpu_seconds
 
 
 def measure_run(cfg, n_workers, chunk_points, work_dir, label, repeat=0):
@@ -190,7 +183,7 @@ def measure_run(cfg, n_workers, chunk_points, work_dir, label, repeat=0):
         wall_s=round(wall, 3), points_per_s=round(cfg.n_points / wall, 2), phases=phase_s,
         tasks=tasks, point_compute_s=round(point_compute, 3), n_not_converged=n_failed,
         worker_max_rss_kib=rss_after, worker_rss_before_kib=rss_before,
-        driver_max_rss_kib=driver_max_rss_kib(), driver_cpu_s=round(driver_cpu, 3),
+        driver_max_rss_kib=peak_rss_kib(), driver_cpu_s=round(driver_cpu, 3),
         worker_cpu_s=[round(cpu_after[w] - cpu_before[w], 3) for w in cpu_after],
         loadavg_before=before, loadavg_after=loadavg(),
     )
