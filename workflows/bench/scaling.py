@@ -26,7 +26,7 @@ with its relaxed housekeeping settings; `scaling_runs`):
 * from Dask's task stream: busy time per worker, the span of the compute phase, its tail (how
   long the first worker to finish waits for the last), and worker utilization;
 * points per second, the sum of the per-point compute times stored in the cube;
-* peak memory: max RSS (ru_maxrss, KiB on Linux) of each worker process after the sweep and of
+* peak memory: peak RSS (VmHWM, KiB) of each worker process after the sweep and of
   the driver process (a high-water mark over the whole benchmark, as the driver runs them all);
 * CPU seconds of the driver and the workers during the sweep, load average before and after;
   from them the speed-up in CPU time, which other load on a shared machine does not inflate;
