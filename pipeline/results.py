@@ -11,17 +11,22 @@ from pipeline import cube, fileio, warmup
 
 def write(ds, path):
     """Atomic netCDF write: compressed numbers, integers without a fill value (so a plain
-    xarray.open_dataset keeps the flags integer; padding has its own flag value), text
-    uncompressed (HDF5 filters do not apply to variable-length strings)."""
-    enc = {name: {"_FillValue": None} for name in ds.coords}
+    xarray.open_dataset keeps the flags integer; padding has its own flag value), text as UTF-8
+    character arrays, which every netCDF reader and the CF checker know (netCDF-4 variable-length
+    strings are valid CF-1.8 but cfchecker 4.1 rejects them, and HDF5 filters skip them)."""
+    enc = {name: {"_FillValue": None, **_text(var)} for name, var in ds.coords.items()}
     for name, var in ds.data_vars.items():
-        if var.dtype.kind == "O":
-            enc[name] = {}
+        if var.dtype.kind in "OU":
+            enc[name] = _text(var)
         else:
             enc[name] = {**cube.COMPRESSION, **({"_FillValue": None} if var.dtype.kind in "iu" else {})}
     with fileio.atomic_path(path) as tmp:
         ds.to_netcdf(tmp, engine="netcdf4", encoding=enc)
     return path
+
+
+def _text(var):
+    return {"dtype": "S1"} if var.dtype.kind in "OU" else {}
 
 
 def open_result(path, kind):
