@@ -301,6 +301,7 @@ def to_dataset(data, pl, lines, provenance):
     n_mode, n_amp = len(first["modes"]), first["grid"].size
     n_pt = max([len(r["points"].get("frequency", ())) for ln in lines for r in ln["records"]] + [1])
     names = tuple(system.coordinates) + tuple(c + "'" for c in system.coordinates)
+    units = state_units(system.units)
 
     def stack(key, tail=(), dtype=float):
         out = np.empty((len(lines), n_mode) + tail, dtype)
@@ -335,9 +336,12 @@ def to_dataset(data, pl, lines, provenance):
         "mode_label": (lead, stack("label", dtype=object), {"long_name": "mode shape: axial, cylindrical, conical, transverse"}),
         "mode_whirl": (lead, stack("whirl", dtype=object), {"long_name": "whirl: forward, backward, none"}),
         "reduced_coefficient": (lead + ("monomial",), stack("reduced", (len(nnm.MONOMIALS),)),
-                                {"units": "SI", "long_name": "B_m of the reduced oscillator p'' + sum_m B_m m(p, p') = 0"}),
+                                {"long_name": "B_m of the reduced oscillator p'' + sum_m B_m m(p, p') = 0",
+                                 "comment": MIXED_UNITS + "B_m of the monomial p^a r^b is in P^(1-a-b) s^(b-2)"}),
         "manifold_coefficient": (lead + ("state", "monomial"), stack("coefficients", (len(names), len(nnm.MONOMIALS))),
-                                 {"units": "SI", "long_name": "gamma of the manifold: state = gamma @ monomials(p, p')"}),
+                                 {"long_name": "gamma of the manifold: state = gamma @ monomials(p, p')",
+                                  "comment": MIXED_UNITS + "gamma of state component i and the monomial p^a r^b is "
+                                             "in state_units[i] P^-(a+b) s^b"}),
         "manifold_notes": (lead, stack("notes", dtype=object), {"long_name": "internal resonances met and how they were resolved"}),
         "continuation_end": (lead, stack("status", dtype=object), {"long_name": "how the continuation backbone ended"}),
         "continuation_detail": (lead, stack("detail", dtype=object), {"long_name": "how the continuation backbone ended, in words"}),
@@ -349,13 +353,14 @@ def to_dataset(data, pl, lines, provenance):
         "point_unit_circle_error": (lead + ("point",), points("unit_circle_error"), {"units": "1", "long_name": "continued orbit: largest | |multiplier| - 1 | away from +1"}),
         "axial_approach": (pl.axes, np.array([ln["z0"] for ln in lines]).reshape(shape), {"units": "m", "long_name": "preload's axial approach z0"}),
     }
-    v.update(_surface_variables(lines, pl, shape, names))
+    v.update(_surface_variables(lines, pl, shape, names, units))
     coords = {a: (a, data["sweep"][a], _axis_attrs(spec, a)) for a in pl.axes}
-    coords["mode"] = ("mode", np.array(first["modes"]) + 1, {"long_name": "mode number (1 = lowest linear frequency)"})
+    coords["mode"] = ("mode", np.array(first["modes"]) + 1, {"units": "1", "long_name": "mode number (1 = lowest linear frequency)"})
     coords["amplitude_grid"] = (pl.axes + ("amplitude",), np.array([ln["grid"] for ln in lines]).reshape(shape + (n_amp,)),
                                 {"units": "m", "long_name": "master amplitude (first harmonic of its displacement)"})
     coords["monomial"] = ("monomial", list(nnm.MONOMIALS), {"long_name": "monomials of the master displacement p and velocity r"})
     coords["state"] = ("state", list(names), {"long_name": "state components (coordinates, then velocities ')"})
+    coords["state_units"] = ("state", list(units), {"long_name": "units of each state component"})
     attrs = {**provenance, "result_kind": RESULT_KIND, "Conventions": "CF-1.10",
              "coordinates_units": json.dumps(list(system.units))}
     return xr.Dataset(v, coords=coords, attrs=attrs)
@@ -366,25 +371,36 @@ def _axis_attrs(spec, axis):
     return {"units": par.unit, "long_name": par.long_name or axis}
 
 
-def _surface_variables(lines, pl, shape, names):
+# CF has one unit per variable; the manifold's coefficients have one per element, stated as a rule.
+MIXED_UNITS = ("no units attribute: the units differ from element to element (SI); P is the unit of "
+               "the mode's master coordinate, state_units[master]; ")
+
+
+def state_units(coordinate_units):
+    """Units of the state (coordinates, then their velocities) from the coordinates' units."""
+    return tuple(coordinate_units) + tuple("s-1" if u == "1" else f"{u} s-1" for u in coordinate_units)
+
+
+def _surface_variables(lines, pl, shape, names, units):
     drawn = [ln["surface"] for ln in lines if ln["surface"] is not None]
     if not drawn:       # no manifold for surface_mode on any line (an internal resonance): no figure
         return {}
     s0 = drawn[0]
     n_p, n_t = len(s0["p"]), len(s0["t"])
+    slave = {"units": units[s0["slave"]]}
 
     def stack(key, tail):
         return np.array([ln["surface"][key] if ln["surface"] is not None else np.full(tail, np.nan)
                          for ln in lines]).reshape(shape + tail)
     return {
         "surface_value": (pl.axes + ("surface_p", "surface_r"), stack("value", (n_p, n_p)),
-                          {"units": "SI", "long_name": "a slave coordinate on the invariant manifold of surface_mode over (p, r)"}),
+                          {**slave, "long_name": "a slave coordinate on the invariant manifold of surface_mode over (p, r)"}),
         "surface_p_values": (pl.axes + ("surface_p",), stack("p", (n_p,)), {"units": "m", "long_name": "master displacement p"}),
         "surface_r_values": (pl.axes + ("surface_r",), stack("r", (n_p,)), {"units": "m s-1", "long_name": "master velocity r"}),
         "orbit_p": (pl.axes + ("orbit_sample",), stack("orbit_p", (n_t,)), {"units": "m", "long_name": "full orbit from the manifold: master displacement"}),
         "orbit_r": (pl.axes + ("orbit_sample",), stack("orbit_r", (n_t,)), {"units": "m s-1", "long_name": "full orbit from the manifold: master velocity"}),
-        "orbit_slave": (pl.axes + ("orbit_sample",), stack("orbit_slave", (n_t,)), {"units": "SI", "long_name": "full orbit from the manifold: the slave coordinate"}),
-        "orbit_on_surface": (pl.axes + ("orbit_sample",), stack("orbit_manifold", (n_t,)), {"units": "SI", "long_name": "the manifold's value of the slave at the orbit's (p, r)"}),
+        "orbit_slave": (pl.axes + ("orbit_sample",), stack("orbit_slave", (n_t,)), {**slave, "long_name": "full orbit from the manifold: the slave coordinate"}),
+        "orbit_on_surface": (pl.axes + ("orbit_sample",), stack("orbit_manifold", (n_t,)), {**slave, "long_name": "the manifold's value of the slave at the orbit's (p, r)"}),
         "orbit_time": (pl.axes + ("orbit_sample",), stack("t", (n_t,)), {"units": "s", "long_name": "time along the full orbit"}),
         "surface_info": ((), json.dumps({"mode": pl.surface_mode + 1, "master": names[s0["master"]], "slave": names[s0["slave"]],
                                          "amplitude": s0["amplitude"]}), {"long_name": "surface figure: mode, master, slave, orbit amplitude [m]"}),

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from pipeline import backbone, cli, compute, config
+from tests import cfcheck
 
 AXIAL = "configs/filipkovsky2010_axial.toml"
 
@@ -137,3 +138,26 @@ def test_backbones_drawn_over_a_forced_response(axial_result, tmp_path):
     assert (tmp_path / "over" / "backbones.png").stat().st_size > 0
     with pytest.raises(ValueError, match="--over: the forced response must be continued along a frequency in Hz"):
         pipeline.make_report(nc, tmp_path / "bad", over=_forced_response(tmp_path / "bad.nc", unit="m"))
+
+
+def test_cf_checkers_find_no_error_and_units_are_stated(axial_result, tmp_path):
+    """The backbone file under cfchecker and the IOOS compliance-checker (tests/cfcheck.py,
+    skipped where they are not installed): no error. cfchecker's only warnings are the string-
+    valued label coordinates (monomial, state: text, not CF coordinate variables). Every float
+    variable has UDUNITS units or, for the manifold's coefficients, whose units differ from
+    element to element, a comment with the rule; the surface figure's slave coordinate has its own
+    unit (it was "SI")."""
+    nc, _ = axial_result
+    messages = cfcheck.cfchecker_messages(nc, tmp_path)
+    assert messages["FATAL"] == messages["ERROR"] == []
+    assert sorted(messages["WARN"]) == [f"{n}: (5): Possible incorrect declaration of a coordinate variable."
+                                        for n in ("monomial", "state")]
+    assert cfcheck.ioos_failures(nc, tmp_path) == []
+    ds = backbone.open_result(nc)
+    assert list(ds["state_units"].values) == ["m"] * 5 + ["m s-1"] * 5
+    slave = list(ds["state"].values).index(json.loads(str(ds["surface_info"].values))["slave"])
+    for name in ("surface_value", "orbit_slave", "orbit_on_surface"):
+        assert ds[name].attrs["units"] == ds["state_units"].values[slave], name
+    mixed = [n for n, v in ds.data_vars.items() if v.dtype.kind == "f" and "units" not in v.attrs]
+    assert mixed == ["reduced_coefficient", "manifold_coefficient"]
+    assert all(ds[n].attrs["comment"].startswith(backbone.MIXED_UNITS) for n in mixed)
