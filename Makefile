@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow upgrade bench bench-scaling bench-atlas bench-chunk-plans bench-attractor bench-revisions bench-continuation bench-reductions bench-compile bench-backbone bench-models fig13 cascade fold backbone clean
+.PHONY: demo test test-slow check-cf screenshots upgrade bench bench-scaling bench-atlas bench-chunk-plans bench-attractor bench-revisions bench-continuation bench-reductions bench-compile bench-backbone bench-models fig13 cascade fold backbone clean
 
 # CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
 CONSTRAINTS ?= constraints.txt
@@ -40,6 +40,14 @@ backbone: $(STAMP)  ## Filipkovsky 2010 nonlinear normal modes: manifold vs cont
 
 bench: $(STAMP)  ## work-precision and baseline benchmarks -> docs/benchmarks/
 	$(BIN)/python -m workflows.bench.kernels
+
+check-cf: $(STAMP)  ## CF checks of every result kind with cfchecker and the IOOS compliance-checker (needs libudunits2: apt-get install libudunits2-0)
+	$(BIN)/python -m pip install --quiet $(if $(CONSTRAINTS),-c $(CONSTRAINTS)) cfchecker compliance-checker
+	$(BIN)/python -c "import cfchecker.cfchecks, compliance_checker.runner"  # fails here, not as skipped tests, without udunits2
+	$(BIN)/python -m pytest -q -k cf_checkers tests/test_cube.py tests/test_continue_command.py tests/test_backbone_command.py
+
+screenshots: demo fold  ## the demo and fold reports in headless Chromium (apt-get install chromium) -> docs/screenshots/*.png
+	$(BIN)/python -m workflows.screenshots out/demo_report out/bai2006_fold_report -o docs/screenshots
 
 bench-scaling: $(STAMP)  ## 1 vs 2 workers, chunk sizes, memory of the Fig. 13 sweep (5 repeats, ~7 min, quiet machine) -> docs/benchmarks/scaling.*
 	$(BIN)/python -m workflows.bench.scaling --repeats 5

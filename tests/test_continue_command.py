@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from pipeline import config, continuation
+from tests import cfcheck
 from rotorkernels.continuation import arclength as al
 
 CLI = [str(Path(sys.executable).with_name("rotorsweep"))]
@@ -169,3 +170,15 @@ def test_boundary_curves_through_the_pipeline_match_the_sweep_boundaries():
         c, p = np.nonzero(np.isclose(ds["curve_second"].values, 7.6e-6, rtol=1e-12, atol=0))
         crossings = ds["curve_parameter"].values[c, p]
         assert np.min(np.abs(crossings - target)) <= 1e-6 * target
+
+
+def test_cf_checkers_find_no_error(duffing_result, tmp_path):
+    """The continuation file under cfchecker and the IOOS compliance-checker (tests/cfcheck.py,
+    skipped where they are not installed): no error; text is stored as character arrays (cfchecker
+    rejected netCDF-4 strings as an error). cfchecker's one warning is the string-valued label
+    coordinate `observable` (text, not a CF coordinate variable)."""
+    out = duffing_result[0]
+    messages = cfcheck.cfchecker_messages(out, tmp_path)
+    assert messages["FATAL"] == messages["ERROR"] == []
+    assert messages["WARN"] == ["observable: (5): Possible incorrect declaration of a coordinate variable."]
+    assert cfcheck.ioos_failures(out, tmp_path) == []

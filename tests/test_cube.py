@@ -8,6 +8,7 @@ import pytest
 import xarray as xr
 
 from pipeline import cube, schema
+from tests import cfcheck
 from tests.synthetic import synthetic_cube
 
 AXES4 = {
@@ -17,7 +18,8 @@ AXES4 = {
     "preload": np.array([0.0, 100.0]),
 }
 PROVENANCE = {"config_toml": '[scene]\nname = "t"\n', "config_hash": "ab" * 32, "rotorsweep_version": "0.1.0",
-              "created": "2026-01-01T00:00:00+00:00", "numerics": '{"newton_tol": 1e-10}'}
+              "created": "2026-01-01T00:00:00+00:00", "numerics": '{"newton_tol": 1e-10}',
+              "history": "2026-01-01T00:00:00+00:00 rotorsweep 0.1.0: a synthetic test cube"}
 
 
 def random_results(shape, n_multipliers=4, seed=0):
@@ -246,7 +248,7 @@ def test_unreadable_part_is_a_cube_error(tmp_path):
 
 # ----------------------------------------------------------------------------- CF rules
 # The rules the CF checker (cfchecker 4.1) flagged on a demo cube, tested directly: it needs the
-# udunits2 C library, so it runs only where it is installed (test_cfchecker_finds_no_error).
+# udunits2 C library, so it runs only where it is installed (test_cf_checkers_find_no_problem).
 
 # UDUNITS symbols the cubes use; a unit string is terms SYMBOL[EXPONENT] separated by spaces.
 UDUNITS_SYMBOLS = {"1", "m", "s", "Hz", "N", "kg", "degree", "rad"}
@@ -321,10 +323,11 @@ def test_poincare_samples_are_float32_within_the_stated_loss(tiny_run):
         assert 0 < rel.max() <= 2.0 ** -24, name
 
 
-def test_cfchecker_finds_no_error(tiny_cube):
-    """cfchecker, where it is installed (it needs the udunits2 C library). Version 1.8: the
-    newest it knows (it misreads Conventions = CF-1.10)."""
-    cfchecks = pytest.importorskip("cfchecker.cfchecks")
-    result = cfchecks.CFChecker(version="1.8", silent=True).checker(str(tiny_cube))
-    assert result["global"]["FATAL"] == [] and result["global"]["ERROR"] == []
-    assert {name: r["ERROR"] for name, r in result["variables"].items() if r["ERROR"]} == {}
+@pytest.mark.parametrize("which", ["sweep", "4-D"])
+def test_cf_checkers_find_no_problem(which, tiny_cube, tmp_path):
+    """cfchecker and the IOOS compliance-checker (tests/cfcheck.py; skipped where they are not
+    installed): no error and no warning on the real sweep's cube (boundary table, attractors) or
+    on a 4-D cube of every variable."""
+    path = tiny_cube if which == "sweep" else cube.write_cube(four_d(), tmp_path / "c.nc")
+    assert cfcheck.cfchecker_messages(path, tmp_path) == {"FATAL": [], "ERROR": [], "WARN": []}
+    assert cfcheck.ioos_failures(path, tmp_path) == []
