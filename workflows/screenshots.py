@@ -1,0 +1,100 @@
+"""Screenshots of HTML reports in headless Chromium, as a user's browser renders them.
+
+    python -m workflows.screenshots [REPORT_DIR ...] [-o docs/screenshots]
+
+Each REPORT_DIR/report.html is opened offline (file://, no network needed: the reports inline
+bokeh) with a fixed window width; the page's JavaScript runs for a virtual 20 s, the page is
+captured and cropped below its last non-white row, and the browser's console is searched for
+JavaScript errors, which fail the run. Defaults: the reports `make demo` and `make fold` write
+(a sweep with attractors, a continuation), into docs/screenshots/<report dir name>.png.
+
+Chromium is found as $CHROMIUM or chromium, chromium-browser, google-chrome on the PATH (Debian:
+`apt-get install chromium`). It is not a dependency of rotorsweep: tests of the bokeh models
+(tests/test_report.py: frame sizes, line dashes, hover tools) check the same properties without
+a browser; this script shows them as pixels.
+"""
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_REPORTS = ("out/demo_report", "out/bai2006_fold_report")
+BROWSERS = ("chromium", "chromium-browser", "google-chrome")
+WIDTH = 1400
+MAX_HEIGHT = 16000     # the window is this tall, then cropped: headless Chromium has no full-page capture
+VIRTUAL_TIME_MS = 20000
+# console lines of a page's uncaught exceptions and failed loads, as Chromium logs them to stderr
+JS_ERROR = re.compile(r"CONSOLE.*(Uncaught|Error)|Failed to load resource", re.IGNORECASE)
+
+
+class ScreenshotError(Exception):
+    """No browser, a report missing, or a page that failed to render (message for the user)."""
+
+
+def browser():
+    """The Chromium executable to use."""
+    found = os.environ.get("CHROMIUM") or next((shutil.which(b) for b in BROWSERS if shutil.which(b)), None)
+    if not found:
+        raise ScreenshotError("no Chromium found (set CHROMIUM, or install it: apt-get install chromium)")
+    return found
+
+
+def capture(html, png, chromium=None):
+    """Render `html` in headless Chromium into `png`, cropped to the page; returns the page's
+    JavaScript errors (lines of the browser's console)."""
+    html, png = Path(html).resolve(), Path(png)
+    if not html.is_file():
+        raise ScreenshotError(f"{html}: no such report page (make it first, e.g. `make demo`)")
+    with tempfile.TemporaryDirectory(prefix="rotorsweep-shot-") as tmp:
+        raw = Path(tmp) / "page.png"
+        cmd = [chromium or browser(), "--headless=new", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+               "--no-first-run", "--enable-logging=stderr", "--v=0", f"--user-data-dir={tmp}/profile",
+               f"--window-size={WIDTH},{MAX_HEIGHT}", f"--virtual-time-budget={VIRTUAL_TIME_MS}",
+               f"--screenshot={raw}", html.as_uri()]
+        done = subprocess.run(cmd, capture_output=True, text=True, timeout=180)
+        if not raw.is_file():
+            raise ScreenshotError(f"{html}: Chromium wrote no screenshot (exit {done.returncode}): "
+                                  f"{done.stderr.strip()[-500:]}")
+        png.parent.mkdir(parents=True, exist_ok=True)
+        crop_to_content(raw, png)
+    return [line for line in done.stderr.splitlines() if JS_ERROR.search(line)]
+
+
+def crop_to_content(src, dst, margin=16):
+    """Copy the PNG `src` to `dst` without the white rows below its content."""
+    import matplotlib.image as mpimg
+    import numpy as np
+
+    img = mpimg.imread(src)
+    rows = np.flatnonzero((img[..., :3] < 0.98).any(axis=(1, 2)))
+    end = min(len(img), (rows[-1] + 1 + margin) if len(rows) else len(img))
+    mpimg.imsave(dst, img[:end, :, :3])
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("reports", nargs="*", default=list(DEFAULT_REPORTS),
+                    help="report directories holding report.html (default: %(default)s)")
+    ap.add_argument("-o", "--out", default=str(ROOT / "docs" / "screenshots"), help="where the PNGs go")
+    args = ap.parse_args(argv)
+    try:
+        chromium = browser()
+        failed = False
+        for report in args.reports:
+            png = Path(args.out) / f"{Path(report).name}.png"
+            errors = capture(Path(report) / "report.html", png, chromium)
+            print(f"{png}: {'JavaScript errors: ' + '; '.join(errors) if errors else 'no JavaScript errors'}")
+            failed |= bool(errors)
+    except ScreenshotError as exc:
+        print(f"screenshots: {exc}", file=sys.stderr)
+        return 2
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
