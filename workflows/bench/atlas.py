@@ -20,7 +20,6 @@ import datetime
 import json
 import os
 import re
-import resource
 import shutil
 import sys
 import tempfile
