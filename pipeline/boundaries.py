@@ -221,15 +221,14 @@ def add_boundary_table(data, ds, map_tasks=None, done=None):
     done as in boundary_rows."""
     rows = boundary_rows(data, ds, map_tasks, done)
     axis = schema.continued_axis(ds)
-    out = ds.copy()
     coord = ds[axis].attrs
-    for name, (dtype, attrs) in schema.boundary_variables(axis, coord["units"], coord["long_name"]).items():
-        out[name] = ("boundary", np.array([r[name] for r in rows], dtype=dtype), dict(attrs))
+    table = {name: ("boundary", np.array([r[name] for r in rows], dtype=dtype), dict(attrs))
+             for name, (dtype, attrs) in schema.boundary_variables(axis, coord["units"], coord["long_name"]).items()}
     for other in _others(ds, axis):
         attrs = ds[other].attrs
-        out[f"boundary_{other}"] = ("boundary", np.array([r[f"boundary_{other}"] for r in rows], float),
-                                    {"units": attrs["units"], "long_name": f"{attrs['long_name']} of the boundary"})
-    return out
+        table[f"boundary_{other}"] = ("boundary", np.array([r[f"boundary_{other}"] for r in rows], float),
+                                      {"units": attrs["units"], "long_name": f"{attrs['long_name']} of the boundary"})
+    return ds.assign(table)     # one merge, not one per variable
 
 
 def boundary_frame(ds):

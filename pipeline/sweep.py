@@ -220,8 +220,14 @@ WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_TH
 # shares the cores with the workers, and with Dask's defaults (an event-loop tick every 20 ms in
 # every process, nannies polling worker memory every 100 ms, each worker sampling its own stack
 # every 10 ms for the dashboard's profile page) an idle 2-worker cluster took 74 ms of CPU per
-# second, 3.7% of 2 cores (13 ms/s relaxed). A scheduler given by address keeps its own settings.
+# second, 3.7% of 2 cores (13 ms/s relaxed). The system monitor (host CPU, memory, network and
+# disk counters for the dashboard's System page and the heartbeats, every 500 ms in the scheduler,
+# each nanny and each worker) then took a third of what was left: an idle 2-worker cluster used
+# 33-38 ms/s with it, 24 ms/s sampling every 5 s (AMD EPYC, 2 cores). The workers' memory limits
+# do not wait for it (they sample their process memory themselves). A scheduler given by address
+# keeps its own settings.
 LOCAL_CLUSTER_CONFIG = {"distributed.admin.tick.interval": "1s",
+                        "distributed.admin.system-monitor.interval": "5s",
                         "distributed.worker.memory.monitor-interval": "500ms",
                         "distributed.worker.profile.enabled": False}
 

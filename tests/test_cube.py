@@ -94,7 +94,8 @@ def test_build_follows_the_schema():
     np.testing.assert_array_equal(built["multiplier"].values, np.arange(4))
 
 
-def test_cf_attributes_and_compression_on_disk(tmp_path):
+def test_cf_attributes_and_compression_on_disk(tmp_path, monkeypatch):
+    monkeypatch.setattr(cube, "COMPRESS_FROM_BYTES", 0)     # this small cube compressed as a large one
     path = cube.write_cube(four_d(), tmp_path / "c.nc")
     ds = cube.open_cube(path)
     assert ds.attrs["Conventions"] == "CF-1.10" and ds.attrs["title"]
@@ -112,6 +113,16 @@ def test_cf_attributes_and_compression_on_disk(tmp_path):
         assert "_FillValue" not in nc["orbit_status"].ncattrs()
         assert nc["orbit_status"].filters()["zlib"]
         assert "_FillValue" not in nc["speed"].ncattrs()
+
+
+def test_small_cube_is_written_without_filters(tmp_path):
+    ds = four_d()
+    assert ds.nbytes < cube.COMPRESS_FROM_BYTES
+    path = cube.write_cube(ds, tmp_path / "c.nc")
+    with netCDF4.Dataset(path) as nc:
+        assert not nc["orbit_status"].filters()["zlib"] and not nc["residual"].filters()["shuffle"]
+        assert nc["residual"].chunking() != "contiguous"        # still chunked by line
+    np.testing.assert_array_equal(cube.open_cube(path)["residual"].values, ds["residual"].values)
 
 
 def test_existing_cube_needs_overwrite(tmp_path):

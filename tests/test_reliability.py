@@ -132,6 +132,9 @@ def test_local_cluster_binds_to_localhost_and_its_workers_keep_their_imports_out
             assert addr.startswith("tcp://127.0.0.1:")
         # the preload froze what the imports left (a fresh process: nothing frozen otherwise)
         assert all(n > 10_000 for n in client.run(gc.get_freeze_count).values())
+        # the relaxed housekeeping reached the worker processes (they get the nannies' settings)
+        monitor_ms = client.run(lambda dask_worker: dask_worker.periodic_callbacks["monitor"].callback_time)
+        assert set(monitor_ms.values()) == {5000}
     finally:
         client.close()
         cluster.close()
