@@ -53,6 +53,15 @@ def test_chunk_plan_simulation_on_known_schedules():
             assert 1.0 <= v["mean"] <= v["worst"] <= bound
 
 
+def test_speedup_net_of_steal():
+    """Steal on the critical path: all of it with one busy vCPU, half of it with two."""
+    from workflows.bench.scaling_ceiling import net_of_steal
+
+    assert net_of_steal(10.0, 6.0, 0.0, 2.0) == 2.0           # 10 / (6 - 1)
+    assert net_of_steal(10.5, 5.0, 0.5, 0.0) == 2.0           # (10.5 - 0.5) / 5
+    assert net_of_steal(10.0, 6.0, None, 2.0) is None          # not reported: no guess
+
+
 @pytest.mark.timeout(180)
 def test_scaling_bench_core_on_a_tiny_grid(tmp_path):
     """1 and 2 workers with default chunks plus one chunk size on 2 workers, 8 points: the JSON
@@ -92,6 +101,7 @@ def test_scaling_bench_core_on_a_tiny_grid(tmp_path):
     w1, w2 = ceiling["wall_1_s"], ceiling["wall_2_s"]            # rounded to 1e-4 s, the ratio to 1e-3:
     # the roundings add (the ratio's 5e-4, and the walls' 5e-5 each at their worst)
     assert abs(ceiling["speedup"] - w1 / w2) <= 5e-4 + (w1 + 5e-5) / (w2 - 5e-5) - w1 / w2
+    assert {"steal_1_s", "steal_2_s", "speedup_net_of_steal"} <= set(ceiling)
     assert set(data["scheduler"]["by_workers"]) == {"1", "2"}
     assert all(v["batch_tasks_per_s"] > 0 for v in data["scheduler"]["by_workers"].values())
     assert len(data["load_average"]["start"]) == 3 and data["machine"]["cores"] >= 1

@@ -20,6 +20,23 @@ def loadavg():
     return [round(x, 2) for x in os.getloadavg()]
 
 
+def steal_seconds():
+    """CPU seconds the hypervisor gave to other guests while this machine's CPUs had work (the
+    'steal' column of /proc/stat, summed over CPUs; None where it is not reported). A shared
+    host steals mostly when every vCPU of this guest is busy: it slows 2-worker runs, not
+    1-worker ones, and no scheduler here can win that time back."""
+    with contextlib.suppress(OSError, IndexError, ValueError):
+        with open("/proc/stat") as f:
+            fields = f.readline().split()
+        return int(fields[8]) / os.sysconf("SC_CLK_TCK")
+    return None
+
+
+def since(start, now):
+    """now - start, rounded to 10 ms (the clock tick), or None where either was not measured."""
+    return None if start is None or now is None else round(now - start, 2)
+
+
 def peak_rss_kib():
     """This process's peak resident set size in KiB. Linux's VmHWM, not getrusage's ru_maxrss:
     a worker process is forked from the driver and then exec'd, and ru_maxrss survives the exec,

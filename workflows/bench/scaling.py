@@ -63,7 +63,7 @@ QUICK_OUT = ROOT / "build" / "bench_scaling_quick"
 RUN_KEYS = ("label", "workers", "chunk_points", "chunk_points_used", "n_chunks", "repeat",
             "cluster_start_s", "worker_warmup_s", "wall_s", "points_per_s", "phases", "tasks",
             "point_compute_s", "n_not_converged", "worker_max_rss_kib", "worker_rss_before_kib", "driver_max_rss_kib",
-            "driver_cpu_s", "worker_cpu_s", "loadavg_before", "loadavg_after")
+            "driver_cpu_s", "worker_cpu_s", "steal_s", "loadavg_before", "loadavg_after")
 RESULT_KEYS = ("benchmark", "mode", "created", "git", "scene", "machine", "load_average",
                "warmup", "runs", "scaling", "ceiling", "chunk_sensitivity", "limits", "task_costs", "scheduler",
                "verdict", "command")

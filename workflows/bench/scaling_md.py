@@ -33,7 +33,8 @@ def run_rows(runs):
             f"{r['points_per_s']:.0f} | "
             f"{fmt(ph.get('compute'))} | {fmt(ph.get('boundaries'))} | "
             f"{fmt((ph.get('assemble') or 0) + (ph.get('write') or 0))} | {fmt(t.get('tail_s'))} | "
-            f"{_pct(t.get('utilization'))} | {' / '.join(_mib(x) for x in r['worker_max_rss_kib'])} | "
+            f"{_pct(t.get('utilization'))} | {fmt(r.get('steal_s'))} | "
+            f"{' / '.join(_mib(x) for x in r['worker_max_rss_kib'])} | "
             f"{_mib(r['driver_max_rss_kib'])} | {r['loadavg_after'][0]} |")
     return "\n".join(rows)
 
@@ -64,7 +65,9 @@ def speedup_section(res):
         busy_1_total=fmt(lim.get("busy_total_1_s"), "{:.1f}"), part_files=fmt(lim.get("part_files_s")),
         driver_cpu=f"{lim['driver_cpu_2_s']:.1f}", gaps_cost=fmt(lim.get("gaps_cost_s")),
         serial=fmt(lim.get("serial_s")), amdahl=f"{lim['amdahl_limit']:.2f}",
-        utilization=_pct(lim.get("utilization_2")), pairs=_pair_ratios(res["runs"]))
+        utilization=_pct(lim.get("utilization_2")), pairs=_pair_ratios(res["runs"]),
+        steal_1=fmt(lim.get("steal_1_s")), steal_2=fmt(lim.get("steal_2_s")), steal_cost=fmt(lim.get("steal_cost_s")),
+        net_speedup=fmt(sc.get("speedup_net_of_steal")))
     text += "\n\n" + ceiling_section(res)
     if sc["speedup"] > lim["amdahl_limit"] * 1.02:
         text += part("scaling", "inconsistent", serial_1=f"{lim['serial_1_worker_s']:.2f}",
@@ -94,7 +97,8 @@ def ceiling_section(res):
     return part("scaling", "ceiling", repeats=c["repeats"], wall_1=f"{c['wall_1_s']:.2f}",
                 wall_2=f"{c['wall_2_s']:.2f}", speedup=f"{c['speedup']:.2f}", cpu_1=f"{c['cpu_1_s']:.2f}",
                 cpu_2=f"{c['cpu_2_s']:.2f}", cpu_ratio=f"{c['cpu_2_s'] / c['cpu_1_s']:.3f}",
-                share=f"{res['scaling']['speedup'] / c['speedup']:.0%}") + "\n\n"
+                share=f"{res['scaling']['speedup'] / c['speedup']:.0%}", steal_1=fmt(c.get("steal_1_s")),
+                steal_2=fmt(c.get("steal_2_s")), net_speedup=fmt(c.get("speedup_net_of_steal"))) + "\n\n"
 
 
 def chunk_section(sens):

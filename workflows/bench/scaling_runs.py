@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from workflows.bench.common import loadavg, peak_rss_kib
+from workflows.bench.common import loadavg, peak_rss_kib, since, steal_seconds
 from workflows.bench.scaling_scene import chunk_plan, first_point, scene_config
 
 
@@ -153,10 +153,12 @@ def measure_run(cfg, n_workers, chunk_points, work_dir, label, repeat=0):
         out = Path(work_dir) / f"{label}_r{repeat}.nc"
         driver_cpu = time.process_time()
         with phase_timers() as phases, get_task_stream(client) as stream:
+            steal = steal_seconds()
             t0 = time.perf_counter()
             path = pipeline.run(cfg, str(out), scheduler=cluster.scheduler_address,
                                 chunk_points=chunk_points, overwrite=True, progress=False)
             wall = time.perf_counter() - t0
+            steal = since(steal, steal_seconds())
         driver_cpu = time.process_time() - driver_cpu
         cpu_after = client.run(cpu_seconds)
         rss_after = list(client.run(max_rss).values())
@@ -183,7 +185,7 @@ def measure_run(cfg, n_workers, chunk_points, work_dir, label, repeat=0):
         wall_s=round(wall, 3), points_per_s=round(cfg.n_points / wall, 2), phases=phase_s,
         tasks=tasks, point_compute_s=round(point_compute, 3), n_not_converged=n_failed,
         worker_max_rss_kib=rss_after, worker_rss_before_kib=rss_before,
-        driver_max_rss_kib=peak_rss_kib(), driver_cpu_s=round(driver_cpu, 3),
+        driver_max_rss_kib=peak_rss_kib(), driver_cpu_s=round(driver_cpu, 3), steal_s=steal,
         worker_cpu_s=[round(cpu_after[w] - cpu_before[w], 3) for w in cpu_after],
         loadavg_before=before, loadavg_after=loadavg(),
     )
