@@ -65,14 +65,15 @@ class BaiPoint:
         return np.median([self.fd_monodromy(u0, scale, rel_step=h) for h in rel_steps], axis=0)
 
     def periodic_orbit(self, u0, iterations=3):
-        """Newton with the finite-difference monodromy, from u0 (physical units)."""
+        """Newton with the finite-difference monodromy, from u0 (physical units); the monodromy
+        returned is fd_monodromy_median's (one step size's can be an outlier)."""
         u = np.asarray(u0, float)
         scale = np.array([1e-6, 1e-6, 1e-6 / self.period, 1e-6 / self.period])
         for _ in range(iterations):
             mono = self.fd_monodromy(u, scale)
             r = self.period_map(u) - u
             u = u - np.linalg.solve(mono - np.eye(4), r)
-        mono = self.fd_monodromy(u, scale)
+        mono = self.fd_monodromy_median(u, scale)
         residual = np.max(np.abs((self.period_map(u) - u) / scale))
         return u, mono, residual
 
