@@ -32,6 +32,29 @@ def test_atlas_config_is_the_fig13_grid_and_every_point_builds():
         assert used[0] == pytest.approx(a) and np.all(np.diff(used) > 0) and used[-1] < 90.0
 
 
+def test_segments_tile_the_grid_and_each_builds_from_its_id_alone():
+    """The atlas's segments (24,320) cover every grid point once, runs of at most segment_length
+    along speed on one line; a chunk task's worker builds any of them from its id (SegmentGrid)."""
+    cfg = config.parse_config((ROOT / "configs" / "atlas4d_fig13.toml").read_text(), allow_large=True)
+    segs = sweep.segments(cfg)
+    grid = sweep.SegmentGrid(cfg.data, cfg.axes, cfg.continued_axis)
+    assert [s.id for s in segs] == list(range(len(grid)))
+    seen = np.zeros(tuple(len(v) for v in cfg.axes.values()), int)
+    for seg in segs:
+        seen[tuple(seg.index.T)] += 1
+        assert len(seg) <= cfg.data["numerics"]["segment_length"]
+        assert np.array_equal(seg.values, cfg.axes["speed"][seg.index[:, 0]])
+        assert (seg.index[:, 1:] == seg.index[0, 1:]).all()
+        assert all(seg.line[n] == cfg.axes[n][j] for n, j in zip(list(cfg.axes)[1:], seg.index[0, 1:]))
+    assert (seen == 1).all()
+    for i in (0, 75, 76, 12345, len(segs) - 1):
+        built = grid[i]
+        assert (built.id, built.line) == (segs[i].id, segs[i].line)
+        assert np.array_equal(built.index, segs[i].index) and np.array_equal(built.values, segs[i].values)
+    with pytest.raises(IndexError):
+        grid[len(segs)]
+
+
 def _segments(lengths):
     return [sweep.Segment(i, np.zeros((n, 1), int), {}, "speed", np.zeros(n)) for i, n in enumerate(lengths)]
 

@@ -117,7 +117,7 @@ def _measure_runs(cfg, work_dir, worker_counts, chunk_sizes, repeats):
 
 def task_costs(cfg, n_workers=2):
     """What one task of the default plan carries and costs to (de)serialize in the driver: the
-    pickled arguments (config + chunk of segments) and result of the median chunk, the result
+    pickled arguments (config + the chunk's segment ids) and result of the median chunk, the result
     measured on one segment solved here and scaled by points."""
     import pickle
     import statistics
@@ -128,7 +128,7 @@ def task_costs(cfg, n_workers=2):
     chunk = sorted(chunks, key=lambda c: sum(len(s) for s in c))[len(chunks) // 2]
     n = sum(len(s) for s in chunk)
     t0 = time.perf_counter()
-    args = pickle.dumps((cfg.data, cfg.axes, cfg.continued_axis, chunk), protocol=5)
+    args = pickle.dumps((cfg.data, cfg.axes, cfg.continued_axis, tuple(s.id for s in chunk)), protocol=5)
     dumps_s = time.perf_counter() - t0
     t0 = time.perf_counter()
     pickle.loads(args)

@@ -22,7 +22,7 @@ def _solve(args):
     from pipeline import sweep
 
     start = time.process_time()
-    sweep.compute_chunk(*args)
+    sweep.compute_segments(*args)
     return time.process_time() - start
 
 
@@ -30,7 +30,7 @@ def _timed(pool, cfg, chunks):
     """(wall, CPU seconds of the pool's processes, hypervisor steal or None) of solving every
     chunk, the next chunk going to whichever process is free."""
     steal, start = steal_seconds(), time.perf_counter()
-    cpu = sum(pool.imap_unordered(_solve, [(cfg.data, cfg.axes, cfg.continued_axis, c) for c in chunks], chunksize=1))
+    cpu = sum(pool.imap_unordered(_solve, [(cfg.data, cfg.axes, cfg.continued_axis, [s.id for s in c]) for c in chunks], chunksize=1))
     return time.perf_counter() - start, cpu, since(steal, steal_seconds())
 
 

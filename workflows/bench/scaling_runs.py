@@ -71,7 +71,7 @@ def task_summary(records, n_workers, phase_start_epoch, phase_seconds):
     tasks, refining = [], []
     for rec in records:
         key = str(rec.get("key", "")).lstrip("('")
-        kind = tasks if key.startswith("compute_chunk") else refining if key.startswith("refine_brackets") else None
+        kind = tasks if key.startswith("compute_segments") else refining if key.startswith("refine_brackets") else None
         for ss in rec.get("startstops", ()) if kind is not None else ():
             if ss.get("action") == "compute":
                 kind.append((rec["worker"], ss["start"], ss["stop"]))
