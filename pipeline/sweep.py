@@ -10,7 +10,6 @@ earlier parts and then each chunk as it arrives; the cube is written (atomically
 import contextlib
 import functools
 import gc
-import itertools
 import json
 import logging
 import os
@@ -59,6 +58,7 @@ class SegmentGrid:
     def __init__(self, data, axes, along):
         self.axes, self.along = axes, along
         self.names = list(axes)
+        self.at = self.names.index(along)
         self.others = [n for n in self.names if n != along]
         self.shape = tuple(len(axes[n]) for n in self.others)
         self.fixed = compute.fixed_values(data)
@@ -93,7 +93,7 @@ class SegmentGrid:
     def _segment(self, line_no, k, line, row):
         steps = np.arange(k * self.length, min((k + 1) * self.length, len(self.values)))
         index = np.repeat(row[None], len(steps), axis=0)
-        index[:, self.names.index(self.along)] = steps
+        index[:, self.at] = steps
         return Segment(line_no * self.per_line + k, index, line, self.along, self.values[steps])
 
 
