@@ -7,6 +7,8 @@ applies it.
 import contextlib
 import errno
 import json
+import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -321,12 +323,12 @@ def _part_paths(parts_dir):
 
 @contextlib.contextmanager
 def _open_part(path):
-    """np.load of a part file; one that cannot be read (truncated, not an npz, a key missing)
-    is a CubeError naming it."""
+    """np.load of a part file; one that cannot be read (truncated, not an npz, a key missing, a
+    damaged zip: CRC or directory errors, a broken deflate stream) is a CubeError naming it."""
     try:
         with np.load(path, allow_pickle=False) as f:
             yield f
-    except (OSError, ValueError, KeyError) as exc:
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
         raise CubeError(f"{path}: unreadable part file ({exc}); delete it to recompute its points") from None
 
 

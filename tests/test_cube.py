@@ -257,6 +257,20 @@ def test_unreadable_part_is_a_cube_error(tmp_path):
         cube.read_parts(tmp_path)
 
 
+@pytest.mark.parametrize("where", [1 / 3, 1 / 2, -30])
+def test_a_damaged_part_is_a_cube_error(tmp_path, where):
+    """A byte flipped inside a member (CRC error) or in the zip directory (names differ) was a
+    BadZipFile traceback on `run --resume`; it is the one line naming the part."""
+    cube.write_part(tmp_path, "c000", np.array([[0, 0, 0, 0], [1, 0, 0, 0]]),
+                    {"max_abs_multiplier": np.array([0.5, 0.7])}, {"config_hash": "x"})
+    path = tmp_path / "c000.npz"
+    data = bytearray(path.read_bytes())
+    data[int(where * len(data)) if where > 0 else where] ^= 0xFF
+    path.write_bytes(bytes(data))
+    with pytest.raises(cube.CubeError, match="c000.npz: unreadable part file.*delete it"):
+        cube.read_parts(tmp_path)
+
+
 # ----------------------------------------------------------------------------- CF rules
 # The rules the CF checker (cfchecker 4.1) flagged on a demo cube, tested directly: it needs the
 # udunits2 C library, so it runs only where it is installed (test_cf_checkers_find_no_problem).
