@@ -442,6 +442,10 @@ def main(argv=None):
 
 
 def _dispatch(args, interrupts):
+    from rotorkernels import models
+
+    if models.PLUGIN_ERRORS:
+        return _error(args, "; ".join(models.PLUGIN_ERRORS))
     try:
         return args.func(args)
     except Exception as exc:

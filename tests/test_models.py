@@ -293,3 +293,23 @@ def test_a_scene_compiles_nothing_after_its_warmup_from_an_empty_cache(tmp_path)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split("\n")[:3] == ["sweep []", "backbone []", "attractor []"], proc.stdout
     assert (tmp_path / "numba").is_dir()     # the empty cache was the one used
+
+
+@pytest.mark.parametrize("plugins, why", [("no_such_model_module", "ModuleNotFoundError"),
+                                          ("broken_model_module", "ZeroDivisionError")])
+def test_a_model_module_that_cannot_load_is_one_line_and_version_still_works(tmp_path, plugins, why):
+    """A typo in $ROTORSWEEP_MODELS (or a module that fails on import) gave a traceback for every
+    command, --version included."""
+    (tmp_path / "broken_model_module.py").write_text("1 / 0\n")
+    env = {**os.environ, "ROTORSWEEP_MODELS": plugins,
+           "PYTHONPATH": os.pathsep.join([str(tmp_path), str(ROOT), os.environ.get("PYTHONPATH", "")])}
+
+    def cli(*args):
+        return subprocess.run([sys.executable, "-m", "pipeline.cli", *args], env=env, capture_output=True,
+                              text=True, timeout=300, cwd=ROOT)
+    version = cli("--version")
+    assert version.returncode == 0 and "rotorsweep" in version.stdout
+    info = cli("info", str(tmp_path / "x.nc"))
+    assert info.returncode == 2 and "Traceback" not in info.stderr
+    [line] = info.stderr.strip().splitlines()
+    assert line.startswith(f"rotorsweep info: error: $ROTORSWEEP_MODELS: model module {plugins!r}: {why}: ")

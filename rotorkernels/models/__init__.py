@@ -16,7 +16,7 @@ import importlib.util
 import os
 import sys
 
-from rotorkernels import plugin_modules
+from rotorkernels import PLUGINS_VARIABLE, plugin_modules
 from rotorkernels.models import (asymmetric5, damped_mathieu, duffing, jeffcott_clearance, linear_oscillator,
                                  rigid_preloaded, symmetric4)
 from rotorkernels.models.spec import Built, ModelSpec, Observable, Parameter  # noqa: F401 (API)
@@ -50,7 +50,8 @@ def get(name):
     try:
         return REGISTRY[name]
     except KeyError:
-        raise ModelError(f"unknown model {name!r}; registered: {', '.join(REGISTRY)}") from None
+        left_out = "".join(f" ({e})" for e in PLUGIN_ERRORS)
+        raise ModelError(f"unknown model {name!r}; registered: {', '.join(REGISTRY)}{left_out}") from None
 
 
 def kernel_tag(spec):
@@ -87,8 +88,20 @@ def _load_dispatch():
     return module
 
 
+def _register_plugins():
+    """Register the models of $ROTORSWEEP_MODELS; one that cannot be imported or registered is
+    left out and its one-line reason kept in PLUGIN_ERRORS (the command line refuses to run with
+    it, but `--version` and `--help` still work and nothing prints a traceback)."""
+    errors = []
+    for name in plugin_modules():
+        try:
+            register(importlib.import_module(name).SPEC)
+        except Exception as exc:      # a typo, a broken module, a clash: the user's to fix
+            errors.append(f"${PLUGINS_VARIABLE}: model module {name!r}: {type(exc).__name__}: {exc}")
+    return tuple(errors)
+
+
 for _module in BUILTIN:
     register(_module.SPEC)
-for _name in plugin_modules():
-    register(importlib.import_module(_name).SPEC)
+PLUGIN_ERRORS = _register_plugins()
 dispatch = _load_dispatch()
