@@ -501,15 +501,33 @@ def parse_config(text, path=None, allow_large=False):
     return Config(None if path is None else str(path), text, data, axes)
 
 
+# A scene is a few kB; a larger file is not one (a device such as /dev/zero would be read until
+# memory runs out).
+MAX_CONFIG_BYTES = 1 << 20
+
+
 def load_config(path, allow_large=False):
+    return parse_config(_config_text(path), path=path, allow_large=allow_large)
+
+
+def _config_text(path):
+    """The text of a config file: a regular file of at most MAX_CONFIG_BYTES, UTF-8."""
     p = Path(path)
     try:
-        text = p.read_text()
-    except FileNotFoundError:
-        raise ConfigError(f"{path}: no such config file") from None
-    except (IsADirectoryError, UnicodeDecodeError) as exc:
+        if not p.exists():
+            raise ConfigError(f"{path}: no such config file")
+        if not p.is_file():
+            raise ConfigError(f"{path}: not a regular file (a config is a TOML text file)")
+        with open(p, "rb") as fh:
+            data = fh.read(MAX_CONFIG_BYTES + 1)
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot be read ({exc.strerror or exc.__class__.__name__})") from None
+    if len(data) > MAX_CONFIG_BYTES:
+        raise ConfigError(f"{path}: larger than {MAX_CONFIG_BYTES} bytes; not a scene config")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
         raise ConfigError(f"{path}: cannot read as a TOML text file ({exc.__class__.__name__})") from None
-    return parse_config(text, path=path, allow_large=allow_large)
 
 
 def check_point(point, data):

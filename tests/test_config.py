@@ -178,3 +178,21 @@ def test_cli_subprocess_bad_config_exits_2_without_traceback(tmp_path):
     proc = subprocess.run(CLI + ["run", str(path), "-o", str(tmp_path / "x.nc")], capture_output=True,
                           text=True, timeout=120)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr and str(path) in proc.stderr
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda d: "/dev/zero", "not a regular file"),
+    (lambda d: d, "not a regular file"),
+    (lambda d: d / "missing.toml", "no such config file"),
+    (lambda d: _written(d / "big.toml", b"# " + b"x" * config.MAX_CONFIG_BYTES), "larger than"),
+    (lambda d: _written(d / "latin1.toml", b"name = '\xe9'"), "cannot read as a TOML text file"),
+])
+def test_config_files_are_read_with_a_size_cap_and_only_when_regular(tmp_path, make, message):
+    """/dev/zero as a config was read until memory ran out."""
+    with pytest.raises(config.ConfigError, match=message):
+        config.load_config(make(tmp_path))
+
+
+def _written(path, data):
+    path.write_bytes(data)
+    return path
