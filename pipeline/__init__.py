@@ -13,15 +13,15 @@ The Python API mirrors the command line:
 import json
 
 
-def _config(cfg, allow_large=False):
+def _config(cfg, allow_large=False, whole_grid=True):
     from pipeline import config as config_mod
 
     if isinstance(cfg, config_mod.Config):
         return cfg
     if cfg is None:
         return config_mod.parse_config(config_mod.DEFAULT_CONFIG_TOML, path="<default scene>",
-                                       allow_large=allow_large)
-    return config_mod.load_config(cfg, allow_large=allow_large)
+                                       allow_large=allow_large, whole_grid=whole_grid)
+    return config_mod.load_config(cfg, allow_large=allow_large, whole_grid=whole_grid)
 
 
 def _dataset(cube_or_path):
@@ -42,7 +42,7 @@ def continue_branches(config=None, output=None, **kwargs):
     result's path. kwargs: workers, scheduler, overwrite, stream."""
     from pipeline import continuation
 
-    cfg = _config(config)
+    cfg = _config(config, whole_grid=False)
     return continuation.run(cfg, output or f"out/{cfg.data['scene']['name']}_continuation.nc", **kwargs)
 
 
@@ -105,7 +105,7 @@ def backbones(config=None, output=None, **kwargs):
     manifold and continuation; returns the result's path."""
     from pipeline import backbone
 
-    cfg = _config(config)
+    cfg = _config(config, whole_grid=False)
     return backbone.run(cfg, output or f"out/{cfg.data['scene']['name']}_backbone.nc", **kwargs)
 
 
@@ -116,7 +116,7 @@ def point(speed=None, clearance=None, contact_angle=None, preload=None, config=N
     `**values`), else the scene's fixed values."""
     from pipeline import compute
 
-    cfg = _config(config)
+    cfg = _config(config, whole_grid=False)
     given = {"speed": speed, "clearance": clearance, "contact_angle": contact_angle, "preload": preload, **values}
     pt = compute.point_values(cfg, given)
     # the periodic orbit only, even where the scene also asks for attractors (`point --attractor`)

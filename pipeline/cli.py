@@ -59,7 +59,7 @@ def cmd_run(args):
 def _run_result(args, module, suffix, label):
     """`continue` / `backbone`: module.run(config) into out/<scene>_<suffix>.nc (or -o), then
     the report when asked."""
-    cfg = pipeline._config(args.config)
+    cfg = pipeline._config(args.config, whole_grid=False)
     out = args.output or f"out/{cfg.data['scene']['name']}_{suffix}.nc"
     path = module.run(cfg, out, workers=args.workers, scheduler=args.scheduler, overwrite=args.overwrite,
                       stream=None if args.quiet else sys.stderr)
@@ -87,7 +87,7 @@ def _attractor_row(args):
     trajectory it also returns is not needed here, so it is kept short)."""
     from pipeline import compute
 
-    cfg = pipeline._config(args.config)
+    cfg = pipeline._config(args.config, whole_grid=False)
     pt = compute.point_values(cfg, _given(args))
     return compute.point_detail(cfg.data, pt, periods=16, steps_per_period=8)["row"]
 
@@ -118,7 +118,7 @@ def cmd_modes(args):
     if args.campbell:
         start, stop, num = args.campbell.split(":")
         speeds = np.linspace(float(start), float(stop), int(num))
-    print(modes.command(pipeline._config(args.config), _at(args.at), speeds, args.output))
+    print(modes.command(pipeline._config(args.config, whole_grid=False), _at(args.at), speeds, args.output))
     return 0
 
 

@@ -468,8 +468,10 @@ def _check_grid_size(sweep, axis_names, data, allow_large, errors, label):
                           grid_points=n if may_confirm and not errors else None)
 
 
-def parse_config(text, path=None, allow_large=False):
-    """Validate a TOML scene; returns a Config or raises ConfigError listing every problem."""
+def parse_config(text, path=None, allow_large=False, whole_grid=True):
+    """Validate a TOML scene; returns a Config or raises ConfigError listing every problem.
+    whole_grid: the command computes every grid point (`run`), so the grid's size is checked;
+    `point`, `continue`, `backbone` and `modes` do not, and a large grid is no reason to refuse them."""
     label = str(path) if path is not None else "<config>"
     try:
         raw = tomllib.loads(text)
@@ -488,7 +490,7 @@ def parse_config(text, path=None, allow_large=False):
             errors.append(f"{section}: required section missing")
     data = {name: _validate_section(name, raw.get(name, {}), table, errors) for name, table in tables.items()}
     sweep = raw.get("sweep", {})
-    if isinstance(sweep, dict):
+    if isinstance(sweep, dict) and whole_grid:
         _check_grid_size(sweep, axis_keys, data, allow_large, errors, label)
     axes = _sweep_axes(sweep, axis_keys, errors) if spec else {}
     data["sweep"] = {name: [float(x) for x in values] for name, values in axes.items()}
@@ -506,8 +508,8 @@ def parse_config(text, path=None, allow_large=False):
 MAX_CONFIG_BYTES = 1 << 20
 
 
-def load_config(path, allow_large=False):
-    return parse_config(_config_text(path), path=path, allow_large=allow_large)
+def load_config(path, allow_large=False, whole_grid=True):
+    return parse_config(_config_text(path), path=path, allow_large=allow_large, whole_grid=whole_grid)
 
 
 def _config_text(path):

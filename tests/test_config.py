@@ -1,5 +1,6 @@
 """Config validation: shipped scenes parse; every malformed config is rejected with its key and
 what is allowed, all problems at once; the scene hash ignores formatting."""
+import json
 import random
 import subprocess
 import sys
@@ -196,3 +197,18 @@ def test_config_files_are_read_with_a_size_cap_and_only_when_regular(tmp_path, m
 def _written(path, data):
     path.write_bytes(data)
     return path
+
+
+def test_a_large_grid_refuses_only_the_command_that_computes_it(tmp_path):
+    """`point`, `continue`, `backbone` and `modes` said 'pass --yes' (which they do not accept) and
+    refused to work on a scene whose sweep grid is large; only `run` computes the grid."""
+    huge = edit("clearance = [3.8e-6, 7.6e-6]", "clearance = {start = 1e-6, stop = 2e-5, num = 30000}")
+    with pytest.raises(config.ConfigError, match="--yes"):
+        config.parse_config(huge)
+    assert len(config.parse_config(huge, whole_grid=False).axes["clearance"]) == 30000
+    path = tmp_path / "huge.toml"
+    path.write_text(huge)
+    done = subprocess.run(CLI + ["point", "--config", str(path), "--speed", "100", "--clearance", "7.6e-6", "--json"],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["status"] == "converged"
