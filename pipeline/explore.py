@@ -17,7 +17,7 @@ import hvplot.xarray  # noqa: F401
 import numpy as np
 import xarray as xr
 
-from pipeline import schema
+from pipeline import result_kinds, schema
 from pipeline.report.cubeinfo import (branch_observables, branch_values, continued_axis,
                                       default_observable, has_attractor, other_axes)
 from pipeline.report.figures.campbell import campbell_points
@@ -112,33 +112,57 @@ def multipliers(ds, where=None, **kwargs):
     return circle * pts
 
 
+# the accessor's figures of each result kind (pipeline.result_kinds); a kind not here has none yet
+FIGURES = {result_kinds.SWEEP: {f.__name__: f for f in (max_multiplier, stability_map, branches, response, campbell,
+                                                        bifurcation, lle, multipliers)}}
+
+
 @xr.register_dataset_accessor("rotorsweep")
 class CubeAccessor:
-    """ds.rotorsweep.<figure>(...): the functions of pipeline.explore on this cube."""
+    """ds.rotorsweep.<figure>(...): the functions of pipeline.explore on this result, where its
+    kind has them (pipeline.result_kinds: a sweep cube has every one; a figure that does not
+    apply says so); ds.rotorsweep.kind and describe() work on every kind."""
 
     def __init__(self, ds):
         self._ds = ds
 
+    @property
+    def kind(self):
+        """The result's kind: "sweep", "continuation", "backbone"."""
+        return result_kinds.kind_of(self._ds).name
+
+    def describe(self):
+        """What the result holds, as `rotorsweep info` prints it."""
+        return result_kinds.kind_of(self._ds).describe(self._ds)
+
+    def _draw(self, figure, *args, **kwargs):
+        kind = result_kinds.kind_of(self._ds)
+        if figure not in FIGURES.get(kind.name, {}):
+            applies = " or ".join(result_kinds.KINDS[k].label() for k, figs in FIGURES.items() if figure in figs)
+            raise ValueError(f"ds.rotorsweep.{figure}() draws {applies}, not {kind.label()}; `rotorsweep report` "
+                             "draws its figures, ds.rotorsweep.describe() says what it holds")
+        return FIGURES[kind.name][figure](self._ds, *args, **kwargs)
+
     def max_multiplier(self, **kwargs):
-        return max_multiplier(self._ds, **kwargs)
+        return self._draw("max_multiplier", **kwargs)
 
     def stability_map(self, **kwargs):
-        return stability_map(self._ds, **kwargs)
+        return self._draw("stability_map", **kwargs)
 
     def branches(self, observable=None, **kwargs):
-        return branches(self._ds, observable, **kwargs)
+        return self._draw("branches", observable, **kwargs)
 
     def response(self, observable=None, **kwargs):
-        return response(self._ds, observable, **kwargs)
+        return self._draw("response", observable, **kwargs)
 
     def campbell(self, **kwargs):
-        return campbell(self._ds, **kwargs)
+        return self._draw("campbell", **kwargs)
 
     def bifurcation(self, variable="poincare_x", **kwargs):
-        return bifurcation(self._ds, variable, **kwargs)
+        return self._draw("bifurcation", variable, **kwargs)
 
     def lle(self, **kwargs):
-        return lle(self._ds, **kwargs)
+        return self._draw("lle", **kwargs)
 
     def multipliers(self, where=None, **kwargs):
-        return multipliers(self._ds, where, **kwargs)
+        return self._draw("multipliers", where, **kwargs)

@@ -118,14 +118,14 @@ def test_a_chunk_refines_the_stability_changes_between_its_own_points_only(tmp_p
     segs = sweep.segments(cfg)
     ids, index, results, inside = sweep.compute_chunk(cfg.data, cfg.axes, "speed", segs)
     assert [(tuple(line), i) for line, i, _ in inside] == [((0,), 3)]
-    ds = cube.assemble(cfg.axes, sweep._fixed_coords(cfg), [(ids, index, results, None)],
-                       sweep._provenance(cfg), n_multipliers=4)
+    ds = cube.assemble(cfg.axes, sweep.fixed_coords(cfg), [(ids, index, results, None)],
+                       sweep.provenance(cfg), n_multipliers=4)
     (row,) = boundaries.boundary_rows(cfg.data, ds)
     assert inside[0][2].items() <= row.items()
     assert sweep.compute_chunk(cfg.data, cfg.axes, "speed", segs[:1])[3] == []
     assert sweep.compute_chunk(cfg.data, cfg.axes, "speed", segs[1:])[3] == []
     cube.write_part(tmp_path, "seg000000", index, results, {"config_hash": "h", "segments": ids, "boundaries": inside})
-    assert sweep._earlier_parts(tmp_path, "h") == (set(ids), boundaries.keyed(inside))
+    assert sweep.earlier_parts(tmp_path, "h") == (set(ids), boundaries.keyed(inside))
 
 
 def test_tracker_finds_each_stability_change_once_in_any_chunk_order():
