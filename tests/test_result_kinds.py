@@ -3,6 +3,7 @@ of each kind (sweep cube, continuation, backbone) opened by open_result, `rotors
 `query` and `report` (each opening the file once) and the xarray accessor; open_cube refuses the
 other kinds by name; each file's history names the command that wrote it."""
 import holoviews as hv
+import numpy as np
 import pytest
 import xarray as xr
 
@@ -93,11 +94,32 @@ def test_report_options_apply_to_their_kind_only(paths, tmp_path):
         rotorsweep.make_report(paths[result_kinds.SWEEP], tmp_path / "b", over=paths[result_kinds.CONTINUATION])
 
 
+FIGURE = {result_kinds.SWEEP: "max_multiplier", result_kinds.CONTINUATION: "branch_diagram",
+          result_kinds.BACKBONE: "backbones"}
+
+
 @pytest.mark.parametrize("kind", KINDS)
-def test_the_accessor_draws_a_cube_and_says_why_not_for_the_others(paths, kind):
+def test_the_accessor_draws_each_kind_and_refuses_the_figures_of_another(paths, kind):
     ds, _ = rotorsweep.open_result(paths[kind])
-    if kind == result_kinds.SWEEP:
-        assert isinstance(ds.rotorsweep.max_multiplier(), hv.core.Dimensioned)
-        return
-    with pytest.raises(ValueError, match=f"max_multiplier\\(\\) draws a sweep cube .*, not a {kind} result"):
-        ds.rotorsweep.max_multiplier()
+    plot = getattr(ds.rotorsweep, FIGURE[kind])()
+    assert isinstance(plot, hv.core.Dimensioned)
+    hv.renderer("bokeh").get_plot(plot)
+    for other in KINDS:
+        if other != kind:
+            what = result_kinds.KINDS[kind].what
+            with pytest.raises(ValueError, match=f"{FIGURE[other]}\\(\\) draws {result_kinds.KINDS[other].what} "
+                                                 f".*, not {what} "):
+                getattr(ds.rotorsweep, FIGURE[other])()
+
+
+def test_branch_diagram_draws_stable_solid_unstable_dashed_and_backbones_both_methods(paths):
+    ds, _ = rotorsweep.open_result(paths[result_kinds.CONTINUATION])
+    plot = ds.rotorsweep.branch_diagram()
+    stable, unstable = plot.get(0), plot.get(1)
+    assert unstable.last.opts.get("style").kwargs["line_dash"] == "dashed"
+    for curves, flag in ((stable, 1), (unstable, 0)):      # each point drawn once, in its own style
+        assert sum(np.isfinite(c.dimension_values(1)).sum() for c in curves) == int((ds["stable"] == flag).sum()) > 0
+    bb, _ = rotorsweep.open_result(paths[result_kinds.BACKBONE])
+    continued, manifold = bb.rotorsweep.backbones().get(0), bb.rotorsweep.backbones().get(1)
+    np.testing.assert_array_equal(continued.last.dimension_values(1), bb["frequency_continuation"].values.ravel())
+    np.testing.assert_array_equal(manifold.last.dimension_values(1), bb["frequency_manifold"].values.ravel())
