@@ -169,9 +169,9 @@ def _plain(record):
 
 def mode_record(spec, values, system, modes, k, grid, pl, opts):
     """Manifold and continuation backbones of mode k on the amplitude grid."""
-    bb = _continued(spec, values, modes, k, grid, pl, opts) if pl.continuation else None
+    bb = continued_backbone(spec, values, modes, k, grid, pl, opts) if pl.continuation else None
     master = bb.coordinate if bb is not None and bb.status != "start_failed" else None
-    f_cont = _on_grid(bb, grid) if bb is not None else np.full(grid.size, np.nan)
+    f_cont = frequency_on_grid(bb, grid) if bb is not None else np.full(grid.size, np.nan)
     record = {"linear_frequency": modes[k].frequency, "label": modes[k].label, "whirl": modes[k].whirl,
               "frequency_continuation": f_cont, **_continuation_fields(bb)}
     try:
@@ -194,7 +194,7 @@ def mode_record(spec, values, system, modes, k, grid, pl, opts):
     }
 
 
-def _continued(spec, values, modes, k, grid, pl, opts):
+def continued_backbone(spec, values, modes, k, grid, pl, opts):
     """The continuation backbone of mode k, reaching a little beyond the grid (its amplitude is q_j
     at the turning point, a little above the first harmonic), from half the grid's first value."""
     z0 = spec.build(values).derived["axial_approach"]
@@ -233,7 +233,7 @@ def _index_in(spec, values, subspace, frequency):
     return int(np.argmin(np.abs(omegas / (2 * np.pi * built.period) - frequency)))
 
 
-def _on_grid(bb, grid):
+def frequency_on_grid(bb, grid):
     """The continued frequencies at the grid amplitudes (cubic spline in A^2; NaN outside the
     amplitudes reached or with fewer than 4 points)."""
     a, f = bb.harmonic_amplitude, bb.frequency

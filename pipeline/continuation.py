@@ -121,7 +121,7 @@ def _within(value, par):
     return above and below
 
 
-def _family(data, pl, where):
+def line_family(data, pl, where):
     """(arclength Family along the parameter at the line `where`, lambda -> Built)."""
     build = compute.builder(data)
     values = {**compute.fixed_values(data), **where}
@@ -136,7 +136,7 @@ def _family(data, pl, where):
 def continue_line(data, where):
     """The branches of one line (a Dask task): a list of dicts of numpy arrays (branch_record)."""
     pl = plan(data)
-    family, built = _family(data, pl, where)
+    family, built = line_family(data, pl, where)
     model = family.model
     sol = solve_orbit(model, family.params(pl.start), family.opts, periods=pl.periods,
                       **compute.newton_settings(model, data["numerics"]))

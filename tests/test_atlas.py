@@ -97,13 +97,13 @@ def test_boundary_rows_are_the_same_for_any_map_and_rows_refined_during_the_swee
         return [boundaries.refine_brackets(data, axis, task) for task in tasks[::-1]][::-1]
     serial = boundaries.boundary_rows(data, plain)
     assert serial and boundaries.boundary_rows(data, plain, backwards) == serial
-    first = boundaries._cube_brackets(plain, "speed")[0]
+    first = boundaries.cube_brackets(plain, "speed")[0]
     done = {(first[1].line, first[1].i): boundaries.refine_brackets(data, "speed", [first])[0]}
     mapped = []
 
     def recording(data, axis, tasks):
         mapped.extend(b for task in tasks for _, b in task)
-        return boundaries._serial(data, axis, tasks)
+        return boundaries.refine_serially(data, axis, tasks)
     assert boundaries.boundary_rows(data, plain, recording, done) == serial
     assert (first[1].line, first[1].i) not in {(b.line, b.i) for b in mapped}
     assert len(mapped) == len(serial) - 1
