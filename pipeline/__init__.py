@@ -7,13 +7,16 @@ The Python API mirrors the command line:
     ds = pipeline.open_cube(path)                                  # an xarray.Dataset
     pipeline.unstable_intervals(ds)                                # rotorsweep query --unstable
     pipeline.continue_branches("configs/bai2006_fold.toml", "out/fold.nc")   # rotorsweep continue
+    ds, kind = pipeline.open_result(path)                          # a result of any kind (info, query)
     pipeline.make_report(ds, "out/demo_report")                    # rotorsweep report
     pipeline.point(speed=100.0, clearance=7.6e-6)                  # rotorsweep point
 """
 import json
 
 
-def _config(cfg, allow_large=False, whole_grid=True):
+def as_config(cfg, allow_large=False, whole_grid=True):
+    """A validated Config from a path, a Config (as it is) or None (the embedded demo scene).
+    whole_grid: the caller computes the whole sweep grid (`run`), whose size is then checked."""
     from pipeline import config as config_mod
 
     if isinstance(cfg, config_mod.Config):
@@ -24,8 +27,12 @@ def _config(cfg, allow_large=False, whole_grid=True):
     return config_mod.load_config(cfg, allow_large=allow_large, whole_grid=whole_grid)
 
 
+def _is_path(cube_or_path):
+    return isinstance(cube_or_path, (str, bytes)) or hasattr(cube_or_path, "__fspath__")
+
+
 def _dataset(cube_or_path):
-    return open_cube(cube_or_path) if isinstance(cube_or_path, (str, bytes)) or hasattr(cube_or_path, "__fspath__") else cube_or_path
+    return open_cube(cube_or_path) if _is_path(cube_or_path) else cube_or_path
 
 
 def run(config=None, output=None, *, allow_large=False, **kwargs):
@@ -33,7 +40,7 @@ def run(config=None, output=None, *, allow_large=False, **kwargs):
     kwargs: workers, scheduler, resume, overwrite, chunk_points, progress."""
     from pipeline import sweep
 
-    cfg = _config(config, allow_large)
+    cfg = as_config(config, allow_large)
     return sweep.run(cfg, output or f"out/{cfg.data['scene']['name']}.nc", **kwargs)
 
 
@@ -42,7 +49,7 @@ def continue_branches(config=None, output=None, **kwargs):
     result's path. kwargs: workers, scheduler, overwrite, stream."""
     from pipeline import continuation
 
-    cfg = _config(config, whole_grid=False)
+    cfg = as_config(config, whole_grid=False)
     return continuation.run(cfg, output or f"out/{cfg.data['scene']['name']}_continuation.nc", **kwargs)
 
 
@@ -58,44 +65,41 @@ def unstable_intervals(cube_or_path):
     return query.unstable_intervals(_dataset(cube_or_path))
 
 
-def make_report(cube_or_path, out_dir, points=None, overwrite=False, over=None, stream=None):
-    """HTML + PNG report of a cube (rotorsweep report); returns the written paths.
-    points: grid points to show in detail (orbit, Poincare section, spectrum, table), each a
-    dict {axis: value} or "speed=36 clearance=19e-6" (nearest grid point). A directory holding
-    the report of another cube is refused unless overwrite; the report is built next to it and
-    then takes its place, so no file of the earlier report is left. over: for a backbone result,
-    a continuation result (path) of a forced response to draw the backbones over. stream: where a
-    sweep cube's report writes its phase lines (what it draws where, when the HTML page and the
-    PNGs are written; None: nowhere)."""
-    from pipeline import backbone, continuation, fileio, report, results, sweep
+def open_result(path):
+    """(dataset, its result kind) of any result file: a sweep cube, a continuation or a backbone
+    result (pipeline.result_kinds), opened once into memory."""
+    from pipeline import result_kinds
 
-    is_path = isinstance(cube_or_path, (str, bytes)) or hasattr(cube_or_path, "__fspath__")
-    if is_path and results.is_result_file(cube_or_path, continuation.RESULT_KIND):
-        ds = continuation.open_result(cube_or_path)
-    elif is_path and backbone.is_backbone_file(cube_or_path):
-        ds = backbone.open_result(cube_or_path)
+    return result_kinds.open_result(path)
+
+
+def make_report(cube_or_path, out_dir, points=None, overwrite=False, over=None, stream=None):
+    """HTML + PNG report of a result (rotorsweep report); returns the written paths. The result:
+    a path, or an opened dataset of any kind (pipeline.result_kinds).
+    points: grid points of a sweep cube to show in detail (orbit, Poincare section, spectrum,
+    table), each a dict {axis: value} or "speed=36 clearance=19e-6" (nearest grid point). A
+    directory holding the report of another cube is refused unless overwrite; the report is built
+    next to it and then takes its place, so no file of the earlier report is left. over: for a
+    backbone result, a continuation result (path) of a forced response to draw the backbones
+    over. stream: where a sweep cube's report writes its phase lines (what it draws where, when
+    the HTML page and the PNGs are written; None: nowhere)."""
+    from pipeline import fileio, result_kinds, sweep
+
+    if _is_path(cube_or_path):
+        ds, kind = result_kinds.open_result(cube_or_path)
     else:
-        ds = _dataset(cube_or_path)
-    identity = fileio.report_identity(ds, None if ds is cube_or_path else cube_or_path)
+        ds, kind = cube_or_path, result_kinds.kind_of(cube_or_path)
+    identity = fileio.report_identity(ds, cube_or_path if _is_path(cube_or_path) else None)
     fileio.check_report_dir(out_dir, identity, overwrite)
-    kind = ds.attrs.get("result_kind")
-    if points and kind in (continuation.RESULT_KIND, backbone.RESULT_KIND):
-        raise ValueError(f"--point applies to sweep cubes, not to {kind} results")
-    if over is not None and kind != backbone.RESULT_KIND:
-        raise ValueError("--over applies to backbone results (rotorsweep backbone)")
-    forced = continuation.open_result(over) if over is not None else None
-    if forced is not None:
+    result_kinds.refuse_options(kind, {"point": points, "over": over is not None}, "report_options")
+    forced = None
+    if over is not None:
         from pipeline.report import backbone_result
+
+        forced = result_kinds.open_kind(over, result_kinds.CONTINUATION)
         backbone_result.check_forced(ds, forced)
     with fileio.replaced_dir(out_dir) as tmp:
-        if kind == continuation.RESULT_KIND:
-            from pipeline.report import branch_result
-            files = branch_result.make_report(ds, tmp)
-        elif kind == backbone.RESULT_KIND:
-            from pipeline.report import backbone_result
-            files = backbone_result.make_report(ds, tmp, forced=forced)
-        else:
-            files = report.make_report(ds, tmp, points=points, say=sweep.phase_printer(stream))
+        files = kind.report(ds, tmp, points=points, forced=forced, say=sweep.phase_printer(stream))
         (tmp / fileio.REPORT_MARKER).write_text(json.dumps(identity, indent=2) + "\n")
     return fileio.moved(files, tmp, out_dir)
 
@@ -105,7 +109,7 @@ def backbones(config=None, output=None, **kwargs):
     manifold and continuation; returns the result's path."""
     from pipeline import backbone
 
-    cfg = _config(config, whole_grid=False)
+    cfg = as_config(config, whole_grid=False)
     return backbone.run(cfg, output or f"out/{cfg.data['scene']['name']}_backbone.nc", **kwargs)
 
 
@@ -116,7 +120,7 @@ def point(speed=None, clearance=None, contact_angle=None, preload=None, config=N
     `**values`), else the scene's fixed values."""
     from pipeline import compute
 
-    cfg = _config(config, whole_grid=False)
+    cfg = as_config(config, whole_grid=False)
     given = {"speed": speed, "clearance": clearance, "contact_angle": contact_angle, "preload": preload, **values}
     pt = compute.point_values(cfg, given)
     # the periodic orbit only, even where the scene also asks for attractors (`point --attractor`)

@@ -30,13 +30,12 @@ import numpy as np
 import xarray as xr
 from scipy.interpolate import CubicSpline
 
-from pipeline import compute, results
+from pipeline import cluster, compute, result_kinds, results
 from pipeline.config import ConfigError
 from rotorkernels import nnm
 from rotorkernels.continuation import backbone as cb
 from rotorkernels.continuation.arclength import Settings
 
-RESULT_KIND = "backbone"
 AUTO_FRACTION = 0.25        # default amplitude_max: this fraction of the preload's axial approach z0
 PART_RTOL = 0.01            # the manifold and the continuation "part" at this relative difference
 SURFACE_POINTS = 21         # the report's manifold surface: a SURFACE_POINTS^2 grid in (p, r)
@@ -170,9 +169,9 @@ def _plain(record):
 
 def mode_record(spec, values, system, modes, k, grid, pl, opts):
     """Manifold and continuation backbones of mode k on the amplitude grid."""
-    bb = _continued(spec, values, modes, k, grid, pl, opts) if pl.continuation else None
+    bb = continued_backbone(spec, values, modes, k, grid, pl, opts) if pl.continuation else None
     master = bb.coordinate if bb is not None and bb.status != "start_failed" else None
-    f_cont = _on_grid(bb, grid) if bb is not None else np.full(grid.size, np.nan)
+    f_cont = frequency_on_grid(bb, grid) if bb is not None else np.full(grid.size, np.nan)
     record = {"linear_frequency": modes[k].frequency, "label": modes[k].label, "whirl": modes[k].whirl,
               "frequency_continuation": f_cont, **_continuation_fields(bb)}
     try:
@@ -195,7 +194,7 @@ def mode_record(spec, values, system, modes, k, grid, pl, opts):
     }
 
 
-def _continued(spec, values, modes, k, grid, pl, opts):
+def continued_backbone(spec, values, modes, k, grid, pl, opts):
     """The continuation backbone of mode k, reaching a little beyond the grid (its amplitude is q_j
     at the turning point, a little above the first harmonic), from half the grid's first value."""
     z0 = spec.build(values).derived["axial_approach"]
@@ -234,7 +233,7 @@ def _index_in(spec, values, subspace, frequency):
     return int(np.argmin(np.abs(omegas / (2 * np.pi * built.period) - frequency)))
 
 
-def _on_grid(bb, grid):
+def frequency_on_grid(bb, grid):
     """The continued frequencies at the grid amplitudes (cubic spline in A^2; NaN outside the
     amplitudes reached or with fewer than 4 points)."""
     a, f = bb.harmonic_amplitude, bb.frequency
@@ -293,7 +292,8 @@ def surface_record(system, man, amplitude):
 # --- the result ----------------------------------------------------------------------------------
 
 def to_dataset(data, pl, lines, provenance):
-    """The backbone result: lines = [line dicts] in plan order, dims (swept axes..., mode, ...)."""
+    """The backbone result (schema: result_kinds.BACKBONE_VARIABLES): lines = [line dicts] in
+    plan order, dims (swept axes..., mode, ...)."""
     spec = compute.model_of(data)
     system = spec.polynomial(line_values(data, pl.lines[0]))
     shape = tuple(len(data["sweep"][a]) for a in pl.axes)
@@ -318,42 +318,27 @@ def to_dataset(data, pl, lines, provenance):
                 out[i, k, :len(vals)] = vals
         return out.reshape(shape + (n_mode, n_pt))
 
-    lead = pl.axes + ("mode",)
-    hz = {"units": "Hz"}
-    v = {
-        "frequency_manifold": (lead + ("amplitude",), stack("frequency_manifold", (n_amp,)),
-                               {**hz, "long_name": "backbone frequency from the cubic invariant manifold"}),
-        "frequency_continuation": (lead + ("amplitude",), stack("frequency_continuation", (n_amp,)),
-                                   {**hz, "long_name": "backbone frequency from continuation of the full model's orbits"}),
-        "relative_difference": (lead + ("amplitude",), stack("relative_difference", (n_amp,)),
-                                {"units": "1", "long_name": "(continuation - manifold) / continuation frequency"}),
-        "linear_frequency": (lead, stack("linear_frequency"), {**hz, "long_name": "linear natural frequency"}),
-        "kappa": (lead, stack("kappa"), {"units": "rad s-1 m-2", "long_name": "manifold backbone omega = omega_0 + kappa A^2"}),
-        "growth_rate": (lead, stack("sigma"), {"units": "s-1 m-2", "long_name": "reduced oscillator's amplitude growth sigma (0 for a conservative system)"}),
-        "parting_amplitude": (lead, stack("parting_amplitude"), {"units": "m", "long_name": f"amplitude where manifold and continuation part by {PART_RTOL:.0%} (NaN: not on the grid)"}),
-        "invariance_distance": (lead, stack("invariance_distance"), {"units": "m", "long_name": "largest distance from the manifold over 10 periods of the full orbit started on it at amplitude_max"}),
-        "master": (lead, stack("master", dtype="int32"), {"units": "1", "long_name": "index of the master coordinate (see the coordinate coordinate)"}),
-        "mode_label": (lead, stack("label", dtype=object), {"long_name": "mode shape: axial, cylindrical, conical, transverse"}),
-        "mode_whirl": (lead, stack("whirl", dtype=object), {"long_name": "whirl: forward, backward, none"}),
-        "reduced_coefficient": (lead + ("monomial",), stack("reduced", (len(nnm.MONOMIALS),)),
-                                {"long_name": "B_m of the reduced oscillator p'' + sum_m B_m m(p, p') = 0",
-                                 "comment": MIXED_UNITS + "B_m of the monomial p^a r^b is in P^(1-a-b) s^(b-2)"}),
-        "manifold_coefficient": (lead + ("state", "monomial"), stack("coefficients", (len(names), len(nnm.MONOMIALS))),
-                                 {"long_name": "gamma of the manifold: state = gamma @ monomials(p, p')",
-                                  "comment": MIXED_UNITS + "gamma of state component i and the monomial p^a r^b is "
-                                             "in state_units[i] P^-(a+b) s^b"}),
-        "manifold_notes": (lead, stack("notes", dtype=object), {"long_name": "internal resonances met and how they were resolved"}),
-        "continuation_end": (lead, stack("status", dtype=object), {"long_name": "how the continuation backbone ended"}),
-        "continuation_detail": (lead, stack("detail", dtype=object), {"long_name": "how the continuation backbone ended, in words"}),
-        "continuation_rhs": (lead, stack("n_rhs", dtype="int64"), {"units": "1", "long_name": "right-hand side evaluations of the continuation"}),
-        "point_amplitude": (lead + ("point",), points("amplitude"), {"units": "m", "long_name": "continued orbit: first harmonic amplitude of the master"}),
-        "point_amplitude_turning": (lead + ("point",), points("amplitude_turning"), {"units": "m", "long_name": "continued orbit: master displacement at its turning point"}),
-        "point_frequency": (lead + ("point",), points("frequency"), {**hz, "long_name": "continued orbit: frequency"}),
-        "point_energy_drift": (lead + ("point",), points("energy_drift"), {"units": "1", "long_name": "continued orbit: (max - min) / mean of T + V along it"}),
-        "point_unit_circle_error": (lead + ("point",), points("unit_circle_error"), {"units": "1", "long_name": "continued orbit: largest | |multiplier| - 1 | away from +1"}),
-        "axial_approach": (pl.axes, np.array([ln["z0"] for ln in lines]).reshape(shape), {"units": "m", "long_name": "preload's axial approach z0"}),
+    values = {
+        "frequency_manifold": stack("frequency_manifold", (n_amp,)),
+        "frequency_continuation": stack("frequency_continuation", (n_amp,)),
+        "relative_difference": stack("relative_difference", (n_amp,)),
+        "linear_frequency": stack("linear_frequency"), "kappa": stack("kappa"), "growth_rate": stack("sigma"),
+        "parting_amplitude": stack("parting_amplitude"), "invariance_distance": stack("invariance_distance"),
+        "master": stack("master", dtype="int32"), "mode_label": stack("label", dtype=object),
+        "mode_whirl": stack("whirl", dtype=object), "reduced_coefficient": stack("reduced", (len(nnm.MONOMIALS),)),
+        "manifold_coefficient": stack("coefficients", (len(names), len(nnm.MONOMIALS))),
+        "manifold_notes": stack("notes", dtype=object), "continuation_end": stack("status", dtype=object),
+        "continuation_detail": stack("detail", dtype=object), "continuation_rhs": stack("n_rhs", dtype="int64"),
+        "point_amplitude": points("amplitude"), "point_amplitude_turning": points("amplitude_turning"),
+        "point_frequency": points("frequency"), "point_energy_drift": points("energy_drift"),
+        "point_unit_circle_error": points("unit_circle_error"),
+        "axial_approach": np.array([ln["z0"] for ln in lines]).reshape(shape),
     }
-    v.update(_surface_variables(lines, pl, shape, names, units))
+    attrs = {"parting_amplitude": {"long_name": f"amplitude where manifold and continuation part by {PART_RTOL:.0%} "
+                                                "(NaN: not on the grid)"}}
+    surface_values, surface_attrs = _surface_variables(lines, pl, shape, names, units)
+    values.update(surface_values)
+    attrs.update(surface_attrs)
     coords = {a: (a, data["sweep"][a], _axis_attrs(spec, a)) for a in pl.axes}
     coords["mode"] = ("mode", np.array(first["modes"]) + 1, {"units": "1", "long_name": "mode number (1 = lowest linear frequency)"})
     coords["amplitude_grid"] = (pl.axes + ("amplitude",), np.array([ln["grid"] for ln in lines]).reshape(shape + (n_amp,)),
@@ -361,19 +346,15 @@ def to_dataset(data, pl, lines, provenance):
     coords["monomial"] = ("monomial", list(nnm.MONOMIALS), {"long_name": "monomials of the master displacement p and velocity r"})
     coords["state"] = ("state", list(names), {"long_name": "state components (coordinates, then velocities ')"})
     coords["state_units"] = ("state", list(units), {"long_name": "units of each state component"})
-    attrs = {**provenance, "result_kind": RESULT_KIND, "Conventions": "CF-1.10",
-             "coordinates_units": json.dumps(list(system.units))}
-    return xr.Dataset(v, coords=coords, attrs=attrs)
+    global_attrs = {**provenance, "result_kind": result_kinds.BACKBONE, "Conventions": "CF-1.10",
+                    "coordinates_units": json.dumps(list(system.units))}
+    return xr.Dataset(result_kinds.variables(result_kinds.BACKBONE, values, attrs, pl.axes), coords=coords,
+                      attrs=global_attrs)
 
 
 def _axis_attrs(spec, axis):
     par = spec.parameter(axis)
     return {"units": par.unit, "long_name": par.long_name or axis}
-
-
-# CF has one unit per variable; the manifold's coefficients have one per element, stated as a rule.
-MIXED_UNITS = ("no units attribute: the units differ from element to element (SI); P is the unit of "
-               "the mode's master coordinate, state_units[master]; ")
 
 
 def state_units(coordinate_units):
@@ -382,52 +363,42 @@ def state_units(coordinate_units):
 
 
 def _surface_variables(lines, pl, shape, names, units):
+    """(values, run-time attrs) of the report's manifold surface; none where surface_mode has no
+    manifold on any line (an internal resonance)."""
     drawn = [ln["surface"] for ln in lines if ln["surface"] is not None]
-    if not drawn:       # no manifold for surface_mode on any line (an internal resonance): no figure
-        return {}
+    if not drawn:
+        return {}, {}
     s0 = drawn[0]
     n_p, n_t = len(s0["p"]), len(s0["t"])
-    slave = {"units": units[s0["slave"]]}
 
     def stack(key, tail):
         return np.array([ln["surface"][key] if ln["surface"] is not None else np.full(tail, np.nan)
                          for ln in lines]).reshape(shape + tail)
-    return {
-        "surface_value": (pl.axes + ("surface_p", "surface_r"), stack("value", (n_p, n_p)),
-                          {**slave, "long_name": "a slave coordinate on the invariant manifold of surface_mode over (p, r)"}),
-        "surface_p_values": (pl.axes + ("surface_p",), stack("p", (n_p,)), {"units": "m", "long_name": "master displacement p"}),
-        "surface_r_values": (pl.axes + ("surface_r",), stack("r", (n_p,)), {"units": "m s-1", "long_name": "master velocity r"}),
-        "orbit_p": (pl.axes + ("orbit_sample",), stack("orbit_p", (n_t,)), {"units": "m", "long_name": "full orbit from the manifold: master displacement"}),
-        "orbit_r": (pl.axes + ("orbit_sample",), stack("orbit_r", (n_t,)), {"units": "m s-1", "long_name": "full orbit from the manifold: master velocity"}),
-        "orbit_slave": (pl.axes + ("orbit_sample",), stack("orbit_slave", (n_t,)), {**slave, "long_name": "full orbit from the manifold: the slave coordinate"}),
-        "orbit_on_surface": (pl.axes + ("orbit_sample",), stack("orbit_manifold", (n_t,)), {**slave, "long_name": "the manifold's value of the slave at the orbit's (p, r)"}),
-        "orbit_time": (pl.axes + ("orbit_sample",), stack("t", (n_t,)), {"units": "s", "long_name": "time along the full orbit"}),
-        "surface_info": ((), json.dumps({"mode": pl.surface_mode + 1, "master": names[s0["master"]], "slave": names[s0["slave"]],
-                                         "amplitude": s0["amplitude"]}), {"long_name": "surface figure: mode, master, slave, orbit amplitude [m]"}),
-    }
+    values = {"surface_value": stack("value", (n_p, n_p)), "surface_p_values": stack("p", (n_p,)),
+              "surface_r_values": stack("r", (n_p,)), "orbit_p": stack("orbit_p", (n_t,)),
+              "orbit_r": stack("orbit_r", (n_t,)), "orbit_slave": stack("orbit_slave", (n_t,)),
+              "orbit_on_surface": stack("orbit_manifold", (n_t,)), "orbit_time": stack("t", (n_t,)),
+              "surface_info": json.dumps({"mode": pl.surface_mode + 1, "master": names[s0["master"]],
+                                          "slave": names[s0["slave"]], "amplitude": s0["amplitude"]})}
+    slave = {"units": units[s0["slave"]]}
+    return values, {name: slave for name in ("surface_value", "orbit_slave", "orbit_on_surface")}
 
 
 def open_result(path):
     """Open a backbone result into memory; CubeError if the file is not one."""
-    return results.open_result(path, RESULT_KIND)
-
-
-def is_backbone_file(path):
-    return results.is_result_file(path, RESULT_KIND)
+    return result_kinds.open_kind(path, result_kinds.BACKBONE)
 
 
 # --- running -------------------------------------------------------------------------------------
 
 def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr):
     """Compute the backbones a config asks for into a netCDF result at `output`; returns its path."""
-    from pipeline import sweep
-
     pl = plan(cfg.data)
     with results.result_output(cfg, output, overwrite, scheduler) as output:
         results.say(stream, f"backbones of {cfg.data['scene']['model']} on {len(pl.lines)} line(s)"
                             f"{'' if pl.continuation else ' (manifold only)'}")
         lines = results.run_lines(cfg, backbone_line, pl.lines, workers, scheduler, stream, _line_summary)
-        provenance = {**sweep._provenance(cfg), "title": f"rotorsweep backbones: {cfg.data['scene']['name']}"}
+        provenance = cluster.provenance(cfg, result_kinds.BACKBONE)
         return results.write(to_dataset(cfg.data, pl, lines, provenance), output)
 
 

@@ -31,7 +31,7 @@ def _others(ds, axis):
     return [a for a in schema.point_axes(ds) if a != axis]
 
 
-def _solver(data, values, axis):
+def axis_solver(data, values, axis):
     """solve(value of `axis`, guess) -> the orbit there, the other axes at `values`; and
     family(scale) -> the arclength family along `axis`."""
     model = compute.model_of(data)
@@ -75,7 +75,7 @@ def _lead(real, imag):
 _LINE_VARS = ("orbit_status", "stable", "orbit_state", "multiplier_real", "multiplier_imag")
 
 
-def _cube_brackets(ds, axis):
+def cube_brackets(ds, axis):
     """(where, Bracket) of every stability change in a cube, lines in grid order."""
     others = _others(ds, axis)
     grid = ds[axis].values
@@ -97,7 +97,7 @@ def refine_brackets(data, axis, items):
     for where, bracket in items:
         key = tuple(sorted(where.items()))
         if key not in solvers:
-            solvers[key] = _solver(data, {**compute.fixed_values(data), **where}, axis)
+            solvers[key] = axis_solver(data, {**compute.fixed_values(data), **where}, axis)
         rows.append(_refine(solvers[key], axis, bracket))
     return rows
 
@@ -125,18 +125,19 @@ def boundary_rows(data, ds, map_tasks=None, done=None):
     axis = schema.continued_axis(ds)
     done = dict(done or {})
     todo = {}
-    for where, b in _cube_brackets(ds, axis):
+    for where, b in cube_brackets(ds, axis):
         if (b.line, b.i) not in done:
             todo.setdefault(b.line, []).append((where, b))
     tasks = list(todo.values())
-    for task, rows in zip(tasks, (map_tasks or _serial)(data, axis, tasks)):
+    for task, rows in zip(tasks, (map_tasks or refine_serially)(data, axis, tasks)):
         done.update({(b.line, b.i): row for (_, b), row in zip(task, rows)})
     others = _others(ds, axis)
     return [{**{f"boundary_{a}": float(ds[a].values[k]) for a, k in zip(others, line)}, **done[line, i]}
             for line, i in sorted(done)]
 
 
-def _serial(data, axis, tasks):
+def refine_serially(data, axis, tasks):
+    """refine_brackets of each task in this process (the map_tasks of boundary_rows without a cluster)."""
     return [refine_brackets(data, axis, task) for task in tasks]
 
 

@@ -14,7 +14,7 @@ import numpy as np
 
 import pipeline
 from pipeline import config as config_mod
-from pipeline import fileio, schema
+from pipeline import cluster, fileio, schema
 
 EXIT_USAGE = 2
 
@@ -22,7 +22,7 @@ EXIT_USAGE = 2
 # a module cannot raise its error, so `point` never imports xarray, pandas or Dask (cube, query,
 # sweep) only to name their errors (a warm one-point command is mostly its imports).
 USER_ERRORS = (("pipeline.config", "ConfigError"), ("pipeline.cube", "CubeError"), ("pipeline.query", "QueryError"),
-               ("pipeline.sweep", "SweepError"), ("rotorkernels.continuation.events", "BoundaryError"),
+               ("pipeline.cluster", "SweepError"), ("rotorkernels.continuation.events", "BoundaryError"),
                ("pipeline.fileio", "FileIOError"))
 
 
@@ -31,7 +31,7 @@ def _confirm_large(args):
     if args.yes:
         return True
     try:
-        pipeline._config(args.config)
+        pipeline.as_config(args.config)
         return False
     except config_mod.ConfigError as exc:
         if exc.grid_points is None or not sys.stdin.isatty():
@@ -59,7 +59,7 @@ def cmd_run(args):
 def _run_result(args, module, suffix, label):
     """`continue` / `backbone`: module.run(config) into out/<scene>_<suffix>.nc (or -o), then
     the report when asked."""
-    cfg = pipeline._config(args.config, whole_grid=False)
+    cfg = pipeline.as_config(args.config, whole_grid=False)
     out = args.output or f"out/{cfg.data['scene']['name']}_{suffix}.nc"
     path = module.run(cfg, out, workers=args.workers, scheduler=args.scheduler, overwrite=args.overwrite,
                       stream=None if args.quiet else sys.stderr)
@@ -87,7 +87,7 @@ def _attractor_row(args):
     trajectory it also returns is not needed here, so it is kept short)."""
     from pipeline import compute
 
-    cfg = pipeline._config(args.config, whole_grid=False)
+    cfg = pipeline.as_config(args.config, whole_grid=False)
     pt = compute.point_values(cfg, _given(args))
     return compute.point_detail(cfg.data, pt, periods=16, steps_per_period=8)["row"]
 
@@ -118,7 +118,7 @@ def cmd_modes(args):
     if args.campbell:
         start, stop, num = args.campbell.split(":")
         speeds = np.linspace(float(start), float(stop), int(num))
-    print(modes.command(pipeline._config(args.config, whole_grid=False), _at(args.at), speeds, args.output))
+    print(modes.command(pipeline.as_config(args.config, whole_grid=False), _at(args.at), speeds, args.output))
     return 0
 
 
@@ -224,22 +224,12 @@ def _point_text(r):
 
 
 def cmd_query(args):
-    from pipeline import backbone, continuation, cube, query, results
+    from pipeline import result_kinds
 
-    if backbone.is_backbone_file(args.cube):
-        print(query._render(backbone.table(backbone.open_result(args.cube)), args.format))
-        return 0
-    if results.is_result_file(args.cube, continuation.RESULT_KIND):
-        print(query._render(continuation.events_table(continuation.open_result(args.cube)), args.format))
-        return 0
-    ds = cube.open_cube(args.cube)
-    ds = query.select(ds, query.parse_where(args.where or []))
-    if args.unstable:
-        print(query.intervals_table(query.unstable_intervals(ds), fmt=args.format))
-    elif args.attractors:
-        print(query.intervals_table(query.attractor_intervals(ds, args.attractors), fmt=args.format))
-    else:
-        print(query.to_table(ds, args.var or None, fmt=args.format))
+    ds, kind = result_kinds.open_result(args.cube)
+    options = {"where": args.where, "var": args.var, "unstable": args.unstable, "attractors": args.attractors}
+    result_kinds.refuse_options(kind, options, "query_options")
+    print(kind.query(ds, args.format, **{k: v for k, v in options.items() if k in kind.query_options}))
     return 0
 
 
@@ -257,14 +247,10 @@ def cmd_report(args):
 
 
 def cmd_info(args):
-    from pipeline import backbone, continuation, cube, results
+    from pipeline import result_kinds
 
-    if backbone.is_backbone_file(args.cube):
-        print(backbone.describe(backbone.open_result(args.cube)))
-    elif results.is_result_file(args.cube, continuation.RESULT_KIND):
-        print(continuation.describe(continuation.open_result(args.cube)))
-    else:
-        print(cube.describe(cube.open_cube(args.cube)))
+    ds, kind = result_kinds.open_result(args.cube)
+    print(kind.describe(ds))
     return 0
 
 
@@ -291,7 +277,7 @@ def cmd_warmup(args):
 
 def build_parser():
     ap = argparse.ArgumentParser(prog="rotorsweep", description=__doc__.splitlines()[0])
-    ap.add_argument("--version", action="version", version=f"rotorsweep {_version()}")
+    ap.add_argument("--version", action="version", version=f"rotorsweep {cluster.VERSION}")
     sub = ap.add_subparsers(dest="command", required=True)
 
     r = sub.add_parser("run", help="run a sweep from a config into a netCDF cube")
@@ -386,18 +372,6 @@ def build_parser():
     i.add_argument("cube", help="result cube (.nc) written by rotorsweep run")
     i.set_defaults(func=cmd_info)
     return ap
-
-
-def _version():
-    """The installed package's version, else the one cubes record (a source checkout)."""
-    from importlib import metadata
-
-    try:
-        return metadata.version("rotorsweep")
-    except metadata.PackageNotFoundError:
-        from pipeline import sweep
-
-        return sweep.VERSION
 
 
 def user_errors():

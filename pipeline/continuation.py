@@ -18,11 +18,10 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from pipeline import compute, results, schema
+from pipeline import cluster, compute, result_kinds, results, schema
 from pipeline.config import ConfigError, continued_axis
 from rotorkernels.continuation import arclength as al, solve_orbit, twoparam
 
-RESULT_KIND = "continuation"
 # orbit samples per forcing period for the amplitudes (max |q| and half peak-to-peak)
 AMPLITUDE_SAMPLES = 64
 
@@ -122,7 +121,7 @@ def _within(value, par):
     return above and below
 
 
-def _family(data, pl, where):
+def line_family(data, pl, where):
     """(arclength Family along the parameter at the line `where`, lambda -> Built)."""
     build = compute.builder(data)
     values = {**compute.fixed_values(data), **where}
@@ -137,7 +136,7 @@ def _family(data, pl, where):
 def continue_line(data, where):
     """The branches of one line (a Dask task): a list of dicts of numpy arrays (branch_record)."""
     pl = plan(data)
-    family, built = _family(data, pl, where)
+    family, built = line_family(data, pl, where)
     model = family.model
     sol = solve_orbit(model, family.params(pl.start), family.opts, periods=pl.periods,
                       **compute.newton_settings(model, data["numerics"]))
@@ -258,7 +257,7 @@ def distinct_curves(curves):
 
 
 def _curve_variables(spec, pl, curves, par_attrs):
-    """Variables of the boundary curves (dimensions curve x curve_point)."""
+    """(values, run-time attrs) of the boundary curves (dimensions curve x curve_point)."""
     curves = distinct_curves(curves)
     n = max([len(c["parameter"]) for c in curves] + [1])
 
@@ -269,29 +268,30 @@ def _curve_variables(spec, pl, curves, par_attrs):
         return out
     critical = pad("critical", complex)
     second = spec.parameter(pl.second)
-    second_attrs = {"units": second.unit, "long_name": second.long_name or pl.second}
-    return {
-        "curve_parameter": (("curve", "curve_point"), pad("parameter"), {**par_attrs, "comment": f"{pl.parameter} along the boundary curve"}),
-        "curve_second": (("curve", "curve_point"), pad("second"), {**second_attrs, "comment": f"{pl.second} along the boundary curve"}),
-        "curve_critical_real": (("curve", "curve_point"), critical.real, {"units": "1", "long_name": "critical Floquet multiplier, real part"}),
-        "curve_critical_imag": (("curve", "curve_point"), critical.imag, {"units": "1", "long_name": "critical Floquet multiplier, imaginary part"}),
-        "curve_type": (("curve",), np.array([c["kind"] for c in curves], "int8"), {"long_name": "bifurcation continued", **schema._flag(al.EVENT_TYPES)}),
-        "curve_points": (("curve",), np.array([len(c["parameter"]) for c in curves], "int32"), {"units": "1", "long_name": "points on the curve"}),
-        "curve_end": (("curve",), np.array([c["end"] for c in curves], "int8"), {"long_name": "how the curve ended", **schema._flag(twoparam.END_REASONS)}),
-        "curve_detail": (("curve",), np.array([c["detail"] for c in curves], object), {"long_name": "how the curve ended, in words"}),
-    }
+    values = {"curve_parameter": pad("parameter"), "curve_second": pad("second"),
+              "curve_critical_real": critical.real, "curve_critical_imag": critical.imag,
+              "curve_type": np.array([c["kind"] for c in curves], "int8"),
+              "curve_points": np.array([len(c["parameter"]) for c in curves], "int32"),
+              "curve_end": np.array([c["end"] for c in curves], "int8"),
+              "curve_detail": np.array([c["detail"] for c in curves], object)}
+    attrs = {"curve_parameter": {**par_attrs, "comment": f"{pl.parameter} along the boundary curve"},
+             "curve_second": {"units": second.unit, "long_name": second.long_name or pl.second,
+                              "comment": f"{pl.second} along the boundary curve"},
+             "curve_type": schema.flag_attrs(al.EVENT_TYPES), "curve_end": schema.flag_attrs(twoparam.END_REASONS)}
+    return values, attrs
 
 
-def _omega_l_variables(data, pl, v):
-    """The continued frequency and the events' over omega_l (pipeline.modes.omega_l): the
-    paper's nondimensional frequency, a coordinate the report draws its axes in."""
+def _omega_l_variables(data, pl, values):
+    """(values, run-time attrs) of the continued frequency and the events' over omega_l
+    (pipeline.modes.omega_l): the paper's nondimensional frequency, a coordinate the report draws
+    its axes in."""
     from pipeline import modes
 
     wl = modes.omega_l(data)
-    attrs = {"units": "1", "long_name": f"{pl.parameter} / omega_l", "omega_l": wl,
+    attrs = {"long_name": f"{pl.parameter} / omega_l", "omega_l": wl,
              "comment": f"omega_l = {wl:.10g} Hz: the lowest linear natural frequency with the 15 deg bearing"}
-    return {"parameter_over_omega_l": (v["parameter"][0], v["parameter"][1] / wl, attrs),
-            "event_parameter_over_omega_l": (v["event_parameter"][0], v["event_parameter"][1] / wl, attrs)}
+    return ({"parameter_over_omega_l": values["parameter"] / wl, "event_parameter_over_omega_l": values["event_parameter"] / wl},
+            {"parameter_over_omega_l": attrs, "event_parameter_over_omega_l": attrs})
 
 
 def _global_parents(lines):
@@ -304,7 +304,8 @@ def _global_parents(lines):
 
 
 def to_dataset(data, pl, lines, provenance):
-    """The continuation result: lines = [(where, [branch records])] in plan order."""
+    """The continuation result (schema: result_kinds.CONTINUATION_VARIABLES): lines = [(where,
+    [branch records])] in plan order."""
     spec = compute.model_of(data)
     records = [(where, r) for where, recs in lines for r in recs]
     n_branch, n_pt = len(records), max([len(r["parameter"]) for _, r in records] + [1])
@@ -320,74 +321,66 @@ def to_dataset(data, pl, lines, provenance):
         mult[b, :len(r["multipliers"])] = r["multipliers"]
     absmax = np.abs(mult).max(axis=2)
     present = ~np.isnan(absmax)
-    stable = np.where(present, absmax < 1.0, -1).astype("int8")
     ev = [(b, r, k) for b, (_, r) in enumerate(records) for k in range(len(r["event_type"]))]
     ev_mult = np.array([r["event_multipliers"][k] for _, r, k in ev]).reshape(len(ev), n)
+
+    def per_event(key, dtype=float, tail=()):
+        return np.array([r[key][k] for _, r, k in ev], dtype).reshape((len(ev),) + tail)
+    values = {
+        "parameter": pad("parameter"), "arclength": pad("arclength"), "orbit_state": pad("state", (n,)),
+        "amplitude_max": pad("amplitude_max", (n_obs,)), "amplitude_half_pp": pad("amplitude_half_pp", (n_obs,)),
+        "orbit_period": pad("period"), "multiplier_real": mult.real, "multiplier_imag": mult.imag,
+        "max_abs_multiplier": absmax, "stable": np.where(present, absmax < 1.0, -1).astype("int8"),
+        "branch_points": np.array([len(r["parameter"]) for _, r in records], "int32"),
+        "branch_periods": np.array([r["periods"] for _, r in records], "int32"),
+        "branch_parent": _global_parents(lines),
+        "branch_end": np.array([r["end"] for _, r in records], "int8"),
+        "branch_detail": np.array([r["detail"] for _, r in records], object),
+        "event_type": per_event("event_type", "int8"), "event_branch": np.array([b for b, _, _ in ev], "int32"),
+        "event_point": per_event("event_index", "int32"), "event_parameter": per_event("event_parameter"),
+        "event_multiplier_real": ev_mult.real, "event_multiplier_imag": ev_mult.imag,
+        "event_state": per_event("event_state", tail=(n,)),
+        "event_amplitude_max": per_event("event_amplitude_max", tail=(n_obs,)),
+        "event_amplitude_half_pp": per_event("event_amplitude_half_pp", tail=(n_obs,)),
+    }
     par_attrs = _parameter_attrs(spec, pl.parameter)
     obs_units = [o.unit for o in spec.observables]
-    amp_unit = obs_units[0] if len(set(obs_units)) == 1 else "various"
-    v = {
-        "parameter": (("branch", "point"), pad("parameter"), {**par_attrs, "comment": f"the continued parameter: {pl.parameter}"}),
-        "arclength": (("branch", "point"), pad("arclength"), {"units": "1", "long_name": "arclength along the branch (normalized state and parameter)"}),
-        "orbit_state": (("branch", "point", "state"), pad("state", (n,)), dict(schema.VARIABLES["orbit_state"][2])),
-        "amplitude_max": (("branch", "point", "observable"), pad("amplitude_max", (n_obs,)), {"units": amp_unit, "long_name": "max |observable| over the orbit"}),
-        "amplitude_half_pp": (("branch", "point", "observable"), pad("amplitude_half_pp", (n_obs,)), {"units": amp_unit, "long_name": "half peak-to-peak of the observable over the orbit"}),
-        "orbit_period": (("branch", "point"), pad("period"), {"units": "s", "long_name": "period of the orbit (k forcing periods)"}),
-        "multiplier_real": (("branch", "point", "multiplier"), mult.real, {"units": "1", "long_name": "Floquet multiplier, real part"}),
-        "multiplier_imag": (("branch", "point", "multiplier"), mult.imag, {"units": "1", "long_name": "Floquet multiplier, imaginary part"}),
-        "max_abs_multiplier": (("branch", "point"), absmax, {"units": "1", "long_name": "largest Floquet multiplier modulus"}),
-        "stable": (("branch", "point"), stable, {"long_name": "orbit is stable (max |multiplier| < 1)",
-                                                 "flag_values": np.array([-1, 0, 1], "int8"),
-                                                 "flag_meanings": "no_point unstable stable"}),
-        "branch_points": (("branch",), np.array([len(r["parameter"]) for _, r in records], "int32"), {"units": "1", "long_name": "points on the branch"}),
-        "branch_periods": (("branch",), np.array([r["periods"] for _, r in records], "int32"), {"units": "1", "long_name": "forcing periods per orbit (k of period-k)"}),
-        "branch_parent": (("branch",), _global_parents(lines), {"units": "1", "long_name": "branch index of the branch this one was switched from (-1: none)"}),
-        "branch_end": (("branch",), np.array([r["end"] for _, r in records], "int8"), {"long_name": "how the branch ended", **schema._flag(al.END_REASONS)}),
-        "branch_detail": (("branch",), np.array([r["detail"] for _, r in records], object), {"long_name": "how the branch ended, in words"}),
-        "event_type": (("event",), np.array([r["event_type"][k] for _, r, k in ev], "int8"), {"long_name": "located bifurcation point", **schema._flag(al.EVENT_TYPES)}),
-        "event_branch": (("event",), np.array([b for b, _, _ in ev], "int32"), {"units": "1", "long_name": "branch index of the event"}),
-        "event_point": (("event",), np.array([r["event_index"][k] for _, r, k in ev], "int32"), {"units": "1", "long_name": "branch point just before the event"}),
-        "event_parameter": (("event",), np.array([r["event_parameter"][k] for _, r, k in ev], float), {**par_attrs, "comment": "located on the branch to the arclength tolerance"}),
-        "event_multiplier_real": (("event", "multiplier"), ev_mult.real, {"units": "1", "long_name": "Floquet multiplier at the event, real part"}),
-        "event_multiplier_imag": (("event", "multiplier"), ev_mult.imag, {"units": "1", "long_name": "Floquet multiplier at the event, imaginary part"}),
-        "event_state": (("event", "state"), np.array([r["event_state"][k] for _, r, k in ev]).reshape(len(ev), n), dict(schema.VARIABLES["orbit_state"][2])),
-        "event_amplitude_max": (("event", "observable"), np.array([r["event_amplitude_max"][k] for _, r, k in ev]).reshape(len(ev), n_obs), {"units": amp_unit, "long_name": "max |observable| over the orbit at the event"}),
-        "event_amplitude_half_pp": (("event", "observable"), np.array([r["event_amplitude_half_pp"][k] for _, r, k in ev]).reshape(len(ev), n_obs), {"units": amp_unit, "long_name": "half peak-to-peak of the observable over the orbit at the event"}),
-    }
+    amp = {"units": obs_units[0] if len(set(obs_units)) == 1 else "various"}
+    attrs = {"parameter": {**par_attrs, "comment": f"the continued parameter: {pl.parameter}"},
+             "event_parameter": par_attrs, "branch_end": schema.flag_attrs(al.END_REASONS),
+             "event_type": schema.flag_attrs(al.EVENT_TYPES),
+             **{name: amp for name in ("amplitude_max", "amplitude_half_pp", "event_amplitude_max",
+                                       "event_amplitude_half_pp")}}
     rep = data["report"]
-    if rep["frequency_unit"] == "omega_l":
-        v.update(_omega_l_variables(data, pl, v))
-    if pl.second:
-        v.update(_curve_variables(spec, pl, [c for _, r in records for c in r.get("curves", [])], par_attrs))
+    extras = ([_omega_l_variables(data, pl, values)] if rep["frequency_unit"] == "omega_l" else []) + (
+        [_curve_variables(spec, pl, [c for _, r in records for c in r.get("curves", [])], par_attrs)] if pl.second else [])
+    for more_values, more_attrs in extras:
+        values.update(more_values)
+        attrs.update(more_attrs)
     coords = {"observable": ("observable", [o.name for o in spec.observables], {"long_name": "observable (units: " + ", ".join(obs_units) + ")"})}
     for axis in (pl.lines[0] if pl.lines else {}):
-        attrs = spec.parameter(axis)
-        coords[axis] = ("branch", np.array([w[axis] for w, _ in records]), {"units": attrs.unit, "long_name": attrs.long_name or axis})
-    attrs = {**provenance, "result_kind": RESULT_KIND, "parameter": pl.parameter, "curves_in": pl.second,
-             "report_observable": rep["observable"] or spec.observables[0].name,
-             "range": json.dumps(list(pl.range)), "Conventions": "CF-1.10"}
-    return xr.Dataset(v, coords=coords, attrs=attrs)
+        axis_attrs = spec.parameter(axis)
+        coords[axis] = ("branch", np.array([w[axis] for w, _ in records]), {"units": axis_attrs.unit, "long_name": axis_attrs.long_name or axis})
+    global_attrs = {**provenance, "result_kind": result_kinds.CONTINUATION, "parameter": pl.parameter,
+                    "curves_in": pl.second, "report_observable": rep["observable"] or spec.observables[0].name,
+                    "range": json.dumps(list(pl.range)), "Conventions": "CF-1.10"}
+    return xr.Dataset(result_kinds.variables(result_kinds.CONTINUATION, values, attrs), coords=coords,
+                      attrs=global_attrs)
 
 
 def open_result(path):
     """Open a continuation result into memory; CubeError if the file is not one."""
-    return results.open_result(path, RESULT_KIND)
-
-
-def is_continuation(ds):
-    return ds.attrs.get("result_kind") == RESULT_KIND
+    return result_kinds.open_kind(path, result_kinds.CONTINUATION)
 
 
 # --- running -------------------------------------------------------------------------------------
 
 def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr):
     """Run the continuation a config asks for into a netCDF result at `output`; returns its path."""
-    from pipeline import sweep
-
     pl = plan(cfg.data)
     with results.result_output(cfg, output, overwrite, scheduler) as output:
         lines = _run_lines(cfg, pl, workers, scheduler, stream)
-        ds = to_dataset(cfg.data, pl, lines, {**sweep._provenance(cfg), "title": f"rotorsweep continuation: {cfg.data['scene']['name']}"})
+        ds = to_dataset(cfg.data, pl, lines, cluster.provenance(cfg, result_kinds.CONTINUATION))
         return results.write(ds, output)
 
 

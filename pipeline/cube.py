@@ -170,20 +170,38 @@ def _chunks(var, points, along):
 
 
 def open_cube(path):
-    """Open a cube into memory (the file is closed on return); integers stay integers."""
+    """Open a sweep cube into memory (the file is closed on return); integers stay integers.
+    A continuation or backbone result is refused with its kind named (pipeline.result_kinds
+    opens every kind)."""
+    ds = read_netcdf(path)
+    kind = ds.attrs.get("result_kind")
+    if kind is not None:
+        raise CubeError(f"{path} is a {kind} result, not a sweep cube; rotorsweep.open_result opens it "
+                        "(and rotorsweep info / query / report read it)")
+    check_cube(path, ds)
+    return ds
+
+
+def read_netcdf(path):
+    """A rotorsweep result file of any kind, read into memory once (the file is closed on
+    return): netCDF checked first, integers kept integer (no mask and scale)."""
     path = Path(path)
     _check_is_netcdf(path)
     try:
         with xr.open_dataset(path, engine="netcdf4", mask_and_scale=False) as ds:
-            ds = ds.load()
+            return ds.load()
     except (OSError, ValueError) as exc:
         raise CubeError(f"{path}: cannot be read as netCDF ({exc})") from None
+
+
+def check_cube(path, ds):
+    """CubeError unless ds (read by read_netcdf) is a cube of this schema version with every
+    required variable; the fill values stay where the writer put them (in the encoding)."""
     _check_version(path, ds)
     _check_variables(path, ds)
-    for var in ds.variables.values():  # keep fill values where the writer put them
+    for var in ds.variables.values():
         if "_FillValue" in var.attrs:
             var.encoding["_FillValue"] = var.attrs.pop("_FillValue")
-    return ds
 
 
 def _check_is_netcdf(path):

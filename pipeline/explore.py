@@ -7,6 +7,8 @@ accessor that importing this module (or `rotorsweep`) registers on xarray Datase
     ds.max_abs_multiplier.hvplot(x="speed", by="clearance")   # plain hvplot works on a cube
     ds.rotorsweep.max_multiplier()                            # the same with the |lambda| = 1 line
     ds.rotorsweep.branches("amplitude_y")                     # stable solid, unstable dashed
+    ds, _ = rotorsweep.open_result("out/fold.nc")             # a continuation result
+    ds.rotorsweep.branch_diagram()                            # its branches (a backbone result: backbones())
 
 Swept axes beyond x and `by` become hvplot's widgets. The report draws with HoloViews elements
 where hvplot has no such kind (see pipeline/report/figures/*); its Campbell figure is built on
@@ -15,9 +17,10 @@ campbell() here.
 import hvplot.pandas  # noqa: F401  (registers .hvplot on pandas and xarray objects)
 import hvplot.xarray  # noqa: F401
 import numpy as np
+import pandas as pd
 import xarray as xr
 
-from pipeline import schema
+from pipeline import result_kinds, schema
 from pipeline.report.cubeinfo import (branch_observables, branch_values, continued_axis,
                                       default_observable, has_attractor, other_axes)
 from pipeline.report.figures.campbell import campbell_points
@@ -112,33 +115,94 @@ def multipliers(ds, where=None, **kwargs):
     return circle * pts
 
 
+def branch_diagram(ds, observable=None, **kwargs):
+    """A continuation result's branches: half peak-to-peak of `observable` (default: the
+    result's report observable) over the continued parameter, one colour per branch, stable
+    solid and unstable dashed (a NaN ends a line: the other stability's points are gaps)."""
+    observable = observable or ds.attrs.get("report_observable") or str(ds["observable"].values[0])
+    table = pd.DataFrame({"branch": np.repeat(np.arange(ds.sizes["branch"]), ds.sizes["point"]),
+                          ds.attrs["parameter"]: ds["parameter"].values.ravel(),
+                          observable: ds["amplitude_half_pp"].sel(observable=observable).values.ravel(),
+                          "stable": ds["stable"].values.ravel()})
+    style = {"x": ds.attrs["parameter"], "y": observable, "by": "branch", **kwargs}
+    stable = table.assign(**{observable: table[observable].where(table["stable"] == 1)})
+    unstable = table.assign(**{observable: table[observable].where(table["stable"] == 0)})
+    return stable.hvplot.line(**style) * unstable.hvplot.line(line_dash="dashed", **style)
+
+
+def backbones(ds, where=None, **kwargs):
+    """A backbone result's backbones at one line (`where`: the swept axes' values; default the
+    first): frequency over the master's amplitude, continuation solid and manifold dashed, one
+    colour per mode."""
+    line = ds.sel(where) if where else ds.isel({a: 0 for a in ds["axial_approach"].dims})
+    modes = line["mode"].values
+    table = pd.DataFrame({"mode": np.repeat(modes, line.sizes["amplitude"]),
+                          "amplitude": np.tile(line["amplitude_grid"].values, len(modes)),
+                          "continuation": line["frequency_continuation"].values.ravel(),
+                          "manifold": line["frequency_manifold"].values.ravel()})
+    style = {"x": "amplitude", "by": "mode", "logx": True, "ylabel": "frequency [Hz]", **kwargs}
+    return table.hvplot.line(y="continuation", **style) * table.hvplot.line(y="manifold", line_dash="dashed", **style)
+
+
+# the accessor's figures of each result kind (pipeline.result_kinds)
+FIGURES = {kind: {f.__name__: f for f in figures} for kind, figures in (
+    (result_kinds.SWEEP, (max_multiplier, stability_map, branches, response, campbell, bifurcation, lle, multipliers)),
+    (result_kinds.CONTINUATION, (branch_diagram,)),
+    (result_kinds.BACKBONE, (backbones,)))}
+
+
 @xr.register_dataset_accessor("rotorsweep")
 class CubeAccessor:
-    """ds.rotorsweep.<figure>(...): the functions of pipeline.explore on this cube."""
+    """ds.rotorsweep.<figure>(...): the functions of pipeline.explore on this result, where its
+    kind has them (pipeline.result_kinds: a sweep cube has every one; a figure that does not
+    apply says so); ds.rotorsweep.kind and describe() work on every kind."""
 
     def __init__(self, ds):
         self._ds = ds
 
+    @property
+    def kind(self):
+        """The result's kind: "sweep", "continuation", "backbone"."""
+        return result_kinds.kind_of(self._ds).name
+
+    def describe(self):
+        """What the result holds, as `rotorsweep info` prints it."""
+        return result_kinds.kind_of(self._ds).describe(self._ds)
+
+    def _draw(self, figure, *args, **kwargs):
+        kind = result_kinds.kind_of(self._ds)
+        if figure not in FIGURES.get(kind.name, {}):
+            applies = " or ".join(result_kinds.KINDS[k].label() for k, figs in FIGURES.items() if figure in figs)
+            raise ValueError(f"ds.rotorsweep.{figure}() draws {applies}, not {kind.label()}; `rotorsweep report` "
+                             "draws its figures, ds.rotorsweep.describe() says what it holds")
+        return FIGURES[kind.name][figure](self._ds, *args, **kwargs)
+
     def max_multiplier(self, **kwargs):
-        return max_multiplier(self._ds, **kwargs)
+        return self._draw("max_multiplier", **kwargs)
 
     def stability_map(self, **kwargs):
-        return stability_map(self._ds, **kwargs)
+        return self._draw("stability_map", **kwargs)
 
     def branches(self, observable=None, **kwargs):
-        return branches(self._ds, observable, **kwargs)
+        return self._draw("branches", observable, **kwargs)
 
     def response(self, observable=None, **kwargs):
-        return response(self._ds, observable, **kwargs)
+        return self._draw("response", observable, **kwargs)
 
     def campbell(self, **kwargs):
-        return campbell(self._ds, **kwargs)
+        return self._draw("campbell", **kwargs)
 
     def bifurcation(self, variable="poincare_x", **kwargs):
-        return bifurcation(self._ds, variable, **kwargs)
+        return self._draw("bifurcation", variable, **kwargs)
 
     def lle(self, **kwargs):
-        return lle(self._ds, **kwargs)
+        return self._draw("lle", **kwargs)
 
     def multipliers(self, where=None, **kwargs):
-        return multipliers(self._ds, where, **kwargs)
+        return self._draw("multipliers", where, **kwargs)
+
+    def branch_diagram(self, observable=None, **kwargs):
+        return self._draw("branch_diagram", observable, **kwargs)
+
+    def backbones(self, where=None, **kwargs):
+        return self._draw("backbones", where, **kwargs)

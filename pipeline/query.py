@@ -106,7 +106,7 @@ def to_table(ds, variables=None, fmt="table"):
     columns = {a: grid[order.index(a)].ravel().tolist() for a in axes}
     for name in variables:
         columns.update(_columns(name, ds[name], order))
-    return _render(columns, fmt)
+    return render(columns, fmt)
 
 
 def _columns(name, var, order):
@@ -132,7 +132,7 @@ def intervals_table(intervals, fmt="table"):
     """unstable_intervals(ds) in one of FORMATS."""
     if not intervals:
         return {"table": "no unstable intervals", "csv": "", "json": "[]"}[_check_format(fmt)]
-    return _render({k: [row[k] for row in intervals] for k in intervals[0]}, fmt)
+    return render({k: [row[k] for row in intervals] for k in intervals[0]}, fmt)
 
 
 def _check_format(fmt):
@@ -141,7 +141,8 @@ def _check_format(fmt):
     return fmt
 
 
-def _render(columns, fmt):
+def render(columns, fmt):
+    """Columns {name: values} in one of FORMATS (what every query and the reports' CSV files print)."""
     fmt = _check_format(fmt)
     if fmt == "json":
         rows = [dict(zip(columns, values)) for values in zip(*columns.values())]

@@ -1,12 +1,11 @@
-"""What `rotorsweep continue` and `rotorsweep backbone` share: their result files (netCDF with a
-`result_kind` attribute) and running a task per line of the swept axes on a Dask cluster, the
-scene's kernels compiled first in the driver."""
+"""What `rotorsweep continue` and `rotorsweep backbone` share: writing their result files (netCDF
+with a `result_kind` attribute, see pipeline.result_kinds) and running a task per line of the
+swept axes on a Dask cluster (pipeline.cluster), the scene's kernels compiled first in the
+driver."""
 import contextlib
 import os
 
-import xarray as xr
-
-from pipeline import cube, fileio, warmup
+from pipeline import cluster, cube, fileio, warmup
 
 
 def write(ds, path):
@@ -29,40 +28,16 @@ def _text(var):
     return {"dtype": "S1"} if var.dtype.kind in "OU" else {}
 
 
-def open_result(path, kind):
-    """Open a result file of `kind` (continuation, backbone) into memory; CubeError if the file
-    is not one."""
-    try:
-        with xr.open_dataset(path, engine="netcdf4", mask_and_scale=False) as ds:
-            ds = ds.load()
-    except (OSError, ValueError) as exc:
-        raise cube.CubeError(f"{path}: cannot be read as netCDF ({exc})") from None
-    if ds.attrs.get("result_kind") != kind:
-        raise cube.CubeError(f"{path}: not a {kind} result (no result_kind = {kind!r})")
-    return ds
-
-
-def is_result_file(path, kind):
-    """A quick look at the global attributes (no data read): is `path` a result of `kind`?"""
-    try:
-        with xr.open_dataset(path, engine="netcdf4", mask_and_scale=False) as ds:
-            return ds.attrs.get("result_kind") == kind
-    except (OSError, ValueError):
-        return False
-
-
 @contextlib.contextmanager
 def result_output(cfg, output, overwrite, scheduler):
     """The absolute output path, locked for the run (refused if it exists without `overwrite`;
     the scheduler checked first)."""
-    from pipeline import sweep
-
     output = os.path.abspath(output)
     if os.path.exists(output) and not overwrite:
         raise cube.CubeError(f"{output} exists; pass --overwrite to replace it")
     with fileio.output_lock(output, cfg.path or "<default scene>"):
         if scheduler:
-            sweep.check_scheduler(scheduler)
+            cluster.check_scheduler(scheduler)
         yield output
 
 
@@ -72,13 +47,11 @@ def run_lines(cfg, task, lines, workers, scheduler, stream, summary):
     done (`summary(result)`); the results in line order."""
     from dask.distributed import as_completed
 
-    from pipeline import sweep
-
-    client, cluster = sweep._client(workers, scheduler)
+    client, local = cluster.connect(workers, scheduler)
     try:
-        with sweep.heap_frozen():     # the imports' and the cluster's objects (see sweep.heap_frozen)
+        with cluster.heap_frozen():     # the imports' and the cluster's objects (see cluster.heap_frozen)
             warmup.compile_scene(cfg.data, lambda text: say(stream, text))
-            submit = sweep.submitter(client, task, cfg.data)
+            submit = cluster.submitter(client, task, cfg.data)
             futures = {submit(where): k for k, where in enumerate(lines)}
             results = [None] * len(lines)
             for done, future in enumerate(as_completed(futures), 1):
@@ -86,7 +59,7 @@ def run_lines(cfg, task, lines, workers, scheduler, stream, summary):
                 results[k] = future.result()
                 say(stream, f"[{done}/{len(lines)}] {_line_label(lines[k])}: {summary(results[k])}")
     finally:
-        sweep._close(client, cluster)
+        cluster.close(client, local)
     return results
 
 

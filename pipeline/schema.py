@@ -63,7 +63,7 @@ FLOAT_FILL = float("nan")
 INT_FILL_COMMENT = f"{INT_FILL}: no value (no periodic orbit, or the point was not computed)"
 
 
-def _flag(meanings):
+def flag_attrs(meanings):
     """CF flag attributes; flag_values of the flag variables' type (int8), as CF requires."""
     return {"flag_values": np.arange(len(meanings), dtype=np.int8), "flag_meanings": " ".join(meanings)}
 
@@ -71,15 +71,15 @@ def _flag(meanings):
 # name -> (extra dims after the point dims, dtype, attrs). Floats use NaN where not applicable,
 # integers use INT_FILL (see INT_FILL_COMMENT).
 VARIABLES = {
-    "orbit_status": ((), "int8", {"long_name": "periodic orbit (shooting) status", **_flag(ORBIT_STATUS)}),
-    "orbit_reason": ((), "int8", {"long_name": "reason behind orbit_status", **_flag(ORBIT_REASON)}),
+    "orbit_status": ((), "int8", {"long_name": "periodic orbit (shooting) status", **flag_attrs(ORBIT_STATUS)}),
+    "orbit_reason": ((), "int8", {"long_name": "reason behind orbit_status", **flag_attrs(ORBIT_REASON)}),
     "newton_iterations": ((), "int16", {"long_name": "Newton iterations of the shooting solve", "units": "1"}),
     "residual": ((), "float64", {"long_name": "final shooting residual, scaled state (lengths in units of length_scale)", "units": "1"}),
     "multiplier_real": (("multiplier",), "float64", {"long_name": "Floquet multiplier, real part", "units": "1"}),
     "multiplier_imag": (("multiplier",), "float64", {"long_name": "Floquet multiplier, imaginary part", "units": "1"}),
     "max_abs_multiplier": ((), "float64", {"long_name": "largest Floquet multiplier modulus", "units": "1"}),
-    "stable": ((), "int8", {"long_name": "periodic orbit is stable (max |multiplier| < 1)", **_flag(STABLE)}),
-    "bifurcation": ((), "int8", {"long_name": "how the leading multiplier left the unit circle", **_flag(BIFURCATION)}),
+    "stable": ((), "int8", {"long_name": "periodic orbit is stable (max |multiplier| < 1)", **flag_attrs(STABLE)}),
+    "bifurcation": ((), "int8", {"long_name": "how the leading multiplier left the unit circle", **flag_attrs(BIFURCATION)}),
     "forcing_period": ((), "float64", {"long_name": "forcing period T (time unit of the scaled state)", "units": "s"}),
     "orbit_state": (("state",), "float64", {
         "long_name": "periodic orbit state at t = 0 in the kernel's scaled units", "units": "1",
@@ -93,11 +93,11 @@ VARIABLES = {
 LLE_METHOD = ("integrated", "derived")
 _MODULUS = "Floquet multiplier of the attractor's period-k orbit (shooting over k forcing periods)"
 ATTRACTOR_VARIABLES = {
-    "attractor": ((), "int8", {"long_name": "attractor class after the transient", **_flag(ATTRACTOR)}),
+    "attractor": ((), "int8", {"long_name": "attractor class after the transient", **flag_attrs(ATTRACTOR)}),
     "period": ((), "int16", {"long_name": "attractor period in forcing periods (0: none up to max_period)", "units": "1"}),
     "lle": ((), "float64", {"long_name": "largest Lyapunov exponent", "units": "s-1"}),
     "lle_stderr": ((), "float64", {"long_name": "standard error of the largest Lyapunov exponent (block averages; 0 when derived)", "units": "s-1"}),
-    "lle_method": ((), "int8", {"long_name": "how lle was obtained: integrated (Benettin/QR) or derived as ln|multiplier| / (k T)", **_flag(LLE_METHOD)}),
+    "lle_method": ((), "int8", {"long_name": "how lle was obtained: integrated (Benettin/QR) or derived as ln|multiplier| / (k T)", **flag_attrs(LLE_METHOD)}),
     "lyapunov_exponents": (("exponent",), "float64", {"long_name": "Lyapunov spectrum, largest first", "units": "s-1"}),
     "attractor_multiplier_real": (("multiplier",), "float64", {"long_name": f"{_MODULUS}, real part", "units": "1"}),
     "attractor_multiplier_imag": (("multiplier",), "float64", {"long_name": f"{_MODULUS}, imaginary part", "units": "1"}),
@@ -141,7 +141,7 @@ def _with_down(table):
     out.update({name + DOWN_SUFFIX: (extra, dtype, {**attrs, "long_name": attrs["long_name"] + ", sweeping down"})
                 for name, (extra, dtype, attrs) in table.items()})
     out["hysteresis"] = ((), "int8", {
-        "long_name": "up and down sweeps end on different attractors (class, period or orbit differ; 0 where a period is unresolved)", **_flag(("no", "yes"))})
+        "long_name": "up and down sweeps end on different attractors (class, period or orbit differ; 0 where a period is unresolved)", **flag_attrs(("no", "yes"))})
     return out
 
 
@@ -172,9 +172,9 @@ def boundary_variables(axis, units, long_name):
     """The boundary table's variables for continued axis `axis`."""
     return {
         f"boundary_{axis}": ("float64", {"long_name": f"refined {long_name} where max |multiplier| = 1", "units": units}),
-        "boundary_type": ("int8", {"long_name": "how the leading multiplier crosses the unit circle", **_flag(BIFURCATION)}),
-        "boundary_direction": ("int8", {"long_name": f"stability change with increasing {long_name}", **_flag(BOUNDARY_DIRECTION)}),
-        "boundary_status": ("int8", {"long_name": "whether the crossing could be refined", **_flag(BOUNDARY_STATUS)}),
+        "boundary_type": ("int8", {"long_name": "how the leading multiplier crosses the unit circle", **flag_attrs(BIFURCATION)}),
+        "boundary_direction": ("int8", {"long_name": f"stability change with increasing {long_name}", **flag_attrs(BOUNDARY_DIRECTION)}),
+        "boundary_status": ("int8", {"long_name": "whether the crossing could be refined", **flag_attrs(BOUNDARY_STATUS)}),
         "boundary_grid_low": ("float64", {"long_name": f"grid {long_name} below the crossing", "units": units}),
         "boundary_grid_high": ("float64", {"long_name": f"grid {long_name} above the crossing", "units": units}),
     }

@@ -7,27 +7,15 @@ chunk size. Every finished chunk is written at once as a part file next to the o
 re-run with `resume` computes only the segments no part holds. The cube's arrays take the
 earlier parts and then each chunk as it arrives; the cube is written (atomically) at the end.
 """
-import contextlib
-import functools
-import gc
-import json
-import logging
 import os
-import socket
 import sys
 import time
 from dataclasses import dataclass
-from datetime import datetime, timezone
 
 import numpy as np
 
-from pipeline import boundaries, compute, cube, fileio, warmup
-
-VERSION = "0.1.0"
-
-
-class SweepError(Exception):
-    """A sweep that cannot start or finish (message for the user)."""
+from pipeline import boundaries, cluster, compute, cube, fileio, result_kinds, warmup
+from pipeline.cluster import SweepError
 
 
 @dataclass(frozen=True)
@@ -215,7 +203,7 @@ def _fmt_seconds(s):
     return f"{s // 3600}h{s // 60 % 60:02d}m" if s >= 3600 else f"{s // 60}m{s % 60:02d}s"
 
 
-def _earlier_parts(parts_dir, config_hash):
+def earlier_parts(parts_dir, config_hash):
     """(segment ids, {(line, i): refined boundary row}) that part files of the same config hold
     already; refuse parts of another config."""
     done, refined = set(), {}
@@ -246,74 +234,14 @@ def _prepare_output(output, cfg, resume, overwrite):
     return output, parts
 
 
-def _local_workers(workers):
-    """Worker processes of a local cluster: as asked, else one per core, at least 2."""
-    return workers or max(2, os.cpu_count() or 2)
+def provenance(cfg):
+    """The global attributes of a sweep cube of cfg (cluster.provenance)."""
+    return cluster.provenance(cfg, result_kinds.SWEEP)
 
 
-# Each worker process takes one core: no thread pools of its own.
-WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
-              "MKL_NUM_THREADS": "1"}
-# The local cluster's housekeeping, relaxed: the driver process (scheduler, nannies, client)
-# shares the cores with the workers, and with Dask's defaults (an event-loop tick every 20 ms in
-# every process, nannies polling worker memory every 100 ms, each worker sampling its own stack
-# every 10 ms for the dashboard's profile page) an idle 2-worker cluster took 74 ms of CPU per
-# second, 3.7% of 2 cores (13 ms/s relaxed). The system monitor (host CPU, memory, network and
-# disk counters for the dashboard's System page and the heartbeats, every 500 ms in the scheduler,
-# each nanny and each worker) then took a third of what was left: an idle 2-worker cluster used
-# 33-38 ms/s with it, 24 ms/s sampling every 5 s (AMD EPYC, 2 cores). The workers' memory limits
-# do not wait for it (they sample their process memory themselves). A scheduler given by address
-# keeps its own settings.
-LOCAL_CLUSTER_CONFIG = {"distributed.admin.tick.interval": "1s",
-                        "distributed.admin.system-monitor.interval": "5s",
-                        "distributed.worker.memory.monitor-interval": "500ms",
-                        "distributed.worker.profile.enabled": False}
-
-
-def local_cluster(n_workers):
-    """A LocalCluster of n_workers single-threaded worker processes on 127.0.0.1 (dashboard on a
-    free port), as `rotorsweep run` starts it."""
-    import dask
-    from dask.distributed import LocalCluster
-
-    # the servers and the nannies' worker processes take their settings when they are created
-    with dask.config.set(LOCAL_CLUSTER_CONFIG):
-        return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                            dashboard_address="127.0.0.1:0", env=dict(WORKER_ENV),
-                            preload=["pipeline.workerinit"])
-
-
-def _client(workers, scheduler):
-    from dask.distributed import Client
-
-    if scheduler:
-        return Client(scheduler, timeout=f"{4 * SCHEDULER_TIMEOUT_S}s"), None
-    os.environ.setdefault("NUMBA_NUM_THREADS", "1")
-    cluster = local_cluster(_local_workers(workers))
-    return Client(cluster), cluster
-
-
-def _provenance(cfg):
-    model = compute.model_of(cfg.data)
-    created = datetime.now(timezone.utc).isoformat(timespec="seconds")
-    return {
-        "history": f"{created} rotorsweep {VERSION}: run {cfg.path or 'scene ' + cfg.data['scene']['name']}",
-        "source": f"rotorsweep {VERSION}, model {model.name} version {model.version}: {model.description}",
-        "references": model.references or f"none given by model {model.name}",
-        "config_toml": cfg.source,
-        "config_hash": cfg.hash(),
-        "scene": cfg.data["scene"]["name"],
-        "model": cfg.data["scene"]["model"],
-        "model_version": model.version,
-        "continued_axis": cfg.continued_axis,
-        "numerics": json.dumps(cfg.data["numerics"], sort_keys=True),
-        "rotorsweep_version": VERSION,
-        "created": created,
-        "title": f"rotorsweep result cube: {cfg.data['scene']['name']}",
-    }
-
-
-def _fixed_coords(cfg):
+def fixed_coords(cfg):
+    """The cube's scalar coordinates: the fixed values of the axis parameters not swept (NaN
+    where a value is derived per point)."""
     fixed = compute.fixed_values(cfg.data)
     return {k: (np.nan if v is None else float(v)) for k, v in fixed.items() if k not in cfg.axes}
 
@@ -325,9 +253,9 @@ def run(cfg, output, workers=None, scheduler=None, resume=False, overwrite=False
     progress lines go to `stream` (default: sys.stderr at the time of the call)."""
     compute.require_forced(cfg.data, "run")
     output = os.path.abspath(output)
-    with fileio.output_lock(output, cfg.path or "<default scene>"), heap_frozen():
+    with fileio.output_lock(output, cfg.path or "<default scene>"), cluster.heap_frozen():
         if scheduler:
-            check_scheduler(scheduler)
+            cluster.check_scheduler(scheduler)
         output, parts = _prepare_output(output, cfg, resume, overwrite)
         try:
             return _run_locked(cfg, output, parts, workers, scheduler, chunk_points,
@@ -352,36 +280,11 @@ def phase_printer(stream):
     return say
 
 
-@contextlib.contextmanager
-def heap_frozen():
-    """Leave the objects alive now (the imported modules': 300k+ in a driver with Dask, xarray and
-    the kernels loaded) out of garbage collections until the outermost such block ends: each
-    full collection walked them all (0.1 s, once or twice a sweep, with the workers waiting for
-    the next task). A nested block adds what was created since (a local cluster started inside
-    the run) and leaves the unfreezing to the outermost one; a heap the caller froze before
-    counts as an outer block (what the run adds stays frozen until the caller unfreezes)."""
-    global _frozen_blocks
-    # gc.get_freeze_count() walks the frozen objects (21 ms for a sweep driver's, before the first
-    # task): only a first block asks it, to learn whether the caller froze the heap
-    outermost = not _frozen_blocks and not gc.get_freeze_count()
-    _frozen_blocks += 1
-    gc.freeze()
-    try:
-        yield
-    finally:
-        _frozen_blocks -= 1
-        if outermost:
-            gc.unfreeze()
-
-
-_frozen_blocks = 0      # heap_frozen blocks open in this process
-
-
 def _run_locked(cfg, output, parts, workers, scheduler, chunk_points, stream):
     say = phase_printer(stream)
     config_hash = cfg.hash()
     segs = segments(cfg)
-    done, refined = _earlier_parts(parts, config_hash)
+    done, refined = earlier_parts(parts, config_hash)
     todo = [s for s in segs if s.id not in done]
     # the cube's arrays take each chunk as it arrives (the parts of an earlier run first): no
     # part file is read back at the end (Fig. 13: 0.04-0.06 s; the 4-D atlas: 186 MB)
@@ -389,20 +292,20 @@ def _run_locked(cfg, output, parts, workers, scheduler, chunk_points, stream):
                              config_hash)
     for part in cube.iter_parts(parts):
         assembly.add(*part)
-    client = cluster = None
+    client = local = None
     try:
         if todo:
-            client, cluster = _connect(cfg, workers, scheduler, say)
+            client, local = _connect(cfg, workers, scheduler, say)
             total = sum(len(s) for s in segs)
             bar = Progress(total, total - sum(len(s) for s in todo), stream) if stream else None
             refined.update(_run_chunks(client, cfg, todo, parts, assembly, chunk_points, bar, say))
         say("assembling the cube and its boundary table")
-        ds = assembly.dataset(_fixed_coords(cfg), _provenance(cfg))
+        ds = assembly.dataset(fixed_coords(cfg), provenance(cfg))
         ds = boundaries.add_boundary_table(cfg.data, ds, _map_tasks_on(client, stream) if client else None,
                                            refined)
     finally:
         if client is not None:
-            _close(client, cluster)
+            cluster.close(client, local)
     say(f"writing the cube: {output}")
     path = cube.write_cube(ds, output, overwrite=True)
     _remove_parts(parts)
@@ -419,7 +322,7 @@ def _map_tasks_on(client, stream=None):
     def map_tasks(data, axis, tasks):
         if not client.scheduler_info()["workers"]:      # an external cluster scaled to nothing
             return [boundaries.refine_brackets(data, axis, task) for task in tasks]
-        refine = submitter(client, boundaries.refine_brackets, data, axis)
+        refine = cluster.submitter(client, boundaries.refine_brackets, data, axis)
         futures = [refine(task) for task in tasks]
         bar = Progress(len(tasks), stream=stream, unit="boundary lines") if stream and tasks else None
         out = []
@@ -447,22 +350,6 @@ def _write_failure(exc, output, parts):
     return f"the run into {output} stopped: {fileio.os_error_text(exc)}; {kept}"
 
 
-SCHEDULER_TIMEOUT_S = 5
-
-
-def check_scheduler(address, timeout=SCHEDULER_TIMEOUT_S):
-    """Fail within seconds (not Dask's 30 s, and before kernels compile) when nothing listens at
-    a --scheduler address."""
-    host, _, port = address.split("://", 1)[-1].rpartition(":")
-    if not host or not port.isdigit():
-        raise SweepError(f"--scheduler {address}: expected an address like tcp://HOST:PORT")
-    try:
-        socket.create_connection((host.strip("[]"), int(port)), timeout=timeout).close()
-    except OSError as exc:
-        raise SweepError(f"--scheduler {address}: no scheduler reachable within {timeout} s "
-                         f"({exc.strerror or exc}); is it running, and is the address right?") from None
-
-
 # Dask gives up on a task after its workers died `allowed-failures` (3) times (KilledWorker), as
 # it may be what kills them. Our chunks are plain numerics, so worker deaths are far more likely
 # the machine's doing (OOM killer, preemption): resubmit a chunk that many more times.
@@ -470,30 +357,21 @@ RESUBMITS = 3
 
 
 def _connect(cfg, workers, scheduler, say):
-    """(client, local cluster or None), with the scene's kernels compiled (or loaded) here."""
+    """cluster.connect(workers, scheduler), with the scene's kernels compiled (or loaded) here."""
     say(f"connecting to the Dask scheduler at {scheduler}" if scheduler else
-        f"starting {_count(_local_workers(workers), 'local Dask worker')} (127.0.0.1)")
-    client, cluster = _client(workers, scheduler)
+        f"starting {_count(cluster.local_workers(workers), 'local Dask worker')} (127.0.0.1)")
+    client, local = cluster.connect(workers, scheduler)
     try:
         n_workers = max(1, len(client.scheduler_info()["workers"]))
         say(f"{_count(n_workers, 'worker')}; Dask dashboard: {client.dashboard_link}")
         # the cluster just started joins the frozen heap: with its objects in every full
         # collection, compiling the demo scene's kernels took 27.9 s of CPU instead of 19.6
-        with heap_frozen():
+        with cluster.heap_frozen():
             warmup.compile_scene(cfg.data, say)
     except BaseException:
-        _close(client, cluster)
+        cluster.close(client, local)
         raise
-    return client, cluster
-
-
-def submitter(client, fn, *fixed, **options):
-    """submit(*args) -> the future of fn(*fixed, *args) on the cluster. The fixed arguments (the
-    config: a few kB) go with every task, not scattered: a scattered copy lives only on workers
-    and is lost for good once every worker holding it has died. They ride in the task's function,
-    which Dask does not scan for futures as it scans a task's arguments, item by item (Fig. 13's
-    config: 2476 objects, ~1.5 ms of driver time a task)."""
-    return functools.partial(client.submit, functools.partial(fn, *fixed), pure=False, **options)
+    return client, local
 
 
 # Refinement tasks (of the stability changes between two chunks) run before the chunks still
@@ -514,11 +392,11 @@ def _run_chunks(client, cfg, todo, parts, assembly, chunk_points, bar, say):
     say(f"sweeping {_count(sum(len(s) for s in todo), 'point')} in {_count(len(chunks), 'chunk')}")
     if bar:
         bar.restart()
-    solve = submitter(client, compute_segments, cfg.data, cfg.axes, cfg.continued_axis)
+    solve = cluster.submitter(client, compute_segments, cfg.data, cfg.axes, cfg.continued_axis)
 
     def submit(chunk):
         return solve(tuple(seg.id for seg in chunk))
-    refine = submitter(client, boundaries.refine_brackets, cfg.data, cfg.continued_axis, priority=REFINE_PRIORITY)
+    refine = cluster.submitter(client, boundaries.refine_brackets, cfg.data, cfg.continued_axis, priority=REFINE_PRIORITY)
     tracker = boundaries.Tracker(cfg.axes, cfg.continued_axis)
     futures = {submit(chunk): (chunk, 0) for chunk in chunks}
     refining, refined = {}, {}
@@ -572,22 +450,6 @@ def _killed_chunk(chunk, parts):
     return (f"the chunk starting at speed={first['speed']:g} Hz, clearance={first['clearance']:g} m "
             f"killed {RESUBMITS + 1} x 3 workers; finished chunks are kept in {parts}: look for what "
             "ends the workers (memory?), then rerun with --resume")
-
-
-def _close(client, cluster):
-    """Close silently: after Ctrl-C or an error the nannies warn that they kill workers still busy
-    in a kernel, and the in-process scheduler logs CRITICAL tracebacks for results of tasks in
-    flight it can no longer send to the closed client; both are the intent here, and the run's
-    outcome is already decided (its part files are written)."""
-    logger = logging.getLogger("distributed")
-    level = logger.level
-    logger.setLevel(logging.CRITICAL + 1)
-    try:
-        client.close()
-        if cluster is not None:
-            cluster.close()
-    finally:
-        logger.setLevel(level)
 
 
 def _remove_parts(parts):

@@ -25,5 +25,5 @@ def dask_teardown(worker):
     # Called when the worker starts closing (the driver's cluster.close() after Ctrl-C or an
     # error): a heartbeat still in flight when it closes its connections then logs "Failed to
     # communicate with scheduler" with a ~50-line traceback. From here on the worker logs only
-    # its own shutdown; the run's outcome is the driver's to report (as its own `_close` does).
+    # its own shutdown; the run's outcome is the driver's to report (as pipeline.cluster.close does).
     logging.getLogger("distributed").setLevel(logging.CRITICAL + 1)

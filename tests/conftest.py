@@ -29,8 +29,8 @@ def tiny_run(tmp_path_factory):
     from pipeline import boundaries, config, cube, sweep
     cfg = config.parse_config(TINY_SCENE)
     ids, index, results, _ = sweep.compute_chunk(cfg.data, cfg.axes, cfg.continued_axis, sweep.segments(cfg))
-    ds = cube.assemble(cfg.axes, sweep._fixed_coords(cfg), [(ids, index, results, None)],
-                       sweep._provenance(cfg), n_multipliers=4)
+    ds = cube.assemble(cfg.axes, sweep.fixed_coords(cfg), [(ids, index, results, None)],
+                       sweep.provenance(cfg), n_multipliers=4)
     ds = boundaries.add_boundary_table(cfg.data, ds)
     return cube.write_cube(ds, tmp_path_factory.mktemp("tiny") / "tiny.nc"), results
 

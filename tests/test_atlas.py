@@ -97,13 +97,13 @@ def test_boundary_rows_are_the_same_for_any_map_and_rows_refined_during_the_swee
         return [boundaries.refine_brackets(data, axis, task) for task in tasks[::-1]][::-1]
     serial = boundaries.boundary_rows(data, plain)
     assert serial and boundaries.boundary_rows(data, plain, backwards) == serial
-    first = boundaries._cube_brackets(plain, "speed")[0]
+    first = boundaries.cube_brackets(plain, "speed")[0]
     done = {(first[1].line, first[1].i): boundaries.refine_brackets(data, "speed", [first])[0]}
     mapped = []
 
     def recording(data, axis, tasks):
         mapped.extend(b for task in tasks for _, b in task)
-        return boundaries._serial(data, axis, tasks)
+        return boundaries.refine_serially(data, axis, tasks)
     assert boundaries.boundary_rows(data, plain, recording, done) == serial
     assert (first[1].line, first[1].i) not in {(b.line, b.i) for b in mapped}
     assert len(mapped) == len(serial) - 1
@@ -118,14 +118,14 @@ def test_a_chunk_refines_the_stability_changes_between_its_own_points_only(tmp_p
     segs = sweep.segments(cfg)
     ids, index, results, inside = sweep.compute_chunk(cfg.data, cfg.axes, "speed", segs)
     assert [(tuple(line), i) for line, i, _ in inside] == [((0,), 3)]
-    ds = cube.assemble(cfg.axes, sweep._fixed_coords(cfg), [(ids, index, results, None)],
-                       sweep._provenance(cfg), n_multipliers=4)
+    ds = cube.assemble(cfg.axes, sweep.fixed_coords(cfg), [(ids, index, results, None)],
+                       sweep.provenance(cfg), n_multipliers=4)
     (row,) = boundaries.boundary_rows(cfg.data, ds)
     assert inside[0][2].items() <= row.items()
     assert sweep.compute_chunk(cfg.data, cfg.axes, "speed", segs[:1])[3] == []
     assert sweep.compute_chunk(cfg.data, cfg.axes, "speed", segs[1:])[3] == []
     cube.write_part(tmp_path, "seg000000", index, results, {"config_hash": "h", "segments": ids, "boundaries": inside})
-    assert sweep._earlier_parts(tmp_path, "h") == (set(ids), boundaries.keyed(inside))
+    assert sweep.earlier_parts(tmp_path, "h") == (set(ids), boundaries.keyed(inside))
 
 
 def test_tracker_finds_each_stability_change_once_in_any_chunk_order():

@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 
-from pipeline import backbone, cli, compute, config
+from pipeline import backbone, cli, compute, config, result_kinds
 from tests import cfcheck
 
 AXIAL = "configs/filipkovsky2010_axial.toml"
@@ -160,4 +160,4 @@ def test_cf_checkers_find_no_error_and_units_are_stated(axial_result, tmp_path):
         assert ds[name].attrs["units"] == ds["state_units"].values[slave], name
     mixed = [n for n, v in ds.data_vars.items() if v.dtype.kind == "f" and "units" not in v.attrs]
     assert mixed == ["reduced_coefficient", "manifold_coefficient"]
-    assert all(ds[n].attrs["comment"].startswith(backbone.MIXED_UNITS) for n in mixed)
+    assert all(ds[n].attrs["comment"].startswith(result_kinds.MIXED_UNITS) for n in mixed)

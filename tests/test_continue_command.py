@@ -84,7 +84,7 @@ def test_continue_writes_branches_and_folds(duffing_result):
     # the same folds as the kernels' continuation in this process (the file carries them intact)
     cfg = config.parse_config(DUFFING)
     pl = continuation.plan(cfg.data)
-    family, _ = continuation._family(cfg.data, pl, {})
+    family, _ = continuation.line_family(cfg.data, pl, {})
     direct = al.continue_orbit(family, 0.5, np.zeros(2), (0.5, 2.0), pl.settings)
     np.testing.assert_allclose(ds["event_parameter"].values, [e.point.lam for e in direct.events], rtol=1e-12)
     # stable, unstable between the folds, stable: as the multipliers say

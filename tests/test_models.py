@@ -237,7 +237,7 @@ def test_warmup_compiles_what_a_point_with_attractor_then_runs(capsys):
 
     assert cli.main(["warmup", "duffing", "--integrator", "dop853"]) == 0
     assert "duffing (kernel group duffing)" in capsys.readouterr().out
-    cfg = pipeline._config(str(ROOT / "configs" / "duffing_resonance.toml"))
+    cfg = pipeline.as_config(str(ROOT / "configs" / "duffing_resonance.toml"))
     data = {**cfg.data, "analysis": {**cfg.data["analysis"], "attractor": True}}
     compiled = event.RecordingListener()
     with event.install_listener("numba:compile", compiled):
@@ -268,10 +268,10 @@ segs = sweep.segments(fig13)
 scene(fig13.data)
 chunk = lambda: sweep.compute_chunk(fig13.data, fig13.axes, fig13.continued_axis, segs[:2])
 print("sweep", compiled_by(chunk))
-sym = pipeline._config(sys.argv[1])
+sym = pipeline.as_config(sys.argv[1])
 scene(sym.data)
 print("backbone", compiled_by(lambda: backbone.backbone_line(sym.data, backbone.plan(sym.data).lines[0])))
-duff = pipeline._config(sys.argv[2])
+duff = pipeline.as_config(sys.argv[2])
 data = {**duff.data, "analysis": {**duff.data["analysis"], "attractor": True}}
 scene(data)
 print("attractor", compiled_by(lambda: compute.point_detail(data, compute.point_values(duff, {"omega": 1.0}),

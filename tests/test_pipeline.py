@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline import config, cube, sweep
+from pipeline import cluster, config, cube, sweep
 
 SMALL = """
 [scene]
@@ -115,11 +115,11 @@ def test_the_driver_reads_no_part_back_and_leaves_its_heap_out_of_gc_during_a_sw
 def test_a_nested_heap_freeze_adds_what_was_made_since_and_only_the_outermost_unfreezes(monkeypatch):
     assert gc.get_freeze_count() == 0
     asked, count = [], gc.get_freeze_count
-    with sweep.heap_frozen():
+    with cluster.heap_frozen():
         before = gc.get_freeze_count()
         made = [[] for _ in range(1000)]            # tracked by gc, made inside the outer block
         monkeypatch.setattr(gc, "get_freeze_count", lambda: asked.append(1) or count())
-        with sweep.heap_frozen():                   # does not walk the frozen heap to count it
+        with cluster.heap_frozen():                   # does not walk the frozen heap to count it
             assert count() >= before + len(made)
         assert not asked
         monkeypatch.undo()
@@ -233,7 +233,7 @@ def test_every_cli_argument_has_help():
 
 def test_import_rotorsweep_gives_the_public_api():
     import rotorsweep
-    assert rotorsweep.__version__ == sweep.VERSION
+    assert rotorsweep.__version__ == cluster.VERSION
     assert all(hasattr(rotorsweep, name) for name in rotorsweep.__all__)
     assert all(callable(getattr(rotorsweep, name)) for name in ("run", "open_cube", "unstable_intervals",
                                                                 "make_report", "point", "load_config"))

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from pipeline import compute, config, cube, schema, sweep
+from pipeline.cluster import connect
 from tests.test_pipeline import CLI, SMALL, data_vars, rotorsweep
 
 LONG = SMALL.replace("speed = {start = 70.0, stop = 100.0, step = 3.0}",
@@ -124,7 +125,7 @@ def test_existing_cube_is_not_overwritten_without_flag(tmp_path):
 
 
 def test_local_cluster_binds_to_localhost_and_its_workers_keep_their_imports_out_of_gc():
-    client, cluster = sweep._client(2, None)
+    client, cluster = connect(2, None)
     try:
         assert client.scheduler.address.startswith("tcp://127.0.0.1:")
         assert "127.0.0.1" in client.dashboard_link

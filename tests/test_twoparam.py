@@ -44,7 +44,7 @@ def grid_boundary(data, point):
     this is a second, independent method): the bracketing grid speeds, their orbits by
     solve_orbit from a neighbour, Brent on max|multiplier| - 1 with natural continuation
     (events.locate_boundary)."""
-    solve, _ = boundaries._solver(data, {**compute.fixed_values(data), "clearance": point.nu}, "speed")
+    solve, _ = boundaries.axis_solver(data, {**compute.fixed_values(data), "clearance": point.nu}, "speed")
     low = GRID_START + GRID_STEP * math.floor((point.lam - GRID_START) / GRID_STEP)
     a, b = solve(low, point.state), solve(low + GRID_STEP, point.state)
     assert a.status == b.status == 0 and a.stable != b.stable     # the grid sees this boundary

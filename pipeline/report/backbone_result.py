@@ -191,4 +191,4 @@ def make_report(ds, out_dir, title=None, forced=None):
     cols = backbone.table(ds)
     return page.write_result_report(out_dir, title, _header_html(ds, title),
                                     lambda backend: figures(ds, backend, forced), page.columns_html("Modes", cols, 6),
-                                    ds.attrs.get("config_toml", ""), "modes.csv", query._render(cols, "csv"))
+                                    ds.attrs.get("config_toml", ""), "modes.csv", query.render(cols, "csv"))

@@ -205,4 +205,4 @@ def make_report(ds, out_dir, title=None):
     title = title or f"Continuation report: {ds.attrs.get('scene', '')}"
     return page.write_result_report(out_dir, title, _header_html(ds, title), lambda backend: figures(ds, backend),
                                     _events_html(ds) + _bistable_html(ds), ds.attrs.get("config_toml", ""),
-                                    "events.csv", query._render(continuation.events_table(ds), "csv"))
+                                    "events.csv", query.render(continuation.events_table(ds), "csv"))

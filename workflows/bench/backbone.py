@@ -37,14 +37,14 @@ def mode_rows(path, repeats, grid_points=None):
     grid = pb.amplitudes(pl, spec.build(values).derived["axial_approach"])
     modes = nnm.linear_modes(system)
     opts = compute.integrator_settings(data)
-    pb._continued(spec, values, modes, 0, grid, pl, opts)      # compiles (or loads) the kernels
+    pb.continued_backbone(spec, values, modes, 0, grid, pl, opts)      # compiles (or loads) the kernels
     rows = []
     for k in range(len(modes)):
         start = time.perf_counter()
-        bb = pb._continued(spec, values, modes, k, grid, pl, opts)
+        bb = pb.continued_backbone(spec, values, modes, k, grid, pl, opts)
         cont_s = time.perf_counter() - start
         man_s, f_man = best_time(lambda: nnm.backbone(nnm.manifold(system, k, master=bb.coordinate), grid), repeats)
-        f_cont = pb._on_grid(bb, grid)
+        f_cont = pb.frequency_on_grid(bb, grid)
         rel = (f_cont - f_man) / f_cont
         rows.append({"scene": spec.name, "mode": k + 1, "label": f"{modes[k].label} {modes[k].whirl}",
                      "linear_frequency_hz": modes[k].frequency, "manifold_s": man_s, "continuation_s": cont_s,

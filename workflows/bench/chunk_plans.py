@@ -35,11 +35,11 @@ def swept_costs(cfg, work_dir):
     warmed first (the first point a worker solves would count the kernels' loading), in plan order."""
     import pipeline
     from pipeline import sweep
-    from workflows.bench.scaling_runs import _worker_calls, first_point, start_cluster
+    from workflows.bench.scaling_runs import worker_calls, first_point, start_cluster
 
     cluster, client = start_cluster(2)
     try:
-        client.run(_worker_calls()[0], cfg.data, first_point(cfg))
+        client.run(worker_calls()[0], cfg.data, first_point(cfg))
         path = pipeline.run(cfg, str(Path(work_dir) / "costs.nc"), scheduler=cluster.scheduler_address,
                             overwrite=True, progress=False)
     finally:

@@ -12,7 +12,7 @@ time against chunk size and the task timeline of the two-worker run).
 
 What is measured, every run through the public API `pipeline.run(cfg, output,
 scheduler=<address>, chunk_points=..., overwrite=True)` on a fresh local cluster of k
-single-threaded worker processes, the one `rotorsweep run` starts (`pipeline.sweep.local_cluster`,
+single-threaded worker processes, the one `rotorsweep run` starts (`pipeline.cluster.local_cluster`,
 with its relaxed housekeeping settings; `scaling_runs`):
 
 * wall time of the sweep (`pipeline.run`, from the call to the written cube), separately from

@@ -21,7 +21,7 @@ PHASES = (("driver_warmup", "pipeline.warmup", "compile_scene"),
           ("assemble", "pipeline.cube", "Assembly.dataset"),
           ("boundaries", "pipeline.boundaries", "add_boundary_table"),
           ("write", "pipeline.cube", "write_cube"),
-          ("connect", "pipeline.sweep", "_client"),
+          ("connect", "pipeline.cluster", "connect"),
           ("part_files", "pipeline.cube", "write_part"))
 TOP_PHASES = ("driver_warmup", "compute", "assemble", "boundaries", "write")
 
@@ -109,15 +109,15 @@ def task_summary(records, n_workers, phase_start_epoch, phase_seconds):
 def start_cluster(n_workers):
     from distributed import Client
 
-    from pipeline import sweep
+    from pipeline import cluster as runtime
 
-    cluster = sweep.local_cluster(n_workers)        # the cluster `rotorsweep run` starts
+    cluster = runtime.local_cluster(n_workers)      # the cluster every command starts
     client = Client(cluster)
     client.wait_for_workers(n_workers)
     return cluster, client
 
 
-def _worker_calls():
+def worker_calls():
     """Functions run on the workers: warm and cpu_seconds are closures, which cloudpickle ships by
     value (the workers need not import this module); peak_rss_kib is imported there from
     workflows.bench.common (worker processes start with the driver's sys.path)."""
@@ -139,7 +139,7 @@ def measure_run(cfg, n_workers, chunk_points, work_dir, label, repeat=0):
     import pipeline
     from distributed import get_task_stream
 
-    warm, max_rss, cpu_seconds = _worker_calls()
+    warm, max_rss, cpu_seconds = worker_calls()
     before = loadavg()
     t0 = time.perf_counter()
     cluster, client = start_cluster(n_workers)

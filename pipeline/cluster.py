@@ -1,0 +1,173 @@
+"""The Dask runtime of every command that runs on a cluster (run, continue, backbone): the local
+cluster and its workers' setup, connecting to a scheduler given by address (checked first),
+closing quietly, submitting tasks, the driver's frozen heap, and the provenance every result
+file records (the version, the command, the model, the config).
+
+The sweep (pipeline.sweep) and the per-line commands (pipeline.results) use this module; none of
+them starts or closes a cluster another way. It imports only the standard library at import time
+(the command line reads the version here; Dask is imported where a cluster starts)."""
+import contextlib
+import functools
+import gc
+import json
+import logging
+import os
+import socket
+from datetime import datetime, timezone
+from importlib import metadata
+
+
+def installed_version():
+    """The installed package's version (pyproject.toml holds the one definition); a checkout used
+    without installing it has none and says so."""
+    try:
+        return metadata.version("rotorsweep")
+    except metadata.PackageNotFoundError:
+        return "0+unknown"
+
+
+VERSION = installed_version()
+
+
+class SweepError(Exception):
+    """A run that cannot start or finish: no scheduler, output in the way, workers lost
+    (message for the user)."""
+
+
+# Each worker process takes one core: no thread pools of its own.
+WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
+              "MKL_NUM_THREADS": "1"}
+# The local cluster's housekeeping, relaxed: the driver process (scheduler, nannies, client)
+# shares the cores with the workers, and with Dask's defaults (an event-loop tick every 20 ms in
+# every process, nannies polling worker memory every 100 ms, each worker sampling its own stack
+# every 10 ms for the dashboard's profile page) an idle 2-worker cluster took 74 ms of CPU per
+# second, 3.7% of 2 cores (13 ms/s relaxed). The system monitor (host CPU, memory, network and
+# disk counters for the dashboard's System page and the heartbeats, every 500 ms in the scheduler,
+# each nanny and each worker) then took a third of what was left: an idle 2-worker cluster used
+# 33-38 ms/s with it, 24 ms/s sampling every 5 s (AMD EPYC, 2 cores). The workers' memory limits
+# do not wait for it (they sample their process memory themselves). A scheduler given by address
+# keeps its own settings.
+LOCAL_CLUSTER_CONFIG = {"distributed.admin.tick.interval": "1s",
+                        "distributed.admin.system-monitor.interval": "5s",
+                        "distributed.worker.memory.monitor-interval": "500ms",
+                        "distributed.worker.profile.enabled": False}
+SCHEDULER_TIMEOUT_S = 5
+
+
+def local_workers(workers):
+    """Worker processes of a local cluster: as asked, else one per core, at least 2."""
+    return workers or max(2, os.cpu_count() or 2)
+
+
+def local_cluster(n_workers):
+    """A LocalCluster of n_workers single-threaded worker processes on 127.0.0.1 (dashboard on a
+    free port), as every command starts it; pipeline.workerinit sets each worker up."""
+    import dask
+    from dask.distributed import LocalCluster
+
+    # the servers and the nannies' worker processes take their settings when they are created
+    with dask.config.set(LOCAL_CLUSTER_CONFIG):
+        return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                            dashboard_address="127.0.0.1:0", env=dict(WORKER_ENV),
+                            preload=["pipeline.workerinit"])
+
+
+def connect(workers, scheduler):
+    """(client, local cluster or None): a client of the scheduler at `scheduler`, else of a new
+    local cluster of `workers` processes (default local_workers)."""
+    from dask.distributed import Client
+
+    if scheduler:
+        return Client(scheduler, timeout=f"{4 * SCHEDULER_TIMEOUT_S}s"), None
+    os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+    cluster = local_cluster(local_workers(workers))
+    return Client(cluster), cluster
+
+
+def close(client, cluster):
+    """Close silently: after Ctrl-C or an error the nannies warn that they kill workers still busy
+    in a kernel, and the in-process scheduler logs CRITICAL tracebacks for results of tasks in
+    flight it can no longer send to the closed client; both are the intent here, and the run's
+    outcome is already decided (its part files are written)."""
+    logger = logging.getLogger("distributed")
+    level = logger.level
+    logger.setLevel(logging.CRITICAL + 1)
+    try:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    finally:
+        logger.setLevel(level)
+
+
+def check_scheduler(address, timeout=SCHEDULER_TIMEOUT_S):
+    """Fail within seconds (not Dask's 30 s, and before kernels compile) when nothing listens at
+    a --scheduler address."""
+    host, _, port = address.split("://", 1)[-1].rpartition(":")
+    if not host or not port.isdigit():
+        raise SweepError(f"--scheduler {address}: expected an address like tcp://HOST:PORT")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=timeout).close()
+    except OSError as exc:
+        raise SweepError(f"--scheduler {address}: no scheduler reachable within {timeout} s "
+                         f"({exc.strerror or exc}); is it running, and is the address right?") from None
+
+
+def submitter(client, fn, *fixed, **options):
+    """submit(*args) -> the future of fn(*fixed, *args) on the cluster. The fixed arguments (the
+    config: a few kB) go with every task, not scattered: a scattered copy lives only on workers
+    and is lost for good once every worker holding it has died. They ride in the task's function,
+    which Dask does not scan for futures as it scans a task's arguments, item by item (Fig. 13's
+    config: 2476 objects, ~1.5 ms of driver time a task)."""
+    return functools.partial(client.submit, functools.partial(fn, *fixed), pure=False, **options)
+
+
+@contextlib.contextmanager
+def heap_frozen():
+    """Leave the objects alive now (the imported modules': 300k+ in a driver with Dask, xarray and
+    the kernels loaded) out of garbage collections until the outermost such block ends: each
+    full collection walked them all (0.1 s, once or twice a sweep, with the workers waiting for
+    the next task). A nested block adds what was created since (a local cluster started inside
+    the run) and leaves the unfreezing to the outermost one; a heap the caller froze before
+    counts as an outer block (what the run adds stays frozen until the caller unfreezes)."""
+    global _frozen_blocks
+    # gc.get_freeze_count() walks the frozen objects (21 ms for a sweep driver's, before the first
+    # task): only a first block asks it, to learn whether the caller froze the heap
+    outermost = not _frozen_blocks and not gc.get_freeze_count()
+    _frozen_blocks += 1
+    gc.freeze()
+    try:
+        yield
+    finally:
+        _frozen_blocks -= 1
+        if outermost:
+            gc.unfreeze()
+
+
+_frozen_blocks = 0      # heap_frozen blocks open in this process
+
+
+def provenance(cfg, kind):
+    """The global attributes every result file of `kind` (pipeline.result_kinds) records:
+    `history` names the command that wrote it (run, continue, backbone), the version, the model,
+    the config and its hash."""
+    from pipeline import compute, result_kinds
+
+    kind = result_kinds.KINDS[kind]
+    model = compute.model_of(cfg.data)
+    created = datetime.now(timezone.utc).isoformat(timespec="seconds")
+    return {
+        "history": f"{created} rotorsweep {VERSION}: {kind.command} {cfg.path or 'scene ' + cfg.data['scene']['name']}",
+        "source": f"rotorsweep {VERSION}, model {model.name} version {model.version}: {model.description}",
+        "references": model.references or f"none given by model {model.name}",
+        "config_toml": cfg.source,
+        "config_hash": cfg.hash(),
+        "scene": cfg.data["scene"]["name"],
+        "model": cfg.data["scene"]["model"],
+        "model_version": model.version,
+        "continued_axis": cfg.continued_axis,
+        "numerics": json.dumps(cfg.data["numerics"], sort_keys=True),
+        "rotorsweep_version": VERSION,
+        "created": created,
+        "title": f"{kind.title}: {cfg.data['scene']['name']}",
+    }

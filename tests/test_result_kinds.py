@@ -1,0 +1,125 @@
+"""Every result kind (pipeline.result_kinds) through everything that reads results: one small file
+of each kind (sweep cube, continuation, backbone) opened by open_result, `rotorsweep info`,
+`query` and `report` (each opening the file once) and the xarray accessor; open_cube refuses the
+other kinds by name; each file's history names the command that wrote it."""
+import holoviews as hv
+import numpy as np
+import pytest
+import xarray as xr
+
+import rotorsweep
+from pipeline import backbone, cli, cluster, config, continuation, cube, result_kinds, results
+from tests.test_backbone_command import scene
+from tests.test_continue_command import DUFFING
+
+KINDS = (result_kinds.SWEEP, result_kinds.CONTINUATION, result_kinds.BACKBONE)
+COMMANDS = {result_kinds.SWEEP: "run", result_kinds.CONTINUATION: "continue", result_kinds.BACKBONE: "backbone"}
+INFO_HEAD = {result_kinds.SWEEP: "rotorsweep result cube: tiny_attractor",
+             result_kinds.CONTINUATION: "continuation result: scene duffing_hardening",
+             result_kinds.BACKBONE: "backbone result: scene filipkovsky2010_axial"}
+
+
+@pytest.fixture(scope="module")
+def paths(tiny_cube, tmp_path_factory):
+    """{kind: path}: the conftest's tiny sweep cube; the Duffing hardening resonance's branch and
+    the axial rotor's first backbone (9 amplitudes), each computed in this process as its command's
+    line task does and written with the command's provenance (no Dask cluster)."""
+    d = tmp_path_factory.mktemp("kinds")
+    cont = config.parse_config(DUFFING)
+    line = continuation.continue_line(cont.data, {})
+    ds = continuation.to_dataset(cont.data, continuation.plan(cont.data), [({}, line)],
+                                 cluster.provenance(cont, result_kinds.CONTINUATION))
+    bb = config.parse_config(scene(modes="1", amplitude_max=4e-6, amplitude_points=9, surface_mode=1))
+    pl = backbone.plan(bb.data)
+    lines = [backbone.backbone_line(bb.data, where) for where in pl.lines]
+    bds = backbone.to_dataset(bb.data, pl, lines, cluster.provenance(bb, result_kinds.BACKBONE))
+    return {result_kinds.SWEEP: tiny_cube, result_kinds.CONTINUATION: results.write(ds, d / "continuation.nc"),
+            result_kinds.BACKBONE: results.write(bds, d / "backbone.nc")}
+
+
+@pytest.fixture
+def opens(monkeypatch):
+    """The number of times xarray opens a file from here on."""
+    count = []
+    real = xr.open_dataset
+    monkeypatch.setattr(xr, "open_dataset", lambda *a, **k: count.append(a) or real(*a, **k))
+    return count
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_open_result_gives_the_kind_and_history_names_the_command(paths, kind):
+    ds, found = rotorsweep.open_result(paths[kind])
+    assert found is result_kinds.KINDS[kind] and found.command == COMMANDS[kind]
+    assert f"rotorsweep {cluster.VERSION}: {COMMANDS[kind]} scene " in ds.attrs["history"]
+    assert ds.rotorsweep.kind == kind
+
+
+@pytest.mark.parametrize("kind", [result_kinds.CONTINUATION, result_kinds.BACKBONE])
+def test_open_cube_refuses_the_other_kinds_by_name(paths, kind):
+    with pytest.raises(cube.CubeError, match=f"is a {kind} result, not a sweep cube"):
+        rotorsweep.open_cube(paths[kind])
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_info_and_query_open_the_file_once(paths, kind, capsys, opens):
+    assert cli.main(["info", str(paths[kind])]) == 0
+    info = capsys.readouterr().out
+    assert info.startswith(INFO_HEAD[kind]) and len(opens) == 1
+    assert cli.main(["query", str(paths[kind]), "--format", "csv"]) == 0
+    rows = capsys.readouterr().out.strip().splitlines()
+    assert len(rows) >= 2 and len(opens) == 2       # a header and a row at least
+    ds, _ = rotorsweep.open_result(paths[kind])
+    assert ds.rotorsweep.describe() == info.rstrip("\n")
+
+
+@pytest.mark.parametrize("kind", [result_kinds.CONTINUATION, result_kinds.BACKBONE])
+def test_query_options_of_a_sweep_cube_are_refused_on_the_others(paths, kind, capsys):
+    assert cli.main(["query", str(paths[kind]), "--unstable"]) == cli.EXIT_USAGE
+    err = capsys.readouterr().err
+    assert f"--unstable applies to a sweep cube (rotorsweep run), not to a {kind} result" in err
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_report_of_every_kind_opens_the_file_once(paths, kind, tmp_path, opens):
+    out = tmp_path / "report"
+    assert cli.main(["report", str(paths[kind]), "-o", str(out), "-q"]) == 0
+    assert len(opens) == 1
+    assert (out / "report.html").stat().st_size > 0 and any(out.glob("*.png"))
+
+
+def test_report_options_apply_to_their_kind_only(paths, tmp_path):
+    with pytest.raises(ValueError, match="--point applies to a sweep cube .*, not to a continuation result"):
+        rotorsweep.make_report(paths[result_kinds.CONTINUATION], tmp_path / "a", points=["omega=1"])
+    with pytest.raises(ValueError, match="--over applies to a backbone result .*, not to a sweep cube"):
+        rotorsweep.make_report(paths[result_kinds.SWEEP], tmp_path / "b", over=paths[result_kinds.CONTINUATION])
+
+
+FIGURE = {result_kinds.SWEEP: "max_multiplier", result_kinds.CONTINUATION: "branch_diagram",
+          result_kinds.BACKBONE: "backbones"}
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_the_accessor_draws_each_kind_and_refuses_the_figures_of_another(paths, kind):
+    ds, _ = rotorsweep.open_result(paths[kind])
+    plot = getattr(ds.rotorsweep, FIGURE[kind])()
+    assert isinstance(plot, hv.core.Dimensioned)
+    hv.renderer("bokeh").get_plot(plot)
+    for other in KINDS:
+        if other != kind:
+            what = result_kinds.KINDS[kind].what
+            with pytest.raises(ValueError, match=f"{FIGURE[other]}\\(\\) draws {result_kinds.KINDS[other].what} "
+                                                 f".*, not {what} "):
+                getattr(ds.rotorsweep, FIGURE[other])()
+
+
+def test_branch_diagram_draws_stable_solid_unstable_dashed_and_backbones_both_methods(paths):
+    ds, _ = rotorsweep.open_result(paths[result_kinds.CONTINUATION])
+    plot = ds.rotorsweep.branch_diagram()
+    stable, unstable = plot.get(0), plot.get(1)
+    assert unstable.last.opts.get("style").kwargs["line_dash"] == "dashed"
+    for curves, flag in ((stable, 1), (unstable, 0)):      # each point drawn once, in its own style
+        assert sum(np.isfinite(c.dimension_values(1)).sum() for c in curves) == int((ds["stable"] == flag).sum()) > 0
+    bb, _ = rotorsweep.open_result(paths[result_kinds.BACKBONE])
+    continued, manifold = bb.rotorsweep.backbones().get(0), bb.rotorsweep.backbones().get(1)
+    np.testing.assert_array_equal(continued.last.dimension_values(1), bb["frequency_continuation"].values.ravel())
+    np.testing.assert_array_equal(manifold.last.dimension_values(1), bb["frequency_manifold"].values.ravel())
