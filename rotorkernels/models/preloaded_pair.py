@@ -178,7 +178,10 @@ def bearing_problems(data, axes):
         return [REMOVED_STIFFNESS]
     where = "sweep" if "nominal_angle" in axes else "bearing"
     rows = bearing.ANGULAR_TABLES[b["table"]].outer_race_radius
-    given = axes.get("nominal_angle") or ([b["nominal_angle"]] if b["nominal_angle"] is not None else [])
+    if "nominal_angle" in axes:
+        given = [float(a) for a in axes["nominal_angle"]]
+    else:
+        given = [b["nominal_angle"]] if b["nominal_angle"] is not None else []
     if None in rows:
         if given or b.get("free_angle") == "nominal":
             return [f"{where}.nominal_angle: table {b['table']!r} prints one bearing without a nominal angle: "
