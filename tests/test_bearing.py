@@ -310,6 +310,23 @@ def test_loaded_angle_is_an_independent_scalar_root_of_eq_10(angle, p0):
     assert preload_state(geom, p0, free_angle=geom.nominal_contact_angle).contact_angle == st.contact_angle
 
 
+@pytest.mark.parametrize("angle", [12, 40])
+def test_hertz_coefficient_of_eq_11_is_the_contact_constant(angle):
+    """2010 papers' eq. 11, b = (3/2) F1 cbrt(sum K k^2 (Theta1 + Theta2)^2 / (3 E1)), with
+    Theta = (1 - sigma^2) / (pi E), k = 1 / kappa and F1, E1 the complete elliptic integrals of
+    modulus k1^2 = 1 - k^2 (scipy), gives w = b P^{2/3}: b = k_contact^{-2/3} for each contact of
+    the loaded ball (the ellipticity from the code's solve of eq. 12). Rounding: 1e-12."""
+    from scipy.special import ellipe, ellipk
+
+    geom = table_geometry("filipkovsky2016", angle)
+    theta = (1 - geom.poisson_ratio ** 2) / (math.pi * geom.youngs_modulus)
+    for cc in ball_contacts(geom, math.radians(angle + 2.0)):
+        k = 1.0 / cc.ellipticity
+        f1, e1 = ellipk(1 - k * k), ellipe(1 - k * k)
+        b = 1.5 * f1 * (cc.curvature_sum * k * k * (2 * theta) ** 2 / (3 * e1)) ** (1 / 3)
+        assert b == pytest.approx(cc.stiffness ** (-2 / 3), rel=1e-12)
+
+
 def printed_ball_sum(k, alpha, z0, x, y, z, n=7):
     """Eq. 5 (2016: eq. 1) as printed, numpy: P = K sum [x cos a cos b + y cos a sin b +
     (z + z0) sin a]_+^{3/2} (cos a cos b, cos a sin b, sin a), b = 2 pi v / N; and its analytic

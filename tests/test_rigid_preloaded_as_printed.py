@@ -175,6 +175,7 @@ def test_face_to_face_is_back_to_back_mirrored_in_z():
 def test_given_values_are_used_and_recorded_as_given():
     derived = SPEC.build(values()).derived
     assert (derived["contact_constant_given"], derived["axial_approach_given"], derived["contact_angle_imposed"]) == (0, 0, 0)
+    assert derived["free_angle_from_geometry"] == 1
     assert derived["free_contact_angle"] == pytest.approx(math.degrees(math.acos((R1 + 2 * RK - R2[15]) / (2 * RK - D))),
                                                           rel=1e-12)
     derived = SPEC.build(values(contact_constant=3e9, axial_approach=90e-6, contact_angle=16.0)).derived
@@ -228,3 +229,19 @@ def test_the_printed_scene_config_validates():
     cfg = config.load_config("configs/filipkovsky2016_fig2a_printed.toml")
     assert cfg.data["bearing"]["preload_law"] == "as_printed"
     assert list(cfg.axes["nominal_angle"]) == [12.0, 15.0, 26.0, 36.0, 40.0]
+
+
+def test_jeffcott_preload_constant_filipkovsky_is_the_law_as_printed_without_clearance():
+    """jeffcott_clearance's `preload_constant = "filipkovsky"` is bearing.as_printed_state (its
+    thrust 1.5 P0), and a clearance with it is a config error (the printed law has none)."""
+    text = ('[scene]\nname = "j"\nmodel = "jeffcott_clearance"\n[bearing]\npreset = "angular_contact_medium"\n'
+            'nominal_angle = 15\npreload = 300.0\npreload_constant = "filipkovsky"\n{extra}[sweep]\nspeed = [100.0]\n')
+    with pytest.raises(config.ConfigError, match="has no clearance"):
+        config.parse_config(text.format(extra="clearance = 1e-6\n"))
+    cfg = config.parse_config(text.format(extra=""))
+    from pipeline import compute
+    derived = compute.point_params(cfg.data, {**compute.fixed_values(cfg.data), "speed": 100.0}).derived
+    geom = bearing.preset("angular_contact_medium", 15)
+    want = bearing.as_printed_state(geom, 300.0, math.radians(15.0))
+    assert derived["contact_angle_used"] == pytest.approx(math.degrees(want.contact_angle), rel=1e-15)
+    assert want.static_thrust == pytest.approx(450.0, rel=1e-12)

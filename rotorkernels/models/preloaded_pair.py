@@ -140,6 +140,7 @@ def bearing_derived(v, state):
     inputs = bearing_inputs(v)
     return {
         "free_contact_angle": math.degrees(_free_angle(inputs)),
+        "free_angle_from_geometry": float(free_angle_source(inputs) == "geometry"),
         "contact_angle_used": math.degrees(state.contact_angle),
         "contact_angle_imposed": float(inputs.contact_angle is not None),
         "axial_approach": state.axial_approach,
@@ -159,6 +160,7 @@ def _free_angle(inputs):
 
 BEARING_DERIVED = {
     "free_contact_angle": ("degree", "free (unloaded) contact angle: from R1, R2, R_K, d, or the nominal angle"),
+    "free_angle_from_geometry": ("1", "1: free angle from R1, R2, R_K, d (eq. 10 at zero load); 0: the nominal angle"),
     "contact_angle_used": ("degree", "contact angle in the force law (loaded, or imposed)"),
     "contact_angle_imposed": ("1", "1: contact angle imposed by the scene; 0: from the preload solve"),
     "axial_approach": ("m", "axial approach z0 of each bearing in the force law"),
