@@ -120,12 +120,13 @@ def test_series_parts_from_the_ball_sum_by_one_percent_near_a_fifth_of_z0():
 
 # --- the models ---------------------------------------------------------------------------------
 
+@pytest.mark.parametrize("arrangement", ["back_to_back", "face_to_face"])
 @pytest.mark.parametrize("name", MODELS)
-def test_kernel_rhs_is_the_polynomial_form(name):
+def test_kernel_rhs_is_the_polynomial_form(name, arrangement):
     """At random scaled states: du/dtau of the kernel = the PolynomialSystem's acceleration in SI
-    scaled by T^2 / L (rounding: 1e-12 of the largest term)."""
+    scaled by T^2 / L (rounding: 1e-12 of the largest term), in both bearing arrangements."""
     spec = models.get(name)
-    v = values(spec)
+    v = values(spec, arrangement=arrangement)
     built, system = spec.build(v), spec.polynomial(v)
     n, el, t = spec.n_position, spec.length_scale, built.period
     module = __import__(spec.module, fromlist=["rhs"])
