@@ -18,8 +18,9 @@ from typing import NamedTuple
 from rotorkernels import bearing
 from rotorkernels.models.spec import Parameter
 
-NOMINAL_ANGLES = tuple(k for k in bearing.ANGULAR_TABLES["filipkovsky2016"].outer_race_radius)
+NOMINAL_ANGLES = tuple(bearing.ANGULAR_TABLES["filipkovsky2016"].outer_race_radius)
 DEFAULT_TABLE = "filipkovsky2016"
+DEFAULT_NOMINAL_ANGLE = 15.0     # the row a scene without nominal_angle gets (the paper's Figs. 3, 5, 6)
 PRELOAD_LAWS = ("hertz", "as_printed")
 FREE_ANGLES = ("geometry", "nominal")
 # Sign s of the axial coordinate in each bearing: bearing A is shifted by s z, B by -s z.
@@ -87,14 +88,17 @@ def free_angle_source(inputs):
     return "nominal" if inputs.preload_law == "hertz" and labelled and not groove else "geometry"
 
 
+def free_angle(inputs):
+    """The free contact angle [rad] (see free_angle_source)."""
+    if free_angle_source(inputs) == "geometry":
+        return table_geometry(inputs).nominal_contact_angle
+    return math.radians(DEFAULT_NOMINAL_ANGLE if inputs.nominal_angle is None else inputs.nominal_angle)
+
+
 @lru_cache(maxsize=256)
 def preload_from(inputs):
     """bearing.PreloadState of each bearing of the scene (angles in the inputs in degrees)."""
-    geom = table_geometry(inputs)
-    if free_angle_source(inputs) == "geometry":
-        alpha0 = geom.nominal_contact_angle
-    else:
-        alpha0 = math.radians(inputs.nominal_angle if inputs.nominal_angle is not None else 15.0)
+    geom, alpha0 = table_geometry(inputs), free_angle(inputs)
     alpha = None if inputs.contact_angle is None else math.radians(inputs.contact_angle)
     k, z0, p0 = inputs.contact_constant, inputs.axial_approach, inputs.preload
     if inputs.preload_law == "as_printed":
@@ -116,11 +120,6 @@ def preload_of(nominal_angle, preload, preload_law="hertz", **given):
                                       **given))
 
 
-def static_thrust(state):
-    """Axial force [N] of one bearing's force law at rest: P0 (hertz), 1.5 P0 (as printed)."""
-    return state.static_thrust
-
-
 def bearing_state(v):
     """bearing.PreloadState of each bearing at a point's values."""
     return preload_from(bearing_inputs(v))
@@ -139,7 +138,7 @@ def bearing_derived(v, state):
     model derived (0): the free angle, loaded angle, z0, K, Hertz approach and static thrust."""
     inputs = bearing_inputs(v)
     return {
-        "free_contact_angle": math.degrees(_free_angle(inputs)),
+        "free_contact_angle": math.degrees(free_angle(inputs)),
         "free_angle_from_geometry": float(free_angle_source(inputs) == "geometry"),
         "contact_angle_used": math.degrees(state.contact_angle),
         "contact_angle_imposed": float(inputs.contact_angle is not None),
@@ -150,12 +149,6 @@ def bearing_derived(v, state):
         "hertz_approach": state.hertz_approach,
         "static_thrust": state.static_thrust,
     }
-
-
-def _free_angle(inputs):
-    if free_angle_source(inputs) == "geometry":
-        return table_geometry(inputs).nominal_contact_angle
-    return math.radians(inputs.nominal_angle if inputs.nominal_angle is not None else 15.0)
 
 
 BEARING_DERIVED = {
@@ -190,7 +183,7 @@ def bearing_problems(data, axes):
                     "leave bearing.nominal_angle and bearing.free_angle = \"nominal\" out"]
         angles = [None]
     else:
-        angles = given or [15.0]
+        angles = given or [DEFAULT_NOMINAL_ANGLE]
         odd = [a for a in angles if a not in rows]
         if odd:
             return [f"{where}.nominal_angle: must be one of {', '.join(map(str, rows))} deg (the paper's "

@@ -50,8 +50,9 @@ from rotorkernels.contact import ring_force, ring_load
 from rotorkernels.cubic_law import cubic_coefficients, cubic_load
 from rotorkernels.models.spec import Built, ModelSpec, Observable, Parameter
 from rotorkernels.models.preloaded_pair import (  # noqa: F401 (the pair's API, read as rp.*)
-    ARRANGEMENTS, BEARING_DERIVED, BEARING_KEYS, NOMINAL_ANGLES, PRELOAD_LAWS, arrangement_of, bearing_problems,
-    bearing_state, geometry, n_balls_of, preload_of, table_geometry, bearing_derived)
+    ARRANGEMENTS, BEARING_DERIVED, BEARING_KEYS, DEFAULT_NOMINAL_ANGLE, NOMINAL_ANGLES,
+    arrangement_of, bearing_derived, bearing_problems, bearing_state, geometry, n_balls_of, preload_of,
+    table_geometry)
 from rotorkernels.models.velocity import upper_rows, velocity_rows
 
 LENGTH_SCALE = 1e-6
@@ -428,7 +429,7 @@ SPEC = ModelSpec(
                   axis=True, lo=0, hi=1e5, unset=0.0,
                   help="support vibration frequency f_omega [Hz] (needed when support_acceleration > 0)"),
         Parameter(name="nominal_angle", section="bearing", unit="degree", long_name="nominal contact angle",
-                  axis=True, lo=0, hi=90, lo_open=True, hi_open=True, unset=15.0,
+                  axis=True, lo=0, hi=90, lo_open=True, hi_open=True, unset=DEFAULT_NOMINAL_ANGLE,
                   help="row of the bearing table (a label): 12, 15, 26, 36 or 40 deg in the 2016 table; "
                        "the 2010 table has one unlabelled row (leave unset)"),
         _angle("contact_angle", "imposed contact angle",
