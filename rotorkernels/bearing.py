@@ -330,7 +330,7 @@ class PreloadState:
     """Static state of one axially preloaded bearing (the point the force law linearizes about).
 
     The force law of each ball is Q = K [delta]_+^{3/2} with delta = (x cos b + y sin b) cos(alpha)
-    + s0 sin(alpha) - c at rest; ``bracket`` = s0 sin(alpha) - c is that delta at x = y = 0."""
+    + s0 sin(alpha) - c; ``normal_approach`` ("bracket" below) is that delta at x = y = 0."""
 
     contact_angle: float  # loaded contact angle alpha [rad]
     axial_approach: float  # s0 [m], the axial shift that enters the force law (the papers' z0)
