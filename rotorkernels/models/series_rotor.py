@@ -29,9 +29,10 @@ Choices where the papers are ambiguous or inconsistent:
   instead of cancel); `bearing.arrangement = "face_to_face"` flips it.
 * Bearing constants: `bearing.table = "filipkovsky2010"` is these papers' bearing as printed
   (section 2 of both: R1 = 16.00, R2 = 27.53, R_K = 5.93, d = 11.51 mm, N = 7, E = 2e11 Pa,
-  sigma = 0.3, Q = 300 N), which configs/filipkovsky2010_*.toml use. The model's default table
-  stays the 2016 paper's (E = 2.1e11 Pa, the 15 deg row) so that scenes written before keep
-  their numbers; E = 2e11 gives a 3.3 % softer c_r, 1.6 % lower frequencies.
+  sigma = 0.3, Q = 300 N). The model's default table stays the 2016 paper's (E = 2.1e11 Pa, the
+  15 deg row), and configs/filipkovsky2010_*.toml take only R2 from the 2010 papers, so that the
+  scenes and their backbone numbers stay; E = 2e11 gives a 3.3 % softer c_r, 1.6 % lower
+  frequencies.
 * Rotor constants (ROTOR_PARAMETERS) as both papers print them in section 2: l = 0.5 m,
   l1 = 0.125 m (axial paper), d = 0.025 m, m0 = 10 kg, I1 = 0.1, I0 = 0.2 kg m^2,
   omega = 628.3 rad/s. The density is not printed: steel, 7800 kg/m^3 (ours).
