@@ -53,12 +53,12 @@ def scene_values(data, point):
 def static_equilibrium(values, max_iter=50):
     """Newton on P(q) = f_g from the centred rotor (where P = 0 by the preload's symmetry)."""
     state = rp.bearing_state(values)
-    n_balls = rp.geometry(values["nominal_angle"]).n_balls
+    n_balls = rp.n_balls_of(values)
     load = rp.weight(rp.Rotor.of(values))
     q = np.zeros(rp.N_POS)
     scale = float(values["preload"])
     for it in range(max_iter + 1):
-        force, stiffness = rp.bearing_load(q, state, n_balls, values["law"])
+        force, stiffness = rp.bearing_load(q, state, n_balls, values["law"], arrangement=rp.arrangement_of(values))
         residual = np.abs(force - load).max() / scale
         if residual <= EQUILIBRIUM_RTOL or it == max_iter:
             break

@@ -18,7 +18,7 @@ Conventions (Harris, *Rolling Bearing Analysis*; Hamrock & Brewe 1983):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -80,8 +80,37 @@ class BearingGeometry:
 # ----------------------------------------------------------------------------------------------
 # Presets
 
-# Filipkovsky 2016 (medium series, GOST 831-75): outer groove-bottom radius R2 per nominal angle.
-_ANGULAR_R2_MM = {12: 27.5125, 15: 27.5167, 26: 27.5399, 36: 27.5709, 40: 27.5858}
+class AngularTable(NamedTuple):
+    """One paper's angular-contact bearing as printed (SI): shared geometry and material, and the
+    outer groove-bottom radius R2 per row, keyed by the row's nominal angle [deg] (a label)."""
+
+    source: str
+    inner_race_radius: float  # R1 [m]
+    groove_radius: float  # R_K [m], both rings
+    ball_diameter: float  # d [m]
+    n_balls: int
+    youngs_modulus: float  # E [Pa]
+    poisson_ratio: float
+    outer_race_radius: dict  # {nominal angle [deg] or None (no label printed): R2 [m]}
+
+
+ANGULAR_TABLES = {
+    # Filipkovsky 2016, "Результаты численных исследований" (the paragraph after eq. 13): medium
+    # series, GOST 831-75; "R_2 для углов alpha = 12, 15, 26, 36 и 40 deg соответственно равны
+    # 27,5125; 27,5167; 27,5399; 27,5709 и 27,5858 мм", R_1 = 16,0 мм, R_K = 5,930 мм,
+    # d_B = 11,510 мм, N_B = 7, E = 2,1e11 Па, mu = 0,3.
+    "filipkovsky2016": AngularTable(
+        "Filipkovsky 2016", inner_race_radius=16.0e-3, groove_radius=5.930e-3, ball_diameter=11.510e-3,
+        n_balls=7, youngs_modulus=2.1e11, poisson_ratio=0.3,
+        outer_race_radius={12: 27.5125e-3, 15: 27.5167e-3, 26: 27.5399e-3, 36: 27.5709e-3, 40: 27.5858e-3}),
+    # Filipkovsky 2010, both papers, section 2 "Численный анализ колебаний": R_1 = 0,01600 м,
+    # R_2 = 0,02753 м, R_K = 0,00593 м, d_ш = 0,01151 м, N = 7, E = 2e11 Па, sigma = 0,3 (Q = 300 Н).
+    # One bearing, no nominal angle printed (R2 gives a free angle of 19.5 deg by eq. 10).
+    "filipkovsky2010": AngularTable(
+        "Filipkovsky 2010", inner_race_radius=16.00e-3, groove_radius=5.93e-3, ball_diameter=11.51e-3,
+        n_balls=7, youngs_modulus=2e11, poisson_ratio=0.3, outer_race_radius={None: 27.53e-3}),
+}
+_ANGULAR_R2_MM = {k: v * 1e3 for k, v in ANGULAR_TABLES["filipkovsky2016"].outer_race_radius.items()}
 _ANGULAR_DEFAULT_DEG = 26
 
 # How R1/R2 encode the nominal angle (worked out from Filipkovsky 2010 eq. 10 at zero load):
@@ -95,9 +124,9 @@ _ANGULAR_DEFAULT_DEG = 26
 #     R2 = 27.85048 mm - 0.34555 mm * cos(alpha_nominal),
 # i.e. R1 + 2 R_K = 27.8505 mm and 2 R_K - d = 0.3455 mm (e.g. R_K ~ 5.9253, d ~ 11.505 mm) instead
 # of 27.86 and 0.35 mm. The published angles are therefore the geometric free angles of a slightly
-# different ball/groove pair than the one printed. We keep the printed R_K and d (they set the
-# Hertz constant and A), store the user's nominal angle as nominal_contact_angle (the angle the
-# papers' results are labelled with), and expose the R1/R2 angle as groove_free_angle().
+# different ball/groove pair than the one printed. `table_geometry` takes the printed values as
+# printed (nominal angle = a label, free angle from R1, R2, R_K, d: groove_free_angle); the older
+# `preset("angular_contact_medium", angle)` keeps the nominal angle as its free angle.
 PRESETS = {
     "209": "Bai 2006 deep-groove ball bearing 209: D_m = 65.0 mm, D_b = 12.7 mm, "
            "r_i = r_o = 6.6 mm, 9 balls, E = 2.08e11 Pa, nu = 0.3; contact angle from clearance",
@@ -124,16 +153,40 @@ def preset(name: str, nominal_angle_deg: float | None = None) -> BearingGeometry
         if key is None:
             raise ValueError(f"preset 'angular_contact_medium': nominal_angle_deg must be one of "
                              f"{sorted(_ANGULAR_R2_MM)} deg, got {nominal_angle_deg}")
-        r1 = 16.0e-3
-        r2 = _ANGULAR_R2_MM[key] * 1e-3
-        # Equal groove radii put the ball centre midway between the groove centres R1 + R_K and
-        # R2 - R_K, so the pitch diameter is exactly R1 + R2 (about 43.5 mm).
-        return BearingGeometry(name=f"angular_contact_medium_{key}deg", ball_diameter=11.510e-3,
-                               pitch_diameter=r1 + r2, inner_groove_radius=5.930e-3,
-                               outer_groove_radius=5.930e-3, n_balls=7, youngs_modulus=2.1e11,
-                               poisson_ratio=0.3, nominal_contact_angle=math.radians(key),
-                               inner_race_radius=r1, outer_race_radius=r2)
+        geom = table_geometry("filipkovsky2016", key)
+        return replace(geom, name=f"angular_contact_medium_{key}deg", nominal_contact_angle=math.radians(key))
     raise ValueError(f"unknown bearing preset {name!r}; allowed: {sorted(PRESETS)}")
+
+
+GEOMETRY_OVERRIDES = ("inner_race_radius", "outer_race_radius", "groove_radius", "ball_diameter",
+                      "youngs_modulus", "poisson_ratio")
+
+
+def table_geometry(table: str, nominal_angle=None, **overrides) -> BearingGeometry:
+    """The bearing of one row of a paper's table (ANGULAR_TABLES), any printed value replaced by
+    ``overrides`` (GEOMETRY_OVERRIDES, SI; None: as printed). Its nominal_contact_angle is the
+    free angle from R1, R2, R_K, d (groove_free_angle): the row's nominal angle is only a label."""
+    if table not in ANGULAR_TABLES:
+        raise ValueError(f"unknown bearing table {table!r}; allowed: {sorted(ANGULAR_TABLES)}")
+    t = ANGULAR_TABLES[table]
+    rows = t.outer_race_radius
+    label = None if None in rows else nominal_angle
+    if label not in rows:
+        raise ValueError(f"table {table!r}: nominal_angle_deg must be one of {sorted(rows)} deg, got {nominal_angle}")
+    unknown = set(overrides) - set(GEOMETRY_OVERRIDES)
+    if unknown:
+        raise ValueError(f"table_geometry: unknown override(s) {sorted(unknown)}; allowed: {GEOMETRY_OVERRIDES}")
+    given = {k: v for k, v in overrides.items() if v is not None}
+    v = {**t._asdict(), "outer_race_radius": rows[label], **given}
+    r1, r2 = v["inner_race_radius"], v["outer_race_radius"]
+    # Equal groove radii put the ball centre midway between the groove centres R1 + R_K and
+    # R2 - R_K, so the pitch diameter is exactly R1 + R2 (about 43.5 mm).
+    geom = BearingGeometry(name=f"{table}_{label}deg" if label is not None else table,
+                           ball_diameter=v["ball_diameter"], pitch_diameter=r1 + r2,
+                           inner_groove_radius=v["groove_radius"], outer_groove_radius=v["groove_radius"],
+                           n_balls=t.n_balls, youngs_modulus=v["youngs_modulus"],
+                           poisson_ratio=v["poisson_ratio"], inner_race_radius=r1, outer_race_radius=r2)
+    return replace(geom, nominal_contact_angle=groove_free_angle(geom))
 
 
 def groove_free_angle(geom: BearingGeometry) -> float:
@@ -274,19 +327,22 @@ def free_contact_angle(geom: BearingGeometry, clearance: float) -> float:
 
 @dataclass(frozen=True)
 class PreloadState:
-    """Static state of one axially preloaded bearing (the point the force law linearizes about)."""
+    """Static state of one axially preloaded bearing (the point the force law linearizes about).
+
+    The force law of each ball is Q = K [delta]_+^{3/2} with delta = (x cos b + y sin b) cos(alpha)
+    + s0 sin(alpha) - c; ``normal_approach`` ("bracket" below) is that delta at x = y = 0."""
 
     contact_angle: float  # loaded contact angle alpha [rad]
-    # s0 [m], the axial shift that enters the force law
-    #   delta_j = (x cos phi_j + y sin phi_j) cos(alpha) + s0 sin(alpha) - c
-    axial_approach: float
-    normal_approach: float  # elastic approach per ball along the contact line, delta_n [m]
-    # Q [N] per ball that the force law with contact_constant gives at the static state:
-    # P0 / (N sin alpha) for "consistent", 1.5x that for "filipkovsky".
-    ball_load: float
+    axial_approach: float  # s0 [m], the axial shift that enters the force law (the papers' z0)
+    # the deformation of each ball at rest in the force law [m]: the Hertz approach w for
+    # "hertz", z0 sin(alpha) for "as_printed" (SPEC 1 note)
+    normal_approach: float
+    ball_load: float  # K bracket^{3/2} [N] per ball at rest
     radial_stiffness: float  # [N/m], linearized at zero radial displacement
     axial_stiffness: float  # [N/m], linearized
     contact_constant: float  # K used [N/m^1.5]
+    hertz_approach: float = 0.0  # w = w1 + w2 [m], the Hertz approach of each ball under the preload
+    static_thrust: float = 0.0  # N K bracket^{3/2} sin(alpha) [N]: P0 for "hertz", 1.5 P0 as printed
 
 
 def _loaded_geometry(big_a: float, cos_a0: float, u: float) -> tuple[float, float]:
@@ -312,29 +368,32 @@ def _solve_stretch(p0, n_balls, big_a, cos_a0, constant_of) -> float:
     return math.exp(brent_root(residual, lo, hi, xtol=1e-15, maxiter=500))
 
 
+def _check_preload(preload, allow_zero=True) -> float:
+    p0 = float(preload)
+    if not (np.isfinite(p0) and (p0 >= 0.0 if allow_zero else p0 > 0.0)):
+        raise ValueError(f"axial preload must be a finite force {'>=' if allow_zero else '>'} 0 N, got {preload}")
+    return p0
+
+
+def _check_positive(value, what):
+    if value is not None and not (np.isfinite(value) and value > 0):
+        raise ValueError(f"{what} must be a positive number, got {value}")
+
+
 def preload_state(geom: BearingGeometry, preload: float, clearance: float = 0.0,
-                  free_angle: float | None = None, stiffness: float | None = None,
-                  constant: str = "consistent") -> PreloadState:
-    """Loaded contact angle, approaches, ball load and linear stiffnesses under axial preload P0.
+                  free_angle: float | None = None, stiffness: float | None = None) -> PreloadState:
+    """The consistent Hertz model: loaded contact angle, approaches, ball load and linear
+    stiffnesses under axial preload P0.
 
     The rings shift axially until N K delta_n^{3/2} sin(alpha) = P0, with
-    delta_n = A (cos(alpha0)/cos(alpha) - 1). ``stiffness`` fixes K; by default K =
-    hertz_constant(geom, alpha) at the loaded angle. ``constant`` picks the K returned and used for
-    the stiffnesses and ball load (the loaded geometry is always the consistent one):
-
-    * "consistent": K from Hertz theory (or ``stiffness``); the force law reproduces P0.
-    * "filipkovsky": the papers' K = (3 P0 / (2 N)) z0^{-3/2} sin^{-5/2}(alpha) with z0 = s0. With it
-      the force law's static axial force N K (s0 sin a)^{3/2} sin a equals 1.5 P0, not P0 (SPEC 1
-      note): kept only to compare with the papers.
+    delta_n = A (cos(alpha0)/cos(alpha) - 1) (the 2010 papers' eqs. 8-10 with w = delta_n).
+    ``stiffness`` fixes K; by default K = hertz_constant(geom, alpha) at the loaded angle. The
+    force law then carries P0 exactly (static_thrust = P0).
 
     Linearized about x = y = 0 (alpha frozen, as in the force law), using sum cos^2 phi_j = N/2:
         k_r = (3/4) N K delta_n^{1/2} cos^2(alpha),   k_a = (3/2) N K delta_n^{1/2} sin^2(alpha).
     """
-    if constant not in ("consistent", "filipkovsky"):
-        raise ValueError(f"constant must be 'consistent' or 'filipkovsky', got {constant!r}")
-    p0 = float(preload)
-    if not (np.isfinite(p0) and p0 >= 0.0):
-        raise ValueError(f"axial preload must be a finite force >= 0 N, got {preload}")
+    p0 = _check_preload(preload)
     c = float(clearance)
     if not (np.isfinite(c) and c >= 0.0):
         raise ValueError(f"radial clearance must be >= 0 m, got {clearance}")
@@ -344,60 +403,97 @@ def preload_state(geom: BearingGeometry, preload: float, clearance: float = 0.0,
         alpha0 = float(free_angle)
     if not 0.0 <= alpha0 < math.pi / 2:
         raise ValueError(f"free contact angle must be in [0, pi/2) rad, got {alpha0}")
-    if stiffness is not None and not (np.isfinite(stiffness) and stiffness > 0):
-        raise ValueError(f"stiffness K must be a positive number [N/m^1.5], got {stiffness}")
-    if constant == "filipkovsky" and c != 0.0:
-        raise ValueError("constant='filipkovsky' is defined for a clearance-free preloaded bearing "
-                         f"(z0 = s0); got clearance {c} m")
+    _check_positive(stiffness, "stiffness K [N/m^1.5]")
 
     def constant_of(alpha):
         return float(stiffness) if stiffness is not None else hertz_constant(geom, alpha)
 
     n = geom.n_balls
     if p0 == 0.0:  # rings just touching: no load, no contact stiffness
-        if constant == "filipkovsky":
-            raise ValueError("constant='filipkovsky' needs preload > 0: its K = 3 P0/(2N) z0^-3/2 "
-                             "sin^-5/2(alpha) is 0/0 at P0 = 0")
         s0 = c / math.sin(alpha0) if alpha0 > 0.0 else 0.0
         return PreloadState(alpha0, s0, 0.0, 0.0, 0.0, 0.0, constant_of(alpha0))
 
     big_a = geom.groove_center_distance
     u = _solve_stretch(p0, n, big_a, math.cos(alpha0), constant_of)
     alpha, delta_n = _loaded_geometry(big_a, math.cos(alpha0), u)
-    return _preloaded(alpha, delta_n, c, p0, n, constant_of(alpha), constant)
+    return state_at(alpha, (delta_n + c) / math.sin(alpha), delta_n, constant_of(alpha), n, delta_n)
 
 
 def preload_at_angle(geom: BearingGeometry, preload: float, contact_angle: float,
-                     constant: str = "consistent") -> PreloadState:
-    """The static state under axial preload P0 with the contact angle imposed (not solved from
-    the groove geometry): N K(alpha) delta_n^{3/2} sin(alpha) = P0 with K = hertz_constant(geom,
-    alpha), no clearance. ``constant`` as in preload_state."""
-    p0, alpha = float(preload), float(contact_angle)
-    if not (np.isfinite(p0) and p0 > 0.0):
-        raise ValueError(f"axial preload must be a finite force > 0 N, got {preload}")
+                     stiffness: float | None = None) -> PreloadState:
+    """The consistent Hertz model with the contact angle imposed (not solved from the groove
+    geometry): N K delta_n^{3/2} sin(alpha) = P0 with K = ``stiffness`` or hertz_constant(geom,
+    alpha), no clearance."""
+    p0, alpha = _check_preload(preload, allow_zero=False), _check_angle(contact_angle)
+    _check_positive(stiffness, "stiffness K [N/m^1.5]")
+    k = hertz_constant(geom, alpha) if stiffness is None else float(stiffness)
+    delta_n = (p0 / (geom.n_balls * k * math.sin(alpha))) ** (2.0 / 3.0)
+    return state_at(alpha, delta_n / math.sin(alpha), delta_n, k, geom.n_balls, delta_n)
+
+
+def _check_angle(contact_angle) -> float:
+    alpha = float(contact_angle)
     if not 0.0 < alpha < math.pi / 2:
         raise ValueError(f"contact angle must be in (0, pi/2) rad, got {contact_angle}")
-    k_hertz = hertz_constant(geom, alpha)
-    delta_n = (p0 / (geom.n_balls * k_hertz * math.sin(alpha))) ** (2.0 / 3.0)
-    return _preloaded(alpha, delta_n, 0.0, p0, geom.n_balls, k_hertz, constant)
+    return alpha
 
 
-def _preloaded(alpha, delta_n, clearance, p0, n, k_hertz, constant) -> PreloadState:
-    """PreloadState at loaded angle alpha and normal approach delta_n, with the constant K of
-    the chosen normalization (see preload_state)."""
-    sin_a, cos_a = math.sin(alpha), math.cos(alpha)
-    s0 = (delta_n + clearance) / sin_a  # so that s0 sin(alpha) - c = delta_n in the force law
-    if constant == "consistent":
-        k_used = k_hertz
+def preload_with_approach(geom: BearingGeometry, preload: float, contact_angle: float,
+                          axial_approach: float) -> PreloadState:
+    """The consistent Hertz model with z0 given: K from N K (z0 sin a)^{3/2} sin a = P0."""
+    p0, alpha = _check_preload(preload, allow_zero=False), _check_angle(contact_angle)
+    _check_positive(axial_approach, "axial approach z0 [m]")
+    bracket = axial_approach * math.sin(alpha)
+    k = p0 / (geom.n_balls * bracket ** 1.5 * math.sin(alpha))
+    return state_at(alpha, axial_approach, bracket, k, geom.n_balls, bracket)
+
+
+def as_printed_state(geom: BearingGeometry, preload: float, free_angle: float,
+                     contact_angle: float | None = None, stiffness: float | None = None,
+                     axial_approach: float | None = None) -> PreloadState:
+    """The Filipkovsky papers' preloaded bearing exactly as printed (2010 papers eqs. 6-10, 2016
+    eq. 1; SPEC 1 note):
+
+    * eq. 10, (2 R_K - d + w) cos(alpha) = R1 + 2 R_K - R2 = A cos(alpha0), with the Hertz
+      approach w = w1 + w2 of each ball under P_k = P0 / (N sin alpha) (eqs. 8, 9, 11): the loaded
+      angle (unless ``contact_angle`` is given; then w follows from eqs. 8-9 at that angle).
+      Eq. 8 prints w = b P_k^{3/2}; eq. 11's b [m N^-2/3] makes it w = b P_k^{2/3}, used here;
+    * eq. 7, z0 = (2 R_K - d + w) sin(alpha): the axial separation of the two groove-curvature
+      centres (unless ``axial_approach`` is given);
+    * eq. 6, K = (3 P0 / (2 N)) z0^{-3/2} sin^{-5/2}(alpha) (unless ``stiffness`` is given);
+    * eq. 5 / 2016 eq. 1: each ball's bracket at rest is z0 sin(alpha).
+
+    Its static thrust N K (z0 sin a)^{3/2} sin a is 1.5 P0 whatever z0 is (the powers of z0 and
+    sin a cancel): the law as printed does not carry the preload that defines it."""
+    p0 = _check_preload(preload, allow_zero=False)
+    _check_positive(stiffness, "stiffness K [N/m^1.5]")
+    _check_positive(axial_approach, "axial approach z0 [m]")
+    n, big_a = geom.n_balls, geom.groove_center_distance
+    if contact_angle is None:
+        hertz = preload_state(geom, p0, free_angle=free_angle)
+        alpha, w = hertz.contact_angle, hertz.normal_approach
     else:
-        k_used = 1.5 * p0 / n * s0 ** -1.5 * sin_a ** -2.5
-    root = math.sqrt(delta_n)
+        alpha = _check_angle(contact_angle)
+        w = (p0 / (n * math.sin(alpha) * hertz_constant(geom, alpha))) ** (2.0 / 3.0)
+    sin_a = math.sin(alpha)
+    z0 = (big_a + w) * sin_a if axial_approach is None else float(axial_approach)
+    k = 1.5 * p0 / n * z0 ** -1.5 * sin_a ** -2.5 if stiffness is None else float(stiffness)
+    return state_at(alpha, z0, z0 * sin_a, k, n, w)
+
+
+def state_at(alpha, axial_approach, bracket, k, n, hertz_approach) -> PreloadState:
+    """PreloadState of a force law with constant K, contact angle alpha and the deformation
+    ``bracket`` of each ball at rest."""
+    sin_a, cos_a = math.sin(alpha), math.cos(alpha)
+    root = math.sqrt(bracket)
     return PreloadState(
         contact_angle=alpha,
-        axial_approach=s0,
-        normal_approach=delta_n,
-        ball_load=k_used * delta_n * root,
-        radial_stiffness=0.75 * n * k_used * root * cos_a ** 2,
-        axial_stiffness=1.5 * n * k_used * root * sin_a ** 2,
-        contact_constant=k_used,
+        axial_approach=axial_approach,
+        normal_approach=bracket,
+        ball_load=k * bracket * root,
+        radial_stiffness=0.75 * n * k * root * cos_a ** 2,
+        axial_stiffness=1.5 * n * k * root * sin_a ** 2,
+        contact_constant=k,
+        hertz_approach=hertz_approach,
+        static_thrust=n * k * bracket * root * sin_a,
     )

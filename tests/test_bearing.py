@@ -8,6 +8,7 @@ from rotorkernels.bearing import (
     BAI2006_CONTACT_CONSTANT,
     _elliptic_integrals,
     PRESETS,
+    as_printed_state,
     BearingGeometry,
     ball_contacts,
     contact_constant,
@@ -15,8 +16,10 @@ from rotorkernels.bearing import (
     groove_free_angle,
     hertz_constant,
     preload_state,
+    preload_with_approach,
     preset,
     raceway_curvatures,
+    table_geometry,
 )
 
 ANGLES = (12, 15, 26, 36, 40)
@@ -256,34 +259,147 @@ def test_preload_with_given_constant_and_free_angle():
         ac.groove_center_distance * (math.cos(free) / math.cos(st.contact_angle) - 1), rel=1e-10)
 
 
+# The 2016 table as printed, typed here from the paper (not read from the code under test):
+# R1 = 16.0, R_K = 5.930, d = 11.510 mm; R2 per nominal angle; N = 7.
+R1_MM, RK_MM, D_MM = 16.0, 5.930, 11.510
+R2_MM = {12: 27.5125, 15: 27.5167, 26: 27.5399, 36: 27.5709, 40: 27.5858}
+
+
 @pytest.mark.parametrize("angle", ANGLES)
-def test_filipkovsky_constant_gives_one_and_a_half_preload(angle):
-    geom = preset("angular_contact_medium", angle)
-    p0 = 300.0
-    ref = preload_state(geom, p0)
-    st = preload_state(geom, p0, constant="filipkovsky")
-    n, a = geom.n_balls, st.contact_angle
-    assert a == ref.contact_angle and st.axial_approach == ref.axial_approach
-    # the papers' formula, z0 = s0
-    assert st.contact_constant == pytest.approx(1.5 * p0 / n * st.axial_approach ** -1.5 * math.sin(a) ** -2.5,
-                                                rel=1e-12)
-    _, fz = summed_force(st.contact_constant, a, st.axial_approach, 0.0, n)
-    assert fz == pytest.approx(1.5 * p0, rel=1e-10)
-    assert st.radial_stiffness == pytest.approx(1.5 * ref.radial_stiffness, rel=1e-10)
+def test_table_free_angle_is_the_closed_form_of_eq_10_at_zero_load(angle):
+    """(2 R_K - d) cos(a0) = R1 + 2 R_K - R2 (2010 papers, eq. 10 with w = 0); the nominal angle
+    is only a label (the 15 deg row's free angle is 11.23 deg). Both sides are a few flops on
+    numbers of 1e-2: 1e-12 relative."""
+    geom = table_geometry("filipkovsky2016", angle)
+    closed = math.acos((R1_MM + 2 * RK_MM - R2_MM[angle]) / (2 * RK_MM - D_MM))
+    assert geom.nominal_contact_angle == pytest.approx(closed, rel=1e-12)
+    assert geom.inner_race_radius == 16.0e-3 and geom.outer_race_radius == pytest.approx(R2_MM[angle] * 1e-3, rel=1e-15)
+    g2010 = table_geometry("filipkovsky2010")
+    assert g2010.youngs_modulus == 2e11 and g2010.outer_race_radius == 27.53e-3
+    assert math.degrees(g2010.nominal_contact_angle) == pytest.approx(
+        math.degrees(math.acos((16.00 + 2 * 5.93 - 27.53) / (2 * 5.93 - 11.51))), rel=1e-12)
+
+
+def test_table_overrides_replace_the_printed_values():
+    geom = table_geometry("filipkovsky2016", 15, youngs_modulus=2e11, outer_race_radius=27.53e-3)
+    assert (geom.youngs_modulus, geom.outer_race_radius, geom.ball_diameter) == (2e11, 27.53e-3, 11.510e-3)
+    with pytest.raises(ValueError, match="nominal_angle"):
+        table_geometry("filipkovsky2016", 20)
+    with pytest.raises(ValueError, match="outside"):
+        table_geometry("filipkovsky2016", 15, outer_race_radius=28.5e-3)
+
+
+@pytest.mark.parametrize("angle", ANGLES)
+@pytest.mark.parametrize("p0", [100.0, 400.0])
+def test_loaded_angle_is_an_independent_scalar_root_of_eq_10(angle, p0):
+    """Eq. 10, (A + w(a)) cos(a) = R1 + 2 R_K - R2, with eqs. 8-9's w = (P_k / K_h(a))^{2/3},
+    P_k = P0 / (N sin a), solved for a by scipy's brentq on [a0, 80 deg] (the code solves for
+    the stretch in log space). Both to ~1e-15 in their variables: 1e-10 relative."""
+    from scipy.optimize import brentq
+
+    geom = table_geometry("filipkovsky2016", angle)
+    big_a, rhs = (2 * RK_MM - D_MM) * 1e-3, (R1_MM + 2 * RK_MM - R2_MM[angle]) * 1e-3
+
+    def residual(a):
+        w = (p0 / (7 * math.sin(a) * hertz_constant(geom, a))) ** (2 / 3)
+        return (big_a + w) * math.cos(a) - rhs
+
+    alpha = brentq(residual, geom.nominal_contact_angle, math.radians(80), xtol=1e-15, rtol=1e-15)
+    st = as_printed_state(geom, p0, geom.nominal_contact_angle)
+    assert st.contact_angle == pytest.approx(alpha, rel=1e-10)
+    assert preload_state(geom, p0, free_angle=geom.nominal_contact_angle).contact_angle == st.contact_angle
+
+
+@pytest.mark.parametrize("angle", [12, 40])
+def test_hertz_coefficient_of_eq_11_is_the_contact_constant(angle):
+    """2010 papers' eq. 11, b = (3/2) F1 cbrt(sum K k^2 (Theta1 + Theta2)^2 / (3 E1)), with
+    Theta = (1 - sigma^2) / (pi E), k = 1 / kappa and F1, E1 the complete elliptic integrals of
+    modulus k1^2 = 1 - k^2 (scipy), gives w = b P^{2/3}: b = k_contact^{-2/3} for each contact of
+    the loaded ball (the ellipticity from the code's solve of eq. 12). Rounding: 1e-12."""
+    from scipy.special import ellipe, ellipk
+
+    geom = table_geometry("filipkovsky2016", angle)
+    theta = (1 - geom.poisson_ratio ** 2) / (math.pi * geom.youngs_modulus)
+    for cc in ball_contacts(geom, math.radians(angle + 2.0)):
+        k = 1.0 / cc.ellipticity
+        f1, e1 = ellipk(1 - k * k), ellipe(1 - k * k)
+        b = 1.5 * f1 * (cc.curvature_sum * k * k * (2 * theta) ** 2 / (3 * e1)) ** (1 / 3)
+        assert b == pytest.approx(cc.stiffness ** (-2 / 3), rel=1e-12)
+
+
+def printed_ball_sum(k, alpha, z0, x, y, z, n=7):
+    """Eq. 5 (2016: eq. 1) as printed, numpy: P = K sum [x cos a cos b + y cos a sin b +
+    (z + z0) sin a]_+^{3/2} (cos a cos b, cos a sin b, sin a), b = 2 pi v / N; and its analytic
+    stiffness dP/d(x, y, z) = K sum 1.5 [.]_+^{1/2} u u^T."""
+    beta = 2 * np.pi * np.arange(n) / n
+    u = np.stack([np.cos(alpha) * np.cos(beta), np.cos(alpha) * np.sin(beta), np.full(n, np.sin(alpha))])
+    delta = np.maximum(x * u[0] + y * u[1] + (z + z0) * np.sin(alpha), 0.0)
+    return k * u @ delta ** 1.5, k * 1.5 * (u * np.sqrt(delta)) @ u.T
+
+
+@pytest.mark.parametrize("angle", ANGLES)
+def test_as_printed_state_follows_eqs_6_to_10(angle):
+    """z0 from eq. 7, K from eq. 6 (both computed here from the loaded angle and w), eq. 10 holds,
+    and its static thrust at rest is 1.5 P0 (closed form: N K (z0 sin a)^{3/2} sin a with eq. 6's
+    K is (3/2) P0 for every z0 and a). Rounding only: 1e-12."""
+    geom = table_geometry("filipkovsky2016", angle)
+    p0, n = 300.0, 7
+    st = as_printed_state(geom, p0, geom.nominal_contact_angle)
+    a, big_a = st.contact_angle, (2 * RK_MM - D_MM) * 1e-3
+    w = (p0 / (n * math.sin(a) * hertz_constant(geom, a))) ** (2 / 3)       # eqs. 8, 9
+    assert st.hertz_approach == pytest.approx(w, rel=1e-12)
+    assert (big_a + w) * math.cos(a) == pytest.approx((R1_MM + 2 * RK_MM - R2_MM[angle]) * 1e-3, rel=1e-12)
+    z0 = (big_a + w) * math.sin(a)                                            # eq. 7
+    k = 3 * p0 / (2 * n) * z0 ** -1.5 * math.sin(a) ** -2.5                   # eq. 6
+    assert st.axial_approach == pytest.approx(z0, rel=1e-12)
+    assert st.contact_constant == pytest.approx(k, rel=1e-12)
+    force, _ = printed_ball_sum(k, a, z0, 0.0, 0.0, 0.0)
+    assert force[2] == pytest.approx(1.5 * p0, rel=1e-12) and st.static_thrust == pytest.approx(1.5 * p0, rel=1e-12)
+    assert np.abs(force[:2]).max() < 1e-12 * p0
+    # the linear stiffnesses are those of the printed sum at rest
+    _, stiff = printed_ball_sum(k, a, z0, 0.0, 0.0, 0.0)
+    assert st.radial_stiffness == pytest.approx(stiff[0, 0], rel=1e-12)
+    assert st.axial_stiffness == pytest.approx(stiff[2, 2], rel=1e-12)
+
+
+def test_as_printed_at_400_n_and_15_deg_is_the_issue_s_numbers():
+    """The issue's estimate: eq. 7 gives z0 of about 97 um, K about 2.4e9 N/m^1.5 (against 24 um
+    and 1.9e10 of the old Hertz-approach reading)."""
+    st = as_printed_state(table_geometry("filipkovsky2016", 15), 400.0, table_geometry("filipkovsky2016", 15)
+                          .nominal_contact_angle)
+    assert st.axial_approach == pytest.approx(97e-6, rel=0.01)
+    assert st.contact_constant == pytest.approx(2.4e9, rel=0.02)
+
+
+def test_as_printed_values_given_replace_the_derived_ones():
+    geom = table_geometry("filipkovsky2016", 15)
+    a0 = geom.nominal_contact_angle
+    st = as_printed_state(geom, 300.0, a0, contact_angle=math.radians(15.0))
+    assert st.contact_angle == math.radians(15.0)
+    w = (300.0 / (7 * math.sin(st.contact_angle) * hertz_constant(geom, st.contact_angle))) ** (2 / 3)
+    assert st.axial_approach == pytest.approx(((2 * RK_MM - D_MM) * 1e-3 + w) * math.sin(math.radians(15)), rel=1e-12)
+    st = as_printed_state(geom, 300.0, a0, stiffness=3e9, axial_approach=80e-6)
+    assert (st.contact_constant, st.axial_approach) == (3e9, 80e-6)
+    assert st.normal_approach == pytest.approx(80e-6 * math.sin(st.contact_angle), rel=1e-15)
+
+
+def test_consistent_model_with_z0_given_carries_the_preload():
+    geom = table_geometry("filipkovsky2016", 15)
+    st = preload_with_approach(geom, 300.0, math.radians(17.0), 20e-6)
+    force, _ = printed_ball_sum(st.contact_constant, st.contact_angle, 20e-6, 0.0, 0.0, 0.0)
+    assert force[2] == pytest.approx(300.0, rel=1e-12) and st.static_thrust == pytest.approx(300.0, rel=1e-12)
 
 
 def test_preload_state_rejects_bad_input():
     geom = preset("angular_contact_medium")
     with pytest.raises(ValueError, match="preload"):
         preload_state(geom, -1.0)
-    with pytest.raises(ValueError, match="consistent.*filipkovsky"):
-        preload_state(geom, 100.0, constant="harris")
     with pytest.raises(ValueError, match="clearance"):
         preload_state(geom, 100.0, clearance=-1e-6)
     with pytest.raises(ValueError, match="free contact angle"):
         preload_state(geom, 100.0, free_angle=math.pi / 2)
-    with pytest.raises(ValueError, match="preload > 0"):
-        preload_state(geom, 0.0, constant="filipkovsky")
+    with pytest.raises(ValueError, match="preload must be a finite force > 0"):
+        as_printed_state(geom, 0.0, 0.2)
 
 
 # ---------------------------------------------------------------- 6. presets

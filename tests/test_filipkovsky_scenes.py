@@ -13,6 +13,7 @@ from rotorkernels.models import rigid_preloaded as rp
 SPEC = rp.SPEC
 FIG2A = Path("configs/filipkovsky2016_fig2a_continue.toml")
 FIG2B = Path("configs/filipkovsky2016_fig2b_continue.toml")
+FIG2A_PRINTED = Path("configs/filipkovsky2016_fig2a_printed.toml")
 
 
 def _quick_fig2a():
@@ -84,6 +85,27 @@ def test_fig2a_bistability_between_the_folds_by_transients(fig2a_line):
     assert from_rest == pytest.approx(on_lower, rel=0.02)
     assert from_far == pytest.approx(on_upper, rel=0.02)
     assert on_upper > 1.5 * on_lower
+
+
+def test_fig2a_with_the_law_as_printed_turns_at_a_soft_fold_pair():
+    """The scene with the papers' law as printed, narrowed to 15 deg and 370-430 Hz (~15 s): the
+    forward cylindrical resonance is soft (folds below the linear 1x crossing, 422.5 Hz at 250 Hz
+    and about 423 Hz at the crossing), the middle branch a saddle (multiplier > 1), the peak about
+    half the balls' deformation at rest (z0 sin a = 24.2 um), and the line's derived values say
+    the law as printed: static thrust 1.5 P0, z0 from eq. 7."""
+    text = FIG2A_PRINTED.read_text().replace("speed = {start = 50.0, stop = 700.0, step = 5.0}",
+                                             "speed = {start = 370.0, stop = 430.0, step = 5.0}")
+    cfg = config.parse_config(text.replace("nominal_angle = [12, 15, 26, 36, 40]", "nominal_angle = [15]"))
+    (where,) = continuation.plan(cfg.data).lines
+    rec = continuation.continue_line(cfg.data, where)[0]
+    assert [al.EVENT_LABELS[e] for e in rec["event_type"]] == ["LP", "LP"]
+    lower, upper = rec["event_parameter"]
+    assert 385.0 < upper < lower < 422.5
+    peak = rec["amplitude_half_pp"][:, 3].max()
+    assert 0.3 < peak / 24.2e-6 < 0.7
+    derived = compute.point_params(cfg.data, {**compute.fixed_values(cfg.data), **where, "speed": 400.0}).derived
+    assert derived["static_thrust"] == pytest.approx(450.0, rel=1e-12)
+    assert derived["axial_approach"] == pytest.approx(92.69e-6, rel=1e-3)
 
 
 def test_continuing_a_frequency_with_both_forcings_on_is_rejected_before_work():

@@ -67,9 +67,9 @@ def test_series_coefficients_are_the_taylor_coefficients_of_the_ball_sum(nominal
         np.testing.assert_allclose(numeric, series, atol=1e-5 * np.abs(series).max())
 
 
-@pytest.mark.parametrize("stiffness, ratio", [("hertz", 1.0), ("paper", 1.5)])
-def test_static_force_of_the_series_is_the_preload_or_the_papers_1_5_p0(stiffness, ratio):
-    state = rp.preload_of(15, 300.0, stiffness)
+@pytest.mark.parametrize("preload_law, ratio", [("hertz", 1.0), ("as_printed", 1.5)])
+def test_static_force_of_the_series_is_the_preload_or_the_papers_1_5_p0(preload_law, ratio):
+    state = rp.preload_of(15, 300.0, preload_law)
     coef = cubic_coefficients(state.contact_constant, state.axial_approach, state.contact_angle, 7)
     assert coef.static_force == pytest.approx(ratio * 300.0, rel=1e-12)
     assert coef.radial == pytest.approx(state.radial_stiffness, rel=1e-12)
@@ -120,12 +120,13 @@ def test_series_parts_from_the_ball_sum_by_one_percent_near_a_fifth_of_z0():
 
 # --- the models ---------------------------------------------------------------------------------
 
+@pytest.mark.parametrize("arrangement", ["back_to_back", "face_to_face"])
 @pytest.mark.parametrize("name", MODELS)
-def test_kernel_rhs_is_the_polynomial_form(name):
+def test_kernel_rhs_is_the_polynomial_form(name, arrangement):
     """At random scaled states: du/dtau of the kernel = the PolynomialSystem's acceleration in SI
-    scaled by T^2 / L (rounding: 1e-12 of the largest term)."""
+    scaled by T^2 / L (rounding: 1e-12 of the largest term), in both bearing arrangements."""
     spec = models.get(name)
-    v = values(spec)
+    v = values(spec, arrangement=arrangement)
     built, system = spec.build(v), spec.polynomial(v)
     n, el, t = spec.n_position, spec.length_scale, built.period
     module = __import__(spec.module, fromlist=["rhs"])

@@ -48,6 +48,7 @@ SPEC = ModelSpec(
     description="Filipkovsky 2010: asymmetric 5-DOF rotor (transverse-axial coupling) on preloaded ball "
                 "bearings, cubic series law, conservative",
     parameters=sr.ROTOR_PARAMETERS + (
+        # the axial paper, section 2: "l_1 = 0,125 м" from support A
         Parameter(default=0.125, name="disk_position", section="rotor", lo=0, unit="m",
                   help="disk position l1 from bearing A (paper: 0.125 m)"),) + sr.BEARING_PARAMETERS,
     build=sr.build_for(N_POS, disk_position), cold_guess=lambda p: np.zeros(2 * N_POS),

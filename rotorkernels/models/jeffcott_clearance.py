@@ -182,8 +182,11 @@ def build(v):
     stiffness = _stiffness(v["stiffness"], geom, alpha0)
     alpha, approach = alpha0, 0.0
     if preload > 0:
-        state = bearing.preload_state(geom, preload, clearance=clearance, free_angle=alpha0,
-                                      stiffness=stiffness, constant=v["preload_constant"])
+        if v["preload_constant"] == "filipkovsky":   # the papers' law as printed (no clearance)
+            state = bearing.as_printed_state(geom, preload, free_angle=alpha0)
+        else:
+            state = bearing.preload_state(geom, preload, clearance=clearance, free_angle=alpha0,
+                                          stiffness=stiffness)
         alpha, approach, stiffness = state.contact_angle, state.axial_approach, state.contact_constant
     load = v["mass"] * v["gravity"] if v["radial_load"] == "gravity" else v["radial_load"]
     p, period = jeffcott_params(
@@ -210,6 +213,8 @@ def check(data, axes):
                 errors.append(f"{where}: {problem}")
     if b["preload_constant"] == "filipkovsky" and max(axes.get("preload", [b["preload"] or 0.0])) <= 0:
         errors.append("bearing.preload_constant: \"filipkovsky\" needs a preload > 0")
+    if b["preload_constant"] == "filipkovsky" and max(axes.get("clearance", [b["clearance"] or 0.0])) > 0:
+        errors.append("bearing.preload_constant: \"filipkovsky\" (the papers' law as printed) has no clearance")
     return errors
 
 

@@ -17,24 +17,17 @@ Bearing forces (paper eq. 1), fixed ball angles b_k = 2 pi k / N:
     P_v = K sum_k [delta_k]_+^{3/2} (cos a cos b_k, cos a sin b_k, +-sin a)
     delta_k = x_v cos a cos b_k + y_v cos a sin b_k + (z0 +- z) sin a
 
-Back-to-back convention: the upper sign for bearing A, the lower for B. The paper writes
+Back-to-back convention (the default arrangement): the upper sign for bearing A, the lower for B. The paper writes
 z1 = z2 = z; in a preloaded pair one bearing is compressed by an axial shift while the other
 is relieved, so +z loads A and unloads B, and P(q) = dPi/dq with the generalized axial force
 P_zA - P_zB (zero at q = 0: the preload balances). A ball with delta_k <= 0 carries nothing.
 
-Stiffness normalizations (`bearing.stiffness`):
-
-* "hertz": K from the bearing geometry by Hertz theory at the loaded angle, and the axial
-  approach z0 from N K (z0 sin a)^{3/2} sin a = P0 exactly: the force law carries the preload.
-* "paper": K = (3 P0 / (2 N)) z0^{-3/2} sin^{-5/2} a as printed (paper eq. 1), z0 from the same
-  preload equations (2010 papers, eqs. 7-10). With it each bearing's static axial force is
-  1.5 P0, not P0 (SPEC 1 note): K is 1.5x the Hertz value, stiffnesses 1.5x, linear
-  frequencies sqrt(1.5)x. Kept to compare with the paper.
-
-Contact angle: the loaded angle from the preload solve on the preset's geometry (the nominal
-angle of the paper's table is the free angle), or imposed by the scene (`bearing.contact_angle`;
-K then from Hertz theory at that angle and z0 from the equilibrium above). The cube's
-`contact_angle_used` and `contact_angle_imposed` say which.
+Bearing table, preload law (`bearing.preload_law`: "hertz", the consistent Hertz model, or
+"as_printed", the papers' eqs. 6-10 exactly as printed), contact angles, given vs derived values:
+`preloaded_pair`. The force law above takes K, alpha and z0 from there; the ball's bracket at rest
+(z0 sin a) is the Hertz approach w for "hertz" and eq. 7's z0 sin a for "as_printed", whose static
+axial force per bearing is then 1.5 P0 (the rotor stays centred: the two bearings' thrusts oppose).
+`bearing.arrangement` face_to_face flips the sign of z in both bearings (+z compresses B).
 
 Forcing: unbalance (eccentricity a > 0) at Omega, support vibration (acceleration > 0) at omega.
 With both on, the forcing is periodic only when omega / Omega = p / q (coprime, q at most
@@ -48,16 +41,18 @@ units of L = 1 um; u = (q / L, dq/dtau / L).
 """
 import math
 from fractions import Fraction
-from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-from rotorkernels import bearing
 from rotorkernels.contact import ring_force, ring_load
 from rotorkernels.cubic_law import cubic_coefficients, cubic_load
 from rotorkernels.models.spec import Built, ModelSpec, Observable, Parameter
+from rotorkernels.models.preloaded_pair import (  # noqa: F401 (the pair's API, read as rp.*)
+    ARRANGEMENTS, BEARING_DERIVED, BEARING_KEYS, DEFAULT_NOMINAL_ANGLE, NOMINAL_ANGLES,
+    arrangement_of, bearing_derived, bearing_problems, bearing_state, geometry, n_balls_of, preload_of,
+    table_geometry)
 from rotorkernels.models.velocity import upper_rows, velocity_rows
 
 LENGTH_SCALE = 1e-6
@@ -71,7 +66,8 @@ P_USIN = 60         # sine part
 P_SUP = 65          # -T^2 / L A_s
 P_WU, P_WS, P_OFFSET, P_COS_A, P_SIN_A, P_NBALLS, P_COS_D, P_SIN_D = range(70, 78)
 P_LAW, P_CR, P_CA, P_Z0, P_TAN2 = range(78, 83)   # law 1: cubic series, its scaled coefficients
-N_PARAMS = 83
+P_ARR = 83          # +1 back to back (+z compresses A), -1 face to face (+z compresses B)
+N_PARAMS = 84
 LAWS = {"ball_sum": 0.0, "cubic": 1.0}
 
 # Rational detection: a ratio within RATIO_RTOL of p / q with q <= DETECTION_DENOMINATOR is
@@ -110,14 +106,15 @@ def _stiffness_column(out, p, j, k0, k1, k2, k3, k4):
 
 @njit(cache=True, nogil=True, inline="always")
 def _jacobian(out, p, a, b):
-    """[[0, I], [-gain dP/dq, -damp]] from the ring loads a (bearing A, shift +z) and b (B, -z):
-    z enters B as -z, so B's cross terms with z change sign and its kzz does not."""
+    """[[0, I], [-gain dP/dq, -damp]] from the ring loads a (bearing A, shift s z) and b (B, -s z),
+    s = p[P_ARR] = +-1: A's cross terms with z carry s, B's -s, and kzz = kzz_A + kzz_B (s^2 = 1)."""
+    s = p[P_ARR]
     upper_rows(out, N_POS)
-    _stiffness_column(out, p, 0, a[3], a[4], 0.0, 0.0, a[6])
-    _stiffness_column(out, p, 1, a[4], a[5], 0.0, 0.0, a[7])
-    _stiffness_column(out, p, 2, 0.0, 0.0, b[3], b[4], -b[6])
-    _stiffness_column(out, p, 3, 0.0, 0.0, b[4], b[5], -b[7])
-    _stiffness_column(out, p, 4, a[6], a[7], -b[6], -b[7], a[8] + b[8])
+    _stiffness_column(out, p, 0, a[3], a[4], 0.0, 0.0, s * a[6])
+    _stiffness_column(out, p, 1, a[4], a[5], 0.0, 0.0, s * a[7])
+    _stiffness_column(out, p, 2, 0.0, 0.0, b[3], b[4], -s * b[6])
+    _stiffness_column(out, p, 3, 0.0, 0.0, b[4], b[5], -s * b[7])
+    _stiffness_column(out, p, 4, s * a[6], s * a[7], -s * b[6], -s * b[7], a[8] + b[8])
     for i in range(N_POS):
         for j in range(N_POS):
             out[N_POS + i, N_POS + j] = -p[P_DAMP + N_POS * i + j]
@@ -148,23 +145,26 @@ def _force(x, y, z, p):
 @njit(cache=True, nogil=True)
 def rhs(tau, u, p, du):
     velocity_rows(u, du, N_POS)
-    fxa, fya, fza = _force(u[0], u[1], u[4], p)
-    fxb, fyb, fzb = _force(u[2], u[3], -u[4], p)
-    _accelerations(tau, u, p, fxa, fya, fxb, fyb, fza - fzb, du)
+    z = p[P_ARR] * u[4]
+    fxa, fya, fza = _force(u[0], u[1], z, p)
+    fxb, fyb, fzb = _force(u[2], u[3], -z, p)
+    _accelerations(tau, u, p, fxa, fya, fxb, fyb, p[P_ARR] * (fza - fzb), du)
 
 
 @njit(cache=True, nogil=True)
 def jac(tau, u, p, out):
-    _jacobian(out, p, _load(u[0], u[1], u[4], p), _load(u[2], u[3], -u[4], p))
+    z = p[P_ARR] * u[4]
+    _jacobian(out, p, _load(u[0], u[1], z, p), _load(u[2], u[3], -z, p))
 
 
 @njit(cache=True, nogil=True)
 def rhs_jac(tau, u, p, du, out):
     """rhs and jac from one ball sum per bearing."""
-    a = _load(u[0], u[1], u[4], p)
-    b = _load(u[2], u[3], -u[4], p)
+    z = p[P_ARR] * u[4]
+    a = _load(u[0], u[1], z, p)
+    b = _load(u[2], u[3], -z, p)
     velocity_rows(u, du, N_POS)
-    _accelerations(tau, u, p, a[0], a[1], b[0], b[1], a[2] - b[2], du)
+    _accelerations(tau, u, p, a[0], a[1], b[0], b[1], p[P_ARR] * (a[2] - b[2]), du)
     _jacobian(out, p, a, b)
 
 
@@ -245,52 +245,25 @@ def support_vector(direction, acceleration):
 
 # --- bearings ----------------------------------------------------------------------------------
 
-GEOMETRY_PRESET = "angular_contact_medium"
-NOMINAL_ANGLES = (12, 15, 26, 36, 40)
-CONSTANTS = {"hertz": "consistent", "paper": "filipkovsky"}
-
-
-@lru_cache(maxsize=32)
-def geometry(nominal_angle, outer_race_radius=None):
-    """The paper's bearing (table row of `nominal_angle`), or with the outer groove radius R2
-    given: then the free contact angle follows from R1/R2 (2010 eq. 10 at zero load)."""
-    geom = bearing.preset(GEOMETRY_PRESET, int(nominal_angle))
-    if outer_race_radius is None:
-        return geom
-    from dataclasses import replace
-    geom = replace(geom, outer_race_radius=outer_race_radius,
-                   pitch_diameter=geom.inner_race_radius + outer_race_radius)
-    return replace(geom, nominal_contact_angle=bearing.groove_free_angle(geom))
-
-
-@lru_cache(maxsize=256)
-def preload_of(nominal_angle, preload, stiffness, contact_angle=None, outer_race_radius=None):
-    """bearing.PreloadState of each bearing: loaded angle from the preload solve, or the
-    contact angle [deg] imposed."""
-    geom = geometry(nominal_angle, outer_race_radius)
-    if contact_angle is None:
-        return bearing.preload_state(geom, preload, constant=CONSTANTS[stiffness])
-    return bearing.preload_at_angle(geom, preload, math.radians(contact_angle), CONSTANTS[stiffness])
-
-
-def bearing_load(q, state, n_balls, law="ball_sum", length_scale=LENGTH_SCALE):
+def bearing_load(q, state, n_balls, law="ball_sum", length_scale=LENGTH_SCALE, arrangement="back_to_back"):
     """Generalized bearing force P(q) [N] and its stiffness dP/dq [N/m] at positions q [m]:
     the kernel's bearing loads (`_load`) in SI, for static and linear analysis."""
     el = length_scale
     x = np.asarray(q, float) / el
     p = np.zeros(N_PARAMS)       # gain -I, no damping: the lower-left block of the Jacobian is dP/dq
     p[P_GAIN:P_GAIN + 25] = -np.eye(N_POS).ravel()
-    _bearing_params(p, state, n_balls, law, el)
-    a = _load(x[0], x[1], x[4], p)
-    b = _load(x[2], x[3], -x[4], p)
-    force = np.array([a[0], a[1], b[0], b[1], a[2] - b[2]])
+    _bearing_params(p, state, n_balls, law, el, arrangement)
+    s = p[P_ARR]
+    a = _load(x[0], x[1], s * x[4], p)
+    b = _load(x[2], x[3], -s * x[4], p)
+    force = np.array([a[0], a[1], b[0], b[1], s * (a[2] - b[2])])
     jac = np.zeros((2 * N_POS, 2 * N_POS))
     _jacobian(jac, p, a, b)
     k = state.contact_constant
     return k * el ** 1.5 * force, k * el ** 0.5 * jac[N_POS:, :N_POS]
 
 
-def _bearing_params(p, state, n_balls, law, el):
+def _bearing_params(p, state, n_balls, law, el, arrangement="back_to_back"):
     """The force-law entries of the kernel vector, in units where a bearing force is K L^1.5
     times the kernel's load (the ball sum of delta^1.5 in units of L; the cubic series with
     c_r, c_a scaled by 1 / (K sqrt(L)), which is `cubic_coefficients` at K = 1, z0 / L)."""
@@ -301,6 +274,7 @@ def _bearing_params(p, state, n_balls, law, el):
     p[P_COS_D], p[P_SIN_D] = np.cos(2.0 * np.pi / n_balls), np.sin(2.0 * np.pi / n_balls)
     p[P_LAW] = LAWS[law]
     p[P_CR], p[P_CA], p[P_Z0], p[P_TAN2] = cubic_coefficients(1.0, state.axial_approach / el, alpha, n_balls)
+    p[P_ARR] = ARRANGEMENTS[arrangement]
 
 
 # --- forcing frequencies -----------------------------------------------------------------------
@@ -344,7 +318,7 @@ def forcing_of(speed, support_frequency, unbalance_on, support_on, max_denominat
 # --- build -------------------------------------------------------------------------------------
 
 def kernel_params(rotor, state, n_balls, forcing, speed, eccentricity, support, law="ball_sum",
-                  length_scale=LENGTH_SCALE):
+                  length_scale=LENGTH_SCALE, arrangement="back_to_back"):
     """The kernel parameter vector from SI inputs (state: bearing.PreloadState, support: A_s)."""
     t, el = forcing.period, length_scale
     m_inv = np.linalg.inv(mass_matrix(rotor))
@@ -361,18 +335,8 @@ def kernel_params(rotor, state, n_balls, forcing, speed, eccentricity, support, 
     p[P_SUP:P_SUP + 5] = -t * t / el * support
     p[P_WU] = 2.0 * np.pi * forcing.shaft_turns
     p[P_WS] = 2.0 * np.pi * forcing.support_turns
-    _bearing_params(p, state, n_balls, law, el)
+    _bearing_params(p, state, n_balls, law, el, arrangement)
     return p
-
-
-def _optional(v, name):
-    x = v.get(name)
-    return None if x is None or not np.isfinite(x) else float(x)
-
-
-def bearing_state(v):
-    return preload_of(v["nominal_angle"], v["preload"], v["stiffness"],
-                      _optional(v, "contact_angle"), _optional(v, "outer_race_radius"))
 
 
 def build(v):
@@ -382,13 +346,10 @@ def build(v):
     forcing = forcing_of(v["speed"], v["support_frequency"], v["eccentricity"] > 0,
                          v["support_acceleration"] > 0, v["max_denominator"])
     support = support_vector(v["support_direction"], v["support_acceleration"])
-    n_balls = geometry(v["nominal_angle"]).n_balls
-    p = kernel_params(rotor, state, n_balls, forcing, v["speed"], v["eccentricity"], support, v["law"])
+    p = kernel_params(rotor, state, n_balls_of(v), forcing, v["speed"], v["eccentricity"], support, v["law"],
+                      arrangement=arrangement_of(v))
     derived = {
-        "contact_angle_used": math.degrees(state.contact_angle),
-        "contact_angle_imposed": float(_optional(v, "contact_angle") is not None),
-        "axial_approach": state.axial_approach,
-        "contact_constant": state.contact_constant,
+        **bearing_derived(v, state),
         "periodic_forcing": float(forcing.periodic),
         "frequency_ratio_p": float(forcing.ratio.p),
         "frequency_ratio_q": float(forcing.ratio.q),
@@ -432,21 +393,9 @@ def _ratio_problems(data, axes):
 
 
 def check(data, axes):
-    """Config rules across keys: the paper's table angles, a solvable preload geometry, a
-    support frequency for a support vibration, and shootable frequency ratios."""
-    b = data["bearing"]
-    errors = []
-    angles = _grid(data, axes, "bearing", "nominal_angle")
-    odd = [a for a in angles if a not in NOMINAL_ANGLES]
-    if odd:
-        errors.append(f"{'sweep' if 'nominal_angle' in axes else 'bearing'}.nominal_angle: must be one of "
-                      f"{', '.join(map(str, NOMINAL_ANGLES))} deg (the paper's bearing table; got {odd[0]:g})")
-    elif b["outer_race_radius"] is not None:
-        try:
-            geometry(angles[0], b["outer_race_radius"])
-        except ValueError as exc:
-            errors.append(f"bearing.outer_race_radius: the preload equations (2010 papers, eq. 10) have "
-                          f"no solution for this geometry: {exc}")
+    """Config rules across keys: the bearing table and geometry, a support frequency for a
+    support vibration, and shootable frequency ratios."""
+    errors = bearing_problems(data, axes)
     freqs = _grid(data, axes, "forcing", "support_frequency")
     if max(_grid(data, axes, "forcing", "support_acceleration")) > 0 and min(freqs) <= 0:
         errors.append("forcing.support_frequency: must be > 0 when forcing.support_acceleration > 0")
@@ -480,8 +429,9 @@ SPEC = ModelSpec(
                   axis=True, lo=0, hi=1e5, unset=0.0,
                   help="support vibration frequency f_omega [Hz] (needed when support_acceleration > 0)"),
         Parameter(name="nominal_angle", section="bearing", unit="degree", long_name="nominal contact angle",
-                  axis=True, lo=0, hi=90, lo_open=True, hi_open=True, unset=15.0,
-                  help="row of the paper's bearing table: 12, 15, 26, 36 or 40 deg (free contact angle)"),
+                  axis=True, lo=0, hi=90, lo_open=True, hi_open=True, unset=DEFAULT_NOMINAL_ANGLE,
+                  help="row of the bearing table (a label): 12, 15, 26, 36 or 40 deg in the 2016 table; "
+                       "the 2010 table has one unlabelled row (leave unset)"),
         _angle("contact_angle", "imposed contact angle",
                "contact angle [deg] imposed in the force law; unset: the loaded angle from the preload solve"),
         Parameter(name="preload", section="bearing", unit="N", long_name="axial preload", axis=True,
@@ -497,14 +447,13 @@ SPEC = ModelSpec(
                   help="axis the supports vibrate along"),
         Parameter("int", 64, name="max_denominator", section="forcing", lo=1, hi=DETECTION_DENOMINATOR,
                   help="largest q of omega / Omega = p / q shot as periodic (common period q shaft revolutions)"),
-        Parameter("choice", "hertz", name="stiffness", section="bearing", choices=tuple(CONSTANTS),
-                  help="hertz: K from Hertz theory, the preload balances exactly; paper: K as printed (1.5x)"),
+        *BEARING_KEYS,
         Parameter("choice", "ball_sum", name="law", section="bearing", choices=tuple(LAWS),
                   help="bearing force law: ball_sum (exact Hertz sum over the balls) or cubic (the 2010 "
                        "papers' power series, small amplitudes: parts from the sum by 1 % at 0.38 z0)"),
-        Parameter(name="outer_race_radius", section="bearing", lo=0, lo_open=True, unit="m",
-                  help="outer groove-bottom radius R2 [m]; given: the free angle follows from R1/R2 "
-                       "instead of the table's nominal angle"),
+        # Filipkovsky 2016, "Результаты численных исследований": l = 0,5 м; xi_D = 0,125 м;
+        # m_B = 1,963 кг; I_C1 = 0,04098 кг м2; I_C0 = 0,00015 кг м2; m_0 = 10 кг; I_1 = 0,1 кг м2;
+        # I_0 = 0,2 кг м2 (and f_Omega = 250 Гц for Figs. 2b-6, the speed's help).
         _rotor("length", 0.5, "m", "shaft length l between the bearings"),
         Parameter(default=0.125, name="disk_position", section="rotor", lo=0, unit="m",
                   help="disk position xi_D from bearing A"),
@@ -531,10 +480,7 @@ SPEC = ModelSpec(
             ("x_B", "journal B horizontal displacement"), ("y_B", "journal B vertical displacement"),
             ("z", "axial displacement")))),
     derived={
-        "contact_angle_used": ("degree", "contact angle in the force law (loaded, or imposed)"),
-        "contact_angle_imposed": ("1", "1: contact angle imposed by the scene; 0: from the preload solve"),
-        "axial_approach": ("m", "axial approach z0 of each bearing under the preload"),
-        "contact_constant": ("N m-1.5", "ball contact constant K"),
+        **BEARING_DERIVED,
         "periodic_forcing": ("1", "1: periodic forcing (orbit and Floquet); 0: quasi-periodic"),
         "frequency_ratio_p": ("1", "p of support_frequency / speed = p / q (0: incommensurate)"),
         "frequency_ratio_q": ("1", "q: shaft revolutions per common forcing period"),

@@ -24,11 +24,18 @@ Choices where the papers are ambiguous or inconsistent:
   the rigid rotor's (a rigid shaft moves axially as a whole).
 * The shaft is rigid (the papers: "the rotor is a rigid body", the potential energy is the
   bearings' only); "flexible shaft" in the issue refers to its distributed mass.
-* Bearings: back-to-back, as in `rigid_preloaded`: +z compresses A and relieves B (the papers
-  write one z; with equal signs the two static preload forces would add instead of cancel).
-* Bearing geometry and normalization as `rigid_preloaded` (its preset's E = 2.1e11 Pa; the 2010
-  papers print E = 2e11 Pa, which gives a 3.3 % softer c_r, 1.6 % lower frequencies).
-  The 2010 papers' R2 = 27.53 mm is available as bearing.outer_race_radius (configs do so).
+* Bearings: `rigid_preloaded`'s pair (`preloaded_pair`): back-to-back by default, +z compresses A
+  and relieves B (the papers write one z; with equal signs the two static preload forces would add
+  instead of cancel); `bearing.arrangement = "face_to_face"` flips it.
+* Bearing constants: `bearing.table = "filipkovsky2010"` is these papers' bearing as printed
+  (section 2 of both: R1 = 16.00, R2 = 27.53, R_K = 5.93, d = 11.51 mm, N = 7, E = 2e11 Pa,
+  sigma = 0.3, Q = 300 N). The model's default table stays the 2016 paper's (E = 2.1e11 Pa, the
+  15 deg row), and configs/filipkovsky2010_*.toml take only R2 from the 2010 papers, so that the
+  scenes and their backbone numbers stay; E = 2e11 gives a 3.3 % softer c_r, 1.6 % lower
+  frequencies.
+* Rotor constants (ROTOR_PARAMETERS) as both papers print them in section 2: l = 0.5 m,
+  l1 = 0.125 m (axial paper), d = 0.025 m, m0 = 10 kg, I1 = 0.1, I0 = 0.2 kg m^2,
+  omega = 628.3 rad/s. The density is not printed: steel, 7800 kg/m^3 (ours).
 
 Kernel: tau = t / T with T = 2 pi / (the lowest linear natural frequency at the point), positions
 in units of L = 1 um; u = (q / L, dq/dtau / L). The right-hand side does not depend on tau.
@@ -51,12 +58,13 @@ COORDINATES = ("x1", "y1", "x2", "y2", "z")
 
 def p_layout(n):
     """Offsets in the kernel vector of an n-position model: gain T^2 M^-1 (n x n), gyroscopic
-    T M^-1 Omega G (n x n), then c_r, c_a [N/m], z0 / L, tan^2 a."""
+    T M^-1 Omega G (n x n), then c_r, c_a [N/m], z0 / L, tan^2 a and the arrangement's sign s
+    (bearing A shifted by s z, B by -s z)."""
     return 0, n * n, 2 * n * n
 
 
 def n_params(n):
-    return 2 * n * n + 4
+    return 2 * n * n + 5
 
 
 # --- kernels -----------------------------------------------------------------------------------
@@ -72,9 +80,9 @@ def n_params(n):
 
 @njit(cache=True, nogil=True, inline="always")
 def bearing_loads(u, p, n):
-    """The series loads of bearings A (shift +z) and B (-z), scaled units (z = 0 when n = 4)."""
+    """The series loads of bearings A (shift s z) and B (-s z), scaled units (z = 0 when n = 4)."""
     law = 2 * n * n
-    z = u[4] if n == 5 else 0.0
+    z = p[law + 4] * u[4] if n == 5 else 0.0
     a = cubic_load(u[0], u[1], z, p[law], p[law + 1], p[law + 2], p[law + 3])
     b = cubic_load(u[2], u[3], -z, p[law], p[law + 1], p[law + 2], p[law + 3])
     return a, b
@@ -86,7 +94,7 @@ def accelerations(u, p, n, a, b, du):
     term as the C floor (workflows/bench/peers/rotor_rhs.c) does: the same operations, the same
     rounding."""
     velocity_rows(u, du, n)
-    load = (a[0], a[1], b[0], b[1], a[2] - b[2])
+    load = (a[0], a[1], b[0], b[1], p[2 * n * n + 4] * (a[2] - b[2]))
     gyro = n * n
     for i in range(n):
         g = n * i
@@ -109,14 +117,16 @@ def _stiffness_column(out, p, n, j, k0, k1, k2, k3, k4):
 
 @njit(cache=True, nogil=True, inline="always")
 def jacobian(out, p, n, a, b):
-    """[[0, I], [-gain dP/dq, -gyro]]; z enters B as -z (its cross terms with z change sign)."""
+    """[[0, I], [-gain dP/dq, -gyro]]; z enters A as s z and B as -s z (their cross terms with z
+    carry s and -s; kzz does not)."""
+    s = p[2 * n * n + 4]
     upper_rows(out, n)
-    _stiffness_column(out, p, n, 0, a[3], a[4], 0.0, 0.0, a[6])
-    _stiffness_column(out, p, n, 1, a[4], a[5], 0.0, 0.0, a[7])
-    _stiffness_column(out, p, n, 2, 0.0, 0.0, b[3], b[4], -b[6])
-    _stiffness_column(out, p, n, 3, 0.0, 0.0, b[4], b[5], -b[7])
+    _stiffness_column(out, p, n, 0, a[3], a[4], 0.0, 0.0, s * a[6])
+    _stiffness_column(out, p, n, 1, a[4], a[5], 0.0, 0.0, s * a[7])
+    _stiffness_column(out, p, n, 2, 0.0, 0.0, b[3], b[4], -s * b[6])
+    _stiffness_column(out, p, n, 3, 0.0, 0.0, b[4], b[5], -s * b[7])
     if n == 5:
-        _stiffness_column(out, p, n, 4, a[6], a[7], -b[6], -b[7], a[8] + b[8])
+        _stiffness_column(out, p, n, 4, s * a[6], s * a[7], -s * b[6], -s * b[7], a[8] + b[8])
     gyro = n * n
     for i in range(n):
         for j in range(n):
@@ -139,16 +149,17 @@ def rotor_of(v, disk_position):
 def coefficients(v):
     """The series coefficients (SI) at the point's preload state."""
     state = rp.bearing_state(v)
-    n_balls = rp.geometry(v["nominal_angle"]).n_balls
+    n_balls = rp.n_balls_of(v)
     return cubic_coefficients(state.contact_constant, state.axial_approach, state.contact_angle, n_balls), state
 
 
-def _bearing_maps(n):
-    """Local (x, y, z) of bearings A and B as linear maps of q: A = (x1, y1, +z), B = (x2, y2, -z)."""
+def _bearing_maps(n, sign=1.0):
+    """Local (x, y, z) of bearings A and B as linear maps of q: A = (x1, y1, s z), B = (x2, y2, -s z)
+    with s the arrangement's sign (rp.ARRANGEMENTS)."""
     maps = np.zeros((2, 3, n))
     maps[0, 0, 0] = maps[0, 1, 1] = maps[1, 0, 2] = maps[1, 1, 3] = 1.0
     if n == 5:
-        maps[0, 2, 4], maps[1, 2, 4] = 1.0, -1.0
+        maps[0, 2, 4], maps[1, 2, 4] = sign, -sign
     return maps
 
 
@@ -160,7 +171,7 @@ def polynomial_system(v, n, disk_position):
     monomials = potential_monomials(coef)
     local = [derivative_tensor(monomials, m) for m in (1, 2, 3, 4)]
     tensors = [np.zeros((n,) * m) for m in (1, 2, 3, 4)]
-    for a in _bearing_maps(n):
+    for a in _bearing_maps(n, rp.ARRANGEMENTS[rp.arrangement_of(v)]):
         for m, t in enumerate(local, start=1):
             tensors[m - 1] += np.einsum(t, list(range(m)), *[x for k in range(m) for x in (a, [k, m + k])],
                                         list(range(m, 2 * m)))
@@ -191,34 +202,30 @@ def build_for(n, disk_position):
         p = np.empty(n_params(n))
         p[gain:gyro] = (period ** 2 * m_inv).ravel()
         p[gyro:law] = (period * m_inv @ system.G).ravel()
-        p[law:] = coef.radial, coef.axial, coef.approach / LENGTH_SCALE, coef.tan2
-        return Built(p, period, {"contact_angle_used": math.degrees(state.contact_angle),
-                                 "axial_approach": state.axial_approach,
-                                 "contact_constant": state.contact_constant})
+        p[law:] = (coef.radial, coef.axial, coef.approach / LENGTH_SCALE, coef.tan2,
+                   rp.ARRANGEMENTS[rp.arrangement_of(v)])
+        return Built(p, period, rp.bearing_derived(v, state))
     return build
 
 
 # --- spec pieces -------------------------------------------------------------------------------
 
 def check(data, axes):
-    """The bearing table's nominal angles (as rigid_preloaded)."""
-    angles = axes.get("nominal_angle") or [data["bearing"].get("nominal_angle") or 15.0]
-    odd = [a for a in angles if a not in rp.NOMINAL_ANGLES]
-    if odd:
-        return [f"{'sweep' if 'nominal_angle' in axes else 'bearing'}.nominal_angle: must be one of "
-                f"{', '.join(map(str, rp.NOMINAL_ANGLES))} deg (the paper's bearing table; got {odd[0]:g})"]
-    return []
+    """The bearing pair's rules (as rigid_preloaded)."""
+    return rp.bearing_problems(data, axes)
 
 
 def _rotor(name, default, unit, help):
     return Parameter(default=default, name=name, section="rotor", lo=0, lo_open=True, unit=unit, help=help)
 
 
-BEARING_PARAMETERS = tuple(rp.SPEC.parameter(k) for k in
-                           ("nominal_angle", "contact_angle", "preload", "stiffness", "outer_race_radius"))
+BEARING_PARAMETERS = tuple(rp.SPEC.parameter(k) for k in ("nominal_angle", "contact_angle", "preload")) \
+    + rp.BEARING_KEYS
 ROTOR_PARAMETERS = (
     Parameter(name="speed", unit="Hz", long_name="shaft speed", axis=True, lo=0, hi=1e5,
               unset=628.3 / (2 * math.pi), help="shaft speed [Hz] (papers: 628.3 rad/s = 100.0 Hz); a sweep axis"),
+    # Both 2010 papers, section 2 ("Численный анализ колебаний"): l = 0,5 м, d = 0,025 м,
+    # m_0 = 10 кг, I_1 = 0,1 кг м2, I_0 = 0,2 кг м2, omega = 628,3 рад/с (the speed above).
     _rotor("length", 0.5, "m", "shaft length l between the bearings"),
     _rotor("shaft_diameter", SHAFT_DIAMETER, "m", "shaft diameter d (distributed mass)"),
     _rotor("shaft_density", STEEL_DENSITY, "kg m-3", "shaft density (steel; not in the papers)"),
@@ -226,11 +233,7 @@ ROTOR_PARAMETERS = (
     _rotor("disk_diametral", 0.1, "kg m2", "disk diametral inertia I_1"),
     _rotor("disk_polar", 0.2, "kg m2", "disk polar inertia I_0"),
 )
-DERIVED = {
-    "contact_angle_used": ("degree", "contact angle in the force law (loaded, or imposed)"),
-    "axial_approach": ("m", "axial approach z0 of each bearing under the preload"),
-    "contact_constant": ("N m-1.5", "ball contact constant K"),
-}
+DERIVED = rp.BEARING_DERIVED
 REFERENCES = "Filipkovsky S.V. (2010), nonlinear normal modes of a rotor on ball bearings (symmetric, axial)"
 def observables(n):
     names = (("x_A", "journal A horizontal displacement"), ("y_A", "journal A vertical displacement"),

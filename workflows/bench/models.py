@@ -31,8 +31,8 @@ NAME = "models"
 REF_RTOL, REF_CHECK_RTOL = 1e-13, 1e-14
 # The shipped scenes' values (configs/filipkovsky2016_fig2a.toml; filipkovsky2010_*.toml): the
 # model defaults with these keys.
-FIG2A = dict(preload=300.0, stiffness="hertz", eccentricity=10e-6, damping=500.0, nominal_angle=15.0)
-PAPERS_2010 = dict(preload=300.0, stiffness="hertz", outer_race_radius=0.02753, speed=100.0)
+FIG2A = dict(preload=300.0, preload_law="hertz", eccentricity=10e-6, damping=500.0, nominal_angle=15.0)
+PAPERS_2010 = dict(preload=300.0, preload_law="hertz", outer_race_radius=0.02753, speed=100.0)
 POINTS = [
     dict(name="rigid_loaded", model="rigid_preloaded", values=dict(FIG2A, speed=340.0), approach=[300.0, 320.0, 340.0],
          rtols=(1e-8, 1e-10), kind="Fig. 2a scene, 15 deg, 340 Hz: every ball loaded along the orbit"),
