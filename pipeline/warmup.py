@@ -50,7 +50,7 @@ def entry_points(spec, attractor=True, integrator="dop853"):
     else:   # backbones: the vector field at the period's end, the linear modes at rest
         orbits += [
             (ig.derivative, (kernel, 0.0, u, p, False, u, np.zeros((n, n)))),
-            (dispatch.jac, (kernel[0], 0.0, u, p, np.zeros((n, n)))),
+            (dispatch.jac, (kernel.tag, 0.0, u, p, np.zeros((n, n)))),
         ]
     attractors = [
         (_poincare, (kernel, u, p, opts, 0, 1, 0.0, 0.0)),

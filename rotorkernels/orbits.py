@@ -61,7 +61,7 @@ class AutonomousOrbitProblem(NamedTuple):
     def residual(self, s, period):
         """(phi(T; s) - s, monodromy M, f(phi(T; s)), integration ok, right-hand sides evaluated)."""
         kernel = self.model.kernel
-        n = kernel[1]
+        n = kernel.n_state
         z, status, n_rhs, _ = ig.flow(kernel, 0.0, period, ig.initial_state(s, n, True), self.p, True, self.opts, 0.0)
         end = z[:n]
         mono = z[n:].reshape((n, n))

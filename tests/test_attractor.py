@@ -49,7 +49,7 @@ def test_lle_of_stable_orbit_matches_floquet_multipliers(point, weighted, align,
 
 def linear_system(p):
     a = np.zeros((4, 4))
-    models.dispatch.jac(LINEAR.kernel[0], 0.0, np.zeros(4), p, a)
+    models.dispatch.jac(LINEAR.kernel.tag, 0.0, np.zeros(4), p, a)
     return a
 
 

@@ -146,7 +146,7 @@ def _benettin(kernel, u0, p, opts, n_transient, align_intervals, renorm,
     end state, end time); the end state is taken at the next whole period. start: the time of
     u0; clock as in _poincare (1: time runs on through the transient). converged_stop (weighted
     runs only): also stop once the weighted average has converged (CONVERGED_FRACTION)."""
-    n = kernel[1]
+    n = kernel.n_state
     nan = np.full(n, np.nan)
     u = u0.copy()
     h = 0.0
