@@ -38,6 +38,11 @@ def _poincare(kernel, u0, p, opts, n_transient, n_samples, t0=0.0, clock=0.0):
     return out, ig.STATUS_OK, u
 
 
+def entry_points(kernel, opts):
+    """(jitted function, example arguments) with the types `diagnosis` calls it with (warm-up)."""
+    return [(_poincare, (kernel, np.zeros(kernel.n_state), np.zeros(1), opts, 0, 1, 0.0, 0.0))]
+
+
 def poincare(model, u0, p, opts, n_transient, n_samples):
     """Stroboscopic samples (n_samples, n_state), once per forcing period (tau integer) after a
     transient of n_transient periods from u0 at tau = 0, and the integrator status. A run that
