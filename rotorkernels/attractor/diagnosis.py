@@ -344,13 +344,13 @@ class Settings:
     lyapunov_max_periods: int = 2000
     lyapunov_rtol: float = 0.02
     lyapunov_converged_stop: bool = False
-    lyapunov_min_periods: float = None
+    lyapunov_min_periods: float | None = None
     lyapunov_atol: float = 1e-4
     lyapunov_align_periods: float = 20.0
     lyapunov_weighted: bool = True
     lyapunov_renorm_periods: float = 1.0
     lyapunov_blocks: int = 10
-    period_rtol: float = None
+    period_rtol: float | None = None
 
     @classmethod
     def from_keys(cls, section):
