@@ -7,6 +7,7 @@ so results never depend on how they are scheduled. The model is reached only thr
 `ModelSpec` (rotorkernels.models).
 """
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -98,9 +99,10 @@ def solve_segment(data, points):
         sols = [_no_orbit(model, "not_requested")] * len(points)
     rows = [point_variables(model, sol, par, 0.0) for sol, par in zip(sols, params)]
     if ana["attractor"]:
+        settings = attractor_settings(data)
         for direction, suffix in _directions(ana["sweep_direction"]):
             order = range(len(points)) if direction == "up" else range(len(points) - 1, -1, -1)
-            for i, att in _attractor_chain(model, params, sols, opts, ana, order, seconds):
+            for i, att in _attractor_chain(model, params, sols, opts, settings, order, seconds):
                 rows[i].update({name + suffix: v for name, v in attractor_variables(model, att, params[i].period).items()})
         if ana["sweep_direction"] == "both":
             for row in rows:
@@ -166,7 +168,14 @@ def _directions(option):
 LYAPUNOV_MIN_PERIODS = 300
 
 
-def _attractor_chain(model, params, sols, opts, ana, order, seconds):
+def attractor_settings(data):
+    """The scene's attractor.Settings: its [analysis] keys of the same names, and the Lyapunov
+    run's minimum length (LYAPUNOV_MIN_PERIODS)."""
+    settings = attractor.Settings.from_keys(data["analysis"])
+    return replace(settings, lyapunov_min_periods=min(LYAPUNOV_MIN_PERIODS, settings.lyapunov_max_periods))
+
+
+def _attractor_chain(model, params, sols, opts, settings, order, seconds):
     """Continuation of the attractor: each speed (in `order`) starts from the previous one's end
     state; the first from its periodic orbit when one was found, else near static equilibrium."""
     state, k_prev = None, 0
@@ -176,15 +185,9 @@ def _attractor_chain(model, params, sols, opts, ana, order, seconds):
         found = sol.status == shooting.CONVERGED
         if state is None:
             state = sol.state if found else model.cold_guess(par.p)
-        stable_orbit = (sol.state, sol.multipliers) if found and sol.stable and ana["derive_when_stable"] else None
-        att = attractor.diagnose(
-            model, state, par.p, par.period, opts, n_transient=ana["transient_periods"],
-            n_samples=ana["poincare_samples"], max_period=ana["max_period"],
-            lyapunov_always=not ana["derive_when_stable"], stable_orbit=stable_orbit,
-            max_periods=ana["lyapunov_max_periods"],
-            min_periods=min(LYAPUNOV_MIN_PERIODS, ana["lyapunov_max_periods"]), rtol_stop=ana["lyapunov_rtol"],
-            settle_early=ana["stop_when_settled"], converged_stop=ana["lyapunov_converged_stop"],
-            continued_period=k_prev, periodic=par.periodic)
+        stable_orbit = (sol.state, sol.multipliers) if found and sol.stable else None
+        att = attractor.diagnose(model, state, par.p, par.period, opts, settings, stable_orbit=stable_orbit,
+                                 continued_period=k_prev, periodic=par.periodic)
         # a diverged run leaves no attractor to continue from: the next speed starts afresh
         state = att.end_state if att.code not in (attractor.DIVERGED, attractor.INTEGRATION_FAILED) else None
         k_prev = att.period if att.code == attractor.PERIODIC else 0

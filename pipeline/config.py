@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rotorkernels import models
+from rotorkernels import attractor, models
 from rotorkernels.models.spec import Parameter as Key
 
 try:
@@ -409,10 +409,7 @@ def _cross_checks(spec, data, axes, errors):
     ana = data["analysis"]
     if not (ana["floquet"] or ana["attractor"]):
         errors.append("analysis: floquet and attractor are both false; nothing to compute")
-    if ana["poincare_samples"] < 4 * ana["max_period"]:
-        errors.append(f"analysis.poincare_samples: must be >= 4 x analysis.max_period "
-                      f"(= {4 * ana['max_period']}): a period is detected on the second half of "
-                      "the samples and must repeat there at least twice")
+    errors.extend(attractor.Settings.from_keys(ana).problems("analysis."))
     errors.extend(_report_checks(spec, data["report"]))
     num = data["numerics"]
     if num["integrator"] == "dop853" and num["newton_tol"] < num["rtol"]:

@@ -4,7 +4,7 @@ any: `rotorsweep warmup [MODEL...]`, once in a cluster image or before a sweep f
 Kernels are compiled per kernel group (`ModelSpec.group`), so warming one model warms the other
 models of its group, and per integrator (the class of `integrators.settings()`): a scene compiles
 only its own; `rotorsweep warmup` compiles both unless told one (`--integrator`). Each entry point
-below is compiled for the argument types the Python orchestration passes it
+(listed by the kernel packages) is compiled for the argument types the Python orchestration passes it
 (`Dispatcher.compile(signature)`, which loads a cached compilation when there is one); the values
 are never used.
 
@@ -19,14 +19,10 @@ import os
 import time
 
 import numba
-import numpy as np
 
+import rotorkernels.attractor as diagnostics
 from pipeline import compute
-from rotorkernels import integrators as ig, models, shooting
-from rotorkernels.attractor.lyapunov import _benettin
-from rotorkernels.attractor.period import _detect_period
-from rotorkernels.attractor.poincare import _poincare
-from rotorkernels.models import dispatch
+from rotorkernels import integrators as ig, models, orbits
 
 
 INTEGRATORS = ig.METHODS
@@ -34,31 +30,11 @@ INTEGRATORS = ig.METHODS
 
 def entry_points(spec, attractor=True, integrator="dop853"):
     """(jitted function, example arguments) of each kernel that Python code calls for `spec`
-    with `integrator`, with the types of those calls (rotorkernels.orbits, attractor.diagnosis,
-    pipeline.compute); without `attractor`, only those of periodic orbits. Each costs about a
-    second of compiling, so a scene gets only those it calls: a conservative model's backbone
-    neither shoots at a fixed period nor settles a transient."""
-    kernel, n = spec.kernel, spec.n_state
-    u, p, opts = np.zeros(n), np.zeros(1), ig.settings(integrator)
-    orbits = [
-        (shooting.sample_orbit, (kernel, u, p, 1.0, 1, opts)),
-        (ig.flow, (kernel, 0.0, 1.0, u, p, False, opts, 0.0)),     # Python's bool, either value
-        (ig.initial_state, (u, n, False)),       # continuation (the boundaries' refinement)
-    ]
-    if spec.forced:     # shoot_staged is also `shoot` (plain Newton: an attractor's orbit refined)
-        orbits.append((shooting.shoot_staged, (kernel, u, p, 1.0, opts, opts, 1e-9, 1)))
-    else:   # backbones: the vector field at the period's end, the linear modes at rest
-        orbits += [
-            (ig.derivative, (kernel, 0.0, u, p, False, u, np.zeros((n, n)))),
-            (dispatch.jac, (kernel[0], 0.0, u, p, np.zeros((n, n)))),
-        ]
-    attractors = [
-        (_poincare, (kernel, u, p, opts, 0, 1, 0.0, 0.0)),
-        (_benettin, (kernel, u, p, opts, 0, 0, 1.0, 1, 2, 2, 1e-3, 1e-4, True, 0.0, 0.0, False)),
-        (_detect_period, (np.zeros((2, n)), 1, 1e-6, 1e-3)),     # the same for every model
-    ]
-    # the attractor diagnostics sample a forcing period: a conservative model has none
-    return orbits + attractors if attractor and spec.forced else orbits
+    with `integrator`, as the kernel packages list them (`orbits.entry_points`,
+    `attractor.entry_points`); without `attractor`, only those of periodic orbits. Each costs
+    about a second of compiling, so a scene gets only those it calls."""
+    opts = ig.settings(integrator)
+    return orbits.entry_points(spec, opts) + (diagnostics.entry_points(spec, opts) if attractor else [])
 
 
 @contextlib.contextmanager

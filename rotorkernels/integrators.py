@@ -54,10 +54,10 @@ def _derivative(kernel, t, z, p, variational, dz, jbuf):
     variational equations the model's right-hand side and Jacobian come from one evaluation
     (`rhs_jac`, one ball sum)."""
     if variational:
-        dispatch.rhs_jac(kernel[0], t, z, p, dz, jbuf)
-        dispatch.tangent(kernel[0], kernel[3], z, kernel[1], jbuf, dz)
+        dispatch.rhs_jac(kernel.tag, t, z, p, dz, jbuf)
+        dispatch.tangent(kernel.tag, kernel.velocity_form, z, kernel.n_state, jbuf, dz)
     else:
-        dispatch.rhs(kernel[0], t, z, p, dz)
+        dispatch.rhs(kernel.tag, t, z, p, dz)
 
 
 @njit(cache=True, nogil=True)
@@ -82,9 +82,9 @@ def state_status(z, n, n_position, amplitude_limit):
 def start_status(kernel, z, amplitude_limit):
     """An id that is no model of the tag's group is an error status (the dispatch would give
     NaN), else state_status."""
-    if not dispatch.known(kernel[0]):
+    if not dispatch.known(kernel.tag):
         return STATUS_UNKNOWN_MODEL
-    return state_status(z, kernel[1], kernel[2], amplitude_limit)
+    return state_status(z, kernel.n_state, kernel.n_position, amplitude_limit)
 
 
 @njit(cache=True, nogil=True)
@@ -131,7 +131,7 @@ def _error_norm(K, h, z, znew, rtol, atol, w5, w3):
 def dop853(kernel, t0, t1, z0, p, variational, rtol, atol, h0, max_steps, amplitude_limit):
     """Integrate z from t0 to t1 > t0 with adaptive Dormand-Prince 8(5,3)."""
     m = z0.size
-    n = kernel[1]
+    n = kernel.n_state
     z = z0.copy()
     status = start_status(kernel, z, amplitude_limit)
     if status != STATUS_OK:
@@ -176,7 +176,7 @@ def _dop853_steps(kernel, t0, t1, z, p, variational, rtol, atol, h0, max_steps, 
                     target = z
                 else:
                     target = znew if s == _N_STAGES else stage
-                    dispatch.combine(kernel[0], K, _A[s], s, z, step, target)
+                    dispatch.combine(kernel.tag, K, _A[s], s, z, step, target)
                 _derivative(kernel, t + _C[s] * step, target, p, variational, K[s], jbuf)
             n_rhs += _N_STAGES + 1 - first_stage
             first_stage = 1
@@ -191,7 +191,7 @@ def _dop853_steps(kernel, t0, t1, z, p, variational, rtol, atol, h0, max_steps, 
         for i in range(m):
             z[i] = znew[i]
             K[0, i] = K[_N_STAGES, i]
-        status = state_status(z, kernel[1], kernel[2], amplitude_limit)
+        status = state_status(z, kernel.n_state, kernel.n_position, amplitude_limit)
         if status != STATUS_OK:
             return status, n_rhs, h
         factor = _MAX_FACTOR if err == 0.0 else min(_MAX_FACTOR, _SAFETY * err ** _ERR_EXPONENT)
@@ -205,7 +205,7 @@ def _dop853_steps(kernel, t0, t1, z, p, variational, rtol, atol, h0, max_steps, 
 def rk4(kernel, t0, t1, z0, p, variational, n_steps, amplitude_limit):
     """Integrate z from t0 to t1 with n_steps classical RK4 steps."""
     m = z0.size
-    n = kernel[1]
+    n = kernel.n_state
     z = z0.copy()
     h = (t1 - t0) / n_steps
     status = start_status(kernel, z, amplitude_limit)
@@ -242,7 +242,7 @@ def _rk4_steps(kernel, t0, z, p, variational, n_steps, h, amplitude_limit, work,
             _derivative(kernel, tq, stage, p, variational, work[q], jbuf)
         for i in range(m):
             z[i] += h / 6.0 * (work[0, i] + 2.0 * work[1, i] + 2.0 * work[2, i] + work[3, i])
-        status = state_status(z, kernel[1], kernel[2], amplitude_limit)
+        status = state_status(z, kernel.n_state, kernel.n_position, amplitude_limit)
         if status != STATUS_OK:
             return status, 4 * (step + 1)
     return STATUS_OK, 4 * n_steps
@@ -311,7 +311,7 @@ def _integrate_by_method(kernel, t0, t1, z0, p, variational, opts, h0):
 def flow(kernel, t0, t1, z0, p, variational, opts, h0):
     """Integrate with the method and tolerances in `opts` (see `settings`).
 
-    kernel: the model's identity (tag, n_state, n_position, velocity form), `ModelSpec.kernel`.
+    kernel: the model's identity, a `KernelId` (`ModelSpec.kernel`).
     Inlined into its jitted callers, so that a literal True or False there becomes a plain bool
     before it reaches the integrator: one compilation of the integrator serves every caller."""
     return _integrate(kernel, t0, t1, z0, p, bool(variational), opts, h0)

@@ -17,6 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from rotorkernels import floquet, integrators as ig, shooting
+from rotorkernels.models import dispatch
 
 
 class ForcedOrbitProblem(NamedTuple):
@@ -61,7 +62,7 @@ class AutonomousOrbitProblem(NamedTuple):
     def residual(self, s, period):
         """(phi(T; s) - s, monodromy M, f(phi(T; s)), integration ok, right-hand sides evaluated)."""
         kernel = self.model.kernel
-        n = kernel[1]
+        n = kernel.n_state
         z, status, n_rhs, _ = ig.flow(kernel, 0.0, period, ig.initial_state(s, n, True), self.p, True, self.opts, 0.0)
         end = z[:n]
         mono = z[n:].reshape((n, n))
@@ -105,3 +106,24 @@ class AutonomousOrbitProblem(NamedTuple):
         step[free] = delta[:-1]
         step[n] = delta[-1]
         return step
+
+
+def entry_points(spec, opts):
+    """(jitted function, example arguments) of each kernel that the orbit problems and their
+    continuation call from Python for model `spec` with integrator settings `opts`, with the types
+    of those calls, so that a warm-up compiles exactly those (`pipeline.warmup`): a forced model's
+    shooting; a conservative one's backbones neither shoot at a fixed period nor settle a
+    transient, but take the vector field at the period's end and the linear modes at rest."""
+    kernel, n = spec.kernel, spec.n_state
+    u, p = np.zeros(n), np.zeros(1)
+    calls = [
+        (shooting.sample_orbit, (kernel, u, p, 1.0, 1, opts)),
+        (ig.flow, (kernel, 0.0, 1.0, u, p, False, opts, 0.0)),     # Python's bool, either value
+        (ig.initial_state, (u, n, False)),       # continuation (the boundaries' refinement)
+    ]
+    if spec.forced:     # shoot_staged is also `shoot` (plain Newton: an attractor's orbit refined)
+        return calls + [(shooting.shoot_staged, (kernel, u, p, 1.0, opts, opts, 1e-9, 1))]
+    return calls + [
+        (ig.derivative, (kernel, 0.0, u, p, False, u, np.zeros((n, n)))),
+        (dispatch.jac, (kernel.tag, 0.0, u, p, np.zeros((n, n)))),
+    ]

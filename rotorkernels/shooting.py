@@ -51,7 +51,7 @@ def _residual_norm(r, s):
 @njit(cache=True, nogil=True)
 def _return_map(kernel, s, p, periods, opts, h):
     """(u(k T; s) - s, monodromy, flow status, n_rhs, h_next)."""
-    n = kernel[1]
+    n = kernel.n_state
     z0 = ig.initial_state(s, n, True)
     z, status, n_rhs, h = ig.flow(kernel, 0.0, periods, z0, p, True, opts, h)
     r = np.empty(n)
@@ -214,11 +214,11 @@ def settle(kernel, u0, p, periods, opts):
 @njit(cache=True, nogil=True)
 def sample_orbit(kernel, u0, p, periods, n_samples, opts):
     """States at n_samples equally spaced times over [0, periods) starting from u0."""
-    out = np.empty((n_samples, kernel[1]))
+    out = np.empty((n_samples, kernel.n_state))
     z = u0.copy()
     h = 0.0
     dt = periods / n_samples
-    n = kernel[1]
+    n = kernel.n_state
     for i in range(n_samples):
         # element loops, not out[i] = z and out[i + 1:] = nan: the slice assignments' shape
         # checks compile Numba's error formatting (~2 s of a first point)

@@ -49,7 +49,7 @@ def test_lle_of_stable_orbit_matches_floquet_multipliers(point, weighted, align,
 
 def linear_system(p):
     a = np.zeros((4, 4))
-    models.dispatch.jac(LINEAR.kernel[0], 0.0, np.zeros(4), p, a)
+    models.dispatch.jac(LINEAR.kernel.tag, 0.0, np.zeros(4), p, a)
     return a
 
 
@@ -173,8 +173,8 @@ def test_converged_stop_on_the_torus_gives_a_zero_exponent():
     cap with |lle| per period within the stop's tolerance (atol 1e-4, rtol |lle| negligible)."""
     p, period = bai_params(BaiPoint(148.0, 7.6e-6))
     p1 = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=jc.static_guess, tol=1e-10)
-    res = at.diagnose(JEFF, p1.state, p, period, OPTS, max_periods=1000, min_periods=300,
-                      rtol_stop=0.1, converged_stop=True)
+    res = at.diagnose(JEFF, p1.state, p, period, OPTS, at.Settings(lyapunov_max_periods=1000,
+                      lyapunov_min_periods=300, lyapunov_rtol=0.1, lyapunov_converged_stop=True))
     assert (res.code, res.period) == (at.QUASI_PERIODIC, 0)
     assert 300 <= res.periods_used < 1000
     assert abs(res.lle * period) <= 1e-4 * (1 + 0.1), res.lle * period
@@ -302,19 +302,20 @@ def test_power_spectrum_peak():
 
 def test_diagnose_periodic_and_chaotic_points():
     p, period = bai_params(BaiPoint(55.0, 19.0e-6))                     # period 2
-    res = at.diagnose(JEFF, jc.static_guess(p), p, period, OPTS, n_transient=300)
+    res = at.diagnose(JEFF, jc.static_guess(p), p, period, OPTS, at.Settings(transient_periods=300))
     assert (res.code, res.period, res.periods_used) == (at.PERIODIC, 2, 0.0)
-    bench = at.diagnose(JEFF, jc.static_guess(p), p, period, OPTS, n_transient=300,
-                        lyapunov_always=True, max_periods=1000, rtol_stop=0.0)
+    bench = at.diagnose(JEFF, jc.static_guess(p), p, period, OPTS, at.Settings(transient_periods=300,
+                        derive_when_stable=False, lyapunov_max_periods=1000, lyapunov_rtol=0.0))
     assert (bench.code, bench.period, bench.periods_used) == (at.PERIODIC, 2, 1000.0)
     assert res.lle < 0 and abs(res.lle - bench.lle) < 1e-3 * abs(res.lle), (res.lle, bench.lle)
     np.testing.assert_allclose(res.end_state, res.samples[-1])
     p, period = bai_params(CHAOTIC_POINT)
-    res = at.diagnose(JEFF, jc.static_guess(p), p, period, OPTS, max_periods=400)
+    res = at.diagnose(JEFF, jc.static_guess(p), p, period, OPTS, at.Settings(lyapunov_max_periods=400))
     assert res.code == at.CHAOTIC and res.period == 0 and res.lle > 3 * res.lle_stderr > 0
     assert 100 <= res.periods_used <= 400 and res.status == ig.STATUS_OK
     # the end state is on the attractor at a whole period: restarting there stays chaotic
-    again = at.diagnose(JEFF, res.end_state, p, period, OPTS, n_transient=0, max_periods=400)
+    again = at.diagnose(JEFF, res.end_state, p, period, OPTS, at.Settings(transient_periods=0,
+                        lyapunov_max_periods=400))
     assert again.code == at.CHAOTIC
 
 
@@ -326,8 +327,9 @@ def test_derive_when_stable_shortcut_matches_the_integrated_exponents():
     fast = at.diagnose(JEFF, start, p, period, OPTS, stable_orbit=(sol.state, sol.multipliers))
     assert fast.derived and (fast.code, fast.period, fast.periods_used) == (at.PERIODIC, 1, 0.0)
     np.testing.assert_array_equal(fast.samples, np.tile(sol.state, (128, 1)))
-    full = at.diagnose(JEFF, start, p, period, OPTS, lyapunov_always=True, max_periods=1000,
-                       rtol_stop=0.0, min_periods=1000, weighted=False, align_periods=100.0)
+    full = at.diagnose(JEFF, start, p, period, OPTS, at.Settings(derive_when_stable=False,
+                       lyapunov_max_periods=1000, lyapunov_rtol=0.0, lyapunov_min_periods=1000,
+                       lyapunov_weighted=False, lyapunov_align_periods=100.0))
     assert not full.derived and full.periods_used == 1000 and full.code == at.PERIODIC
     np.testing.assert_allclose(fast.exponents, full.exponents, rtol=1e-3)
     assert fast.exponents.sum() == pytest.approx(-2 * 300.0 / 2.0, rel=1e-9)   # -2 D / M
@@ -365,7 +367,7 @@ def test_period_two_attractor_is_refined_and_stable_although_period_one_is_not()
     p, period = bai_params(point)
     p1 = continuation.solve_orbit(JEFF, p, OPTS, cold_guess=jc.static_guess, tol=1e-10)
     assert p1.status == shooting.CONVERGED and not p1.stable and p1.bifurcation == floquet.PERIOD_DOUBLING
-    res = at.diagnose(JEFF, p1.state, p, period, OPTS, n_transient=300)
+    res = at.diagnose(JEFF, p1.state, p, period, OPTS, at.Settings(transient_periods=300))
     assert (res.code, res.period) == (at.PERIODIC, 2) and res.derived
     assert np.abs(res.multipliers).max() < 1.0
     ref = shooting.periodic_orbit(JEFF, res.end_state, p, TIGHT, periods=2, tol=1e-12)
@@ -385,8 +387,8 @@ def test_transient_stopped_when_settled_finds_the_long_transients_period_two_att
     tol = at.default_period_rtol(OPTS)
     orbit, _, used, status = at.settle_periodic(JEFF, start, p, OPTS, 300, 32, tol)
     assert status == ig.STATUS_OK and orbit is not None and orbit[0] == 2 and used < 300
-    fast = at.diagnose(JEFF, start, p, period, OPTS, n_transient=300, settle_early=True)
-    long = at.diagnose(JEFF, start, p, period, OPTS, n_transient=300)
+    fast = at.diagnose(JEFF, start, p, period, OPTS, at.Settings(transient_periods=300, stop_when_settled=True))
+    long = at.diagnose(JEFF, start, p, period, OPTS, at.Settings(transient_periods=300))
     assert (fast.code, fast.period, fast.derived) == (long.code, long.period, long.derived) == (at.PERIODIC, 2, True)
     scale = tol * np.abs(long.samples).max()
     gaps = np.abs(fast.samples[:, None, :] - long.samples[None, :, :]).max(axis=2).min(axis=1)
@@ -409,7 +411,7 @@ def test_settled_stop_does_not_stop_on_an_unstable_orbit():
     tol = at.default_period_rtol(OPTS)
     orbit, _, used, _ = at.settle_periodic(JEFF, p1.state, p, OPTS, 300, 32, tol)
     assert orbit is not None and orbit[0] == 2 and np.abs(orbit[2]).max() < 1.0 and used < 300
-    long = at.diagnose(JEFF, p1.state, p, period, OPTS, n_transient=300)
+    long = at.diagnose(JEFF, p1.state, p, period, OPTS, at.Settings(transient_periods=300))
     np.testing.assert_allclose(np.sort_complex(orbit[2]), np.sort_complex(long.multipliers), atol=1e-7)
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(at.diagnosis, "ESCAPES", 0)
@@ -426,14 +428,15 @@ def test_continued_period_two_orbit_is_the_full_transients_attractor():
     (None, no periods used) and the transient goes on as without it."""
     tol = at.default_period_rtol(OPTS)
     p_next, period_next = bai_params(BaiPoint(55.1, 19.0e-6))
-    neighbour = at.diagnose(JEFF, jc.static_guess(p_next), p_next, period_next, OPTS, n_transient=300)
+    neighbour = at.diagnose(JEFF, jc.static_guess(p_next), p_next, period_next, OPTS,
+                            at.Settings(transient_periods=300))
     assert (neighbour.code, neighbour.period) == (at.PERIODIC, 2)
     p, period = bai_params(BaiPoint(55.0, 19.0e-6))
     orbit, reached, used = at.settle_on_continued_orbit(JEFF, neighbour.end_state, p, OPTS, 2, 300, tol)
     assert orbit is not None and orbit[0] == 2 and used < 100
-    fast = at.diagnose(JEFF, neighbour.end_state, p, period, OPTS, n_transient=300, settle_early=True,
-                       continued_period=2)
-    long = at.diagnose(JEFF, neighbour.end_state, p, period, OPTS, n_transient=300)
+    fast = at.diagnose(JEFF, neighbour.end_state, p, period, OPTS, at.Settings(transient_periods=300,
+                       stop_when_settled=True), continued_period=2)
+    long = at.diagnose(JEFF, neighbour.end_state, p, period, OPTS, at.Settings(transient_periods=300))
     assert (fast.code, fast.period, fast.derived) == (long.code, long.period, long.derived) == (at.PERIODIC, 2, True)
     np.testing.assert_allclose(np.sort_complex(fast.multipliers), np.sort_complex(long.multipliers), atol=1e-7)
     scale = tol * np.abs(long.samples).max()
@@ -464,13 +467,13 @@ def test_just_past_a_flip_the_transient_goes_on_from_the_period_two_orbit_born_t
     brute, status = at.poincare(JEFF, p1.state + 1e-3 * size * v, p, OPTS, 6000, 2)
     assert status == ig.STATUS_OK
     assert np.abs(brute[1] - brute[0]).max() > 1e-2 * size          # period 2, not 1
-    res = at.diagnose(JEFF, p1.state, p, period, OPTS, n_transient=200)
+    res = at.diagnose(JEFF, p1.state, p, period, OPTS, at.Settings(transient_periods=200))
     assert (res.code, res.period, res.derived) == (at.PERIODIC, 2, True) and res.lle < 0
     gaps = np.abs(res.samples[-2:, None, :] - brute[None, :, :]).max(axis=2).min(axis=1)
     assert gaps.max() <= 1e-6 * size, gaps
     with pytest.MonkeyPatch.context() as mp:       # the plain kick: still on the period-1 orbit
         mp.setattr(at.diagnosis, "FLIP_OFFSETS", ())
-        kicked = at.diagnose(JEFF, p1.state, p, period, OPTS, n_transient=200)
+        kicked = at.diagnose(JEFF, p1.state, p, period, OPTS, at.Settings(transient_periods=200))
     assert (kicked.code, kicked.period) == (at.PERIODIC, 1)
 
 
@@ -506,8 +509,8 @@ def test_period_doubling_cascade_to_chaos_at_19um():
     for speed in CASCADE_SPEEDS:
         p, period = bai_params(BaiPoint(speed, 19.0e-6))
         u = jc.static_guess(p) if u is None else u
-        res = at.diagnose(JEFF, u, p, period, OPTS, n_transient=400, n_samples=128, max_periods=1000,
-                          min_periods=200)
+        res = at.diagnose(JEFF, u, p, period, OPTS, at.Settings(transient_periods=400, poincare_samples=128,
+                          lyapunov_max_periods=1000, lyapunov_min_periods=200))
         assert res.status == ig.STATUS_OK
         u = res.end_state
         found.append((speed, res.code, res.period, res.lle))
@@ -518,3 +521,16 @@ def test_period_doubling_cascade_to_chaos_at_19um():
     assert all(lle > 0 for _, c, _, lle in found if c == at.CHAOTIC)
     windows = [k for c, k in codes[first_chaos:] if c == at.PERIODIC and k > 0]
     assert windows and sum(c == at.CHAOTIC for c, _ in codes[first_chaos:]) >= 10, found
+
+
+def test_settings_report_every_problem_and_diagnose_refuses_them():
+    """Settings that cannot work are named (with the caller's prefix) before any work starts."""
+    bad = at.Settings(poincare_samples=64, max_period=32, lyapunov_rtol=-1.0, lyapunov_blocks=1)
+    problems = bad.problems("analysis.")
+    assert any(p.startswith("analysis.poincare_samples: must be >= 4 x analysis.max_period") for p in problems)
+    assert any(p.startswith("analysis.lyapunov_rtol") for p in problems)
+    assert any("n_blocks" in p for p in problems) and len(problems) == 3
+    assert at.Settings().problems() == []
+    with pytest.raises(ValueError, match="poincare_samples"):
+        p, period = bai_params(BaiPoint(40.0, 7.6e-6))
+        at.diagnose(JEFF, jc.static_guess(p), p, period, OPTS, bad)

@@ -227,7 +227,7 @@ def test_models_scipy_peers_compute_the_kernels_equations():
         for u in rng.normal(scale=5.0, size=(10, n)):
             tau = rng.uniform()
             du, z = np.empty(n), np.concatenate([u, rng.normal(size=n * n)])
-            models.dispatch.rhs(spec.kernel[0], tau, u, p, du)
+            models.dispatch.rhs(spec.kernel.tag, tau, u, p, du)
             np.testing.assert_allclose(peer.rhs(tau, u), du, rtol=0, atol=1e-11 * np.abs(du).max())
             dz = np.empty(n + n * n)
             ig.derivative(spec.kernel, tau, z, p, True, dz, np.empty((n, n)))

@@ -212,3 +212,19 @@ def test_a_large_grid_refuses_only_the_command_that_computes_it(tmp_path):
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)["status"] == "converged"
+
+
+def test_analysis_keys_are_the_attractor_settings_fields():
+    """One name per concept: each [analysis] key but the three that choose what runs is a field of
+    attractor.Settings, and the settings built from a scene carry the scene's values."""
+    from dataclasses import fields
+
+    from pipeline import compute
+    from rotorkernels import attractor
+
+    keys = set(config.SCHEMA["analysis"]) - {"floquet", "attractor", "sweep_direction"}
+    assert keys <= {f.name for f in fields(attractor.Settings)}
+    data = config.parse_config(config.DEFAULT_CONFIG_TOML).data
+    settings = compute.attractor_settings(data)
+    assert {k: getattr(settings, k) for k in keys} == {k: data["analysis"][k] for k in keys}
+    assert settings.lyapunov_min_periods == min(compute.LYAPUNOV_MIN_PERIODS, data["analysis"]["lyapunov_max_periods"])

@@ -207,8 +207,8 @@ def test_chaotic_regime_shooting_fails_gracefully(speed):
     spectrum summing to the divergence."""
     point = BaiPoint(speed, CHAOS_CLEARANCE)
     p, period = bai_params(point)
-    att = at.diagnose(JEFF, jc.static_guess(p), p, period, ATT_OPTS, n_transient=300,
-                      max_periods=400)
+    att = at.diagnose(JEFF, jc.static_guess(p), p, period, ATT_OPTS, at.Settings(transient_periods=300,
+                      lyapunov_max_periods=400))
     assert att.code == at.CHAOTIC and att.status == ig.STATUS_OK
     assert att.lle > 3 * att.lle_stderr > 0
     assert abs(att.exponents.sum() - divergence_si(point)) < 1e-6 * abs(divergence_si(point))
@@ -273,8 +273,9 @@ def test_stable_orbit_coexists_with_a_chaotic_attractor(speed):
     assert match(sol.multipliers, np.linalg.eigvals(ref_mono)) < 1e-6
     expected = at.derived_lle(sol.max_abs, period)
 
-    on_orbit = at.diagnose(JEFF, sol.state, p, period, ATT_OPTS, n_transient=0, lyapunov_always=True,
-                           max_periods=1000, rtol_stop=0.0, atol_stop=0.0)
+    on_orbit = at.diagnose(JEFF, sol.state, p, period, ATT_OPTS, at.Settings(transient_periods=0,
+                           derive_when_stable=False, lyapunov_max_periods=1000, lyapunov_rtol=0.0,
+                           lyapunov_atol=0.0))
     assert (on_orbit.code, on_orbit.period) == (at.PERIODIC, 1)
     assert abs(on_orbit.lle - expected) < 1e-3 * abs(expected), (on_orbit.lle, expected)
 
@@ -283,12 +284,12 @@ def test_stable_orbit_coexists_with_a_chaotic_attractor(speed):
     assert status == ig.STATUS_OK
     distance = np.abs(samples - sol.state).max(axis=1)
     assert distance.min() > 0.1 * np.abs(sol.state).max()          # never near the stable orbit
-    chaos = at.diagnose(JEFF, samples[-1], p, period, ATT_OPTS, n_transient=0, max_periods=400,
-                        stable_orbit=(sol.state, sol.multipliers))
+    chaos = at.diagnose(JEFF, samples[-1], p, period, ATT_OPTS, at.Settings(transient_periods=0,
+                        lyapunov_max_periods=400), stable_orbit=(sol.state, sol.multipliers))
     assert chaos.code == at.CHAOTIC and chaos.lle > 3 * chaos.lle_stderr > 0
     assert abs(chaos.exponents.sum() - divergence_si(point)) < 1e-6 * abs(divergence_si(point))
     # the same call from the orbit's basin reports the orbit (the derive-when-stable shortcut)
-    settled = at.diagnose(JEFF, jc.static_guess(p), p, period, ATT_OPTS, n_transient=300,
+    settled = at.diagnose(JEFF, jc.static_guess(p), p, period, ATT_OPTS, at.Settings(transient_periods=300),
                           stable_orbit=(sol.state, sol.multipliers))
     assert (settled.code, settled.period, settled.derived) == (at.PERIODIC, 1, True)
     assert settled.lle == pytest.approx(expected, rel=1e-12)

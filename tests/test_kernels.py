@@ -42,7 +42,7 @@ def match(a, b):
 
 def scaled_rhs(p, tau, u):
     du = np.empty(4)
-    models.dispatch.rhs(JEFF.kernel[0], tau, np.asarray(u, float), p, du)
+    models.dispatch.rhs(JEFF.kernel.tag, tau, np.asarray(u, float), p, du)
     return du
 
 
@@ -69,7 +69,7 @@ def test_analytic_jacobian_matches_finite_differences():
     cases += grazing_states(p, rng, 20)
     for tau, u in cases:
         jac = np.empty((4, 4))
-        models.dispatch.jac(JEFF.kernel[0], tau, u, p, jac)
+        models.dispatch.jac(JEFF.kernel.tag, tau, u, p, jac)
         h = 1e-7
         fd = np.column_stack([(scaled_rhs(p, tau, u + h * e) - scaled_rhs(p, tau, u - h * e)) / (2 * h)
                               for e in np.eye(4)])
@@ -87,7 +87,7 @@ MATHIEU = models.get("damped_mathieu")
 def test_linear_oscillator_multipliers_are_exp_of_eigenvalues(opts, tol):
     p = np.array([40.0, 5.0, 90.0, 0.4, 0.9])
     a = np.zeros((4, 4))
-    models.dispatch.jac(LINEAR.kernel[0], 0.0, np.zeros(4), p, a)
+    models.dispatch.jac(LINEAR.kernel.tag, 0.0, np.zeros(4), p, a)
     orbit = shooting.periodic_orbit(LINEAR, np.array([1.0, -2.0, 0.5, 0.3]), p, opts, tol=1e-12)
     assert orbit.status == shooting.CONVERGED and orbit.iterations <= 2
     np.testing.assert_allclose(orbit.state, 0.0, atol=1e-10)
@@ -285,7 +285,7 @@ def test_preloaded_law_linearizes_to_the_bearing_radial_stiffness(preload):
         axial_approach=state.axial_approach, mass=mass, damping=0.0, radial_load=0.0,
         n_balls=geom.n_balls, ball_diameter=geom.ball_diameter, pitch_diameter=geom.pitch_diameter)
     jac = np.empty((4, 4))
-    models.dispatch.jac(JEFF.kernel[0], 0.3, np.zeros(4), p, jac)
+    models.dispatch.jac(JEFF.kernel.tag, 0.3, np.zeros(4), p, jac)
     np.testing.assert_allclose(-jac[2, 0] * mass / period ** 2, state.radial_stiffness, rtol=1e-12)
     np.testing.assert_allclose(-jac[3, 1] * mass / period ** 2, state.radial_stiffness, rtol=1e-12)
     np.testing.assert_allclose(scaled_rhs(p, 0.3, np.zeros(4)), 0.0, atol=1e-9)
@@ -309,10 +309,10 @@ def test_fused_rhs_jac_equals_rhs_and_jac():
     rng = np.random.default_rng(5)
     for model, p, tau, u in _model_cases(rng):
         du, jac = np.empty(4), np.empty((4, 4))
-        models.dispatch.rhs(model.kernel[0], tau, u, p, du)
-        models.dispatch.jac(model.kernel[0], tau, u, p, jac)
+        models.dispatch.rhs(model.kernel.tag, tau, u, p, du)
+        models.dispatch.jac(model.kernel.tag, tau, u, p, jac)
         du2, jac2 = np.full(4, np.nan), np.full((4, 4), np.nan)
-        models.dispatch.rhs_jac(model.kernel[0], tau, u, p, du2, jac2)
+        models.dispatch.rhs_jac(model.kernel.tag, tau, u, p, du2, jac2)
         np.testing.assert_allclose(du2, du, rtol=1e-15, atol=1e-15 * np.abs(du).max())
         np.testing.assert_allclose(jac2, jac, rtol=1e-15, atol=1e-15 * np.abs(jac).max())
         assert model.velocity_form
@@ -341,8 +341,8 @@ def test_variational_derivative_is_rhs_and_dense_j_phi():
         dz, jbuf = np.full(20, np.nan), np.empty((4, 4))
         ig.derivative(model.kernel, tau, z, p, True, dz, jbuf)
         du, jac = np.empty(4), np.empty((4, 4))
-        models.dispatch.rhs(model.kernel[0], tau, u, p, du)
-        models.dispatch.jac(model.kernel[0], tau, u, p, jac)
+        models.dispatch.rhs(model.kernel.tag, tau, u, p, du)
+        models.dispatch.jac(model.kernel.tag, tau, u, p, jac)
         np.testing.assert_allclose(dz[:4], du, rtol=1e-15, atol=1e-15 * np.abs(du).max())
         dense = (jac @ phi).ravel()
         np.testing.assert_allclose(dz[4:], dense, rtol=1e-14, atol=1e-14 * np.abs(dense).max())

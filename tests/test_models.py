@@ -26,9 +26,9 @@ def test_unknown_id_in_a_group_is_an_error_status_not_another_model():
     """The tag's type picks the kernel group at compile time; within the group an id that is no
     model reaches no model's equations."""
     duffing = models.get("duffing")
-    group = type(duffing.kernel[0])
-    unknown = (group(99), duffing.n_state, duffing.n_position, 1)
-    assert not models.dispatch.known(group(99)) and models.dispatch.known(duffing.kernel[0])
+    group = type(duffing.kernel.tag)
+    unknown = duffing.kernel._replace(tag=group(99))
+    assert not models.dispatch.known(group(99)) and models.dispatch.known(duffing.kernel.tag)
     opts = ig.settings()
     z, status, n_rhs, _ = ig.flow(unknown, 0.0, 1.0, np.zeros(2), np.zeros(4), False, opts, 0.0)
     assert status == ig.STATUS_UNKNOWN_MODEL and n_rhs == 0
@@ -42,7 +42,7 @@ def test_unknown_id_in_a_group_is_an_error_status_not_another_model():
 def test_models_are_compiled_in_their_kernel_groups():
     """Each model's tag type is its group's: the two test-only validation models share one, every
     model with a scene is alone (its first result compiles no other model's equations)."""
-    tags = {name: models.get(name).kernel[0] for name in models.BUILTIN_NAMES}
+    tags = {name: models.get(name).kernel.tag for name in models.BUILTIN_NAMES}
     groups = {}
     for n in tags:
         groups.setdefault(models.get(n).group, set()).add(n)

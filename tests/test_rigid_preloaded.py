@@ -109,7 +109,7 @@ def _paper_forces(q, alpha, z0, k, n):
 
 def _si_acceleration(built, u, tau):
     du = np.zeros(10)
-    models.dispatch.rhs(SPEC.kernel[0], tau, u, built.p, du)
+    models.dispatch.rhs(SPEC.kernel.tag, tau, u, built.p, du)
     return du[5:] * L / built.period ** 2
 
 
@@ -203,18 +203,18 @@ def test_analytic_jacobian_equals_central_differences_including_unloaded_balls()
             continue
         tested += 1
         jac = np.zeros((10, 10))
-        models.dispatch.jac(SPEC.kernel[0], 0.3, u, p, jac)
+        models.dispatch.jac(SPEC.kernel.tag, 0.3, u, p, jac)
         fd = np.zeros((10, 10))
         for j in range(10):
             up, dn, e = np.zeros(10), np.zeros(10), np.zeros(10)
             e[j] = h
-            models.dispatch.rhs(SPEC.kernel[0], 0.3, u + e, p, up)
-            models.dispatch.rhs(SPEC.kernel[0], 0.3, u - e, p, dn)
+            models.dispatch.rhs(SPEC.kernel.tag, 0.3, u + e, p, up)
+            models.dispatch.rhs(SPEC.kernel.tag, 0.3, u - e, p, dn)
             fd[:, j] = (up - dn) / (2 * h)
         assert np.abs(fd - jac).max() <= 1e-7 * np.abs(jac).max()
         du, du2, jac2 = np.zeros(10), np.zeros(10), np.zeros((10, 10))
-        models.dispatch.rhs(SPEC.kernel[0], 0.3, u, p, du)
-        models.dispatch.rhs_jac(SPEC.kernel[0], 0.3, u, p, du2, jac2)
+        models.dispatch.rhs(SPEC.kernel.tag, 0.3, u, p, du)
+        models.dispatch.rhs_jac(SPEC.kernel.tag, 0.3, u, p, du2, jac2)
         assert np.array_equal(du, du2) and np.array_equal(jac, jac2)
 
 
@@ -234,8 +234,8 @@ def test_linear_frequencies_analytic_equal_eigenvalues_of_the_finite_difference_
         for j in range(10):
             up, dn, e = np.zeros(10), np.zeros(10), np.zeros(10)
             e[j] = h
-            models.dispatch.rhs(SPEC.kernel[0], 0.0, e, built.p, up)
-            models.dispatch.rhs(SPEC.kernel[0], 0.0, -e, built.p, dn)
+            models.dispatch.rhs(SPEC.kernel.tag, 0.0, e, built.p, up)
+            models.dispatch.rhs(SPEC.kernel.tag, 0.0, -e, built.p, dn)
             fd[:, j] = (up - dn) / (2 * h)
         numeric = np.linalg.eigvals(fd) / built.period
         f_a = np.sort(analytic.imag[analytic.imag > 0])

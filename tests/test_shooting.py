@@ -31,7 +31,7 @@ def match(a, b):
 def configured_map(kernel, state, p, opts, periods=1.0):
     """(residual norm, monodromy) of the configured map at `state`, from the integrator's own first
     step: how the staged Newton integrates every configured-map iterate."""
-    n = kernel[1]
+    n = kernel.n_state
     z, status, _, _ = ig.flow(kernel, 0.0, periods, ig.initial_state(state, n, True), p, True, opts, 0.0)
     assert status == ig.STATUS_OK
     res = np.abs(z[:n] - state).max() / max(1.0, np.abs(state).max())
@@ -85,7 +85,7 @@ def test_staged_newton_reports_failures_as_statuses():
         if staged:
             assert out.residual == configured_map(JEFF.kernel, out.state, p, OPTS)[0] > 1e-14
     duffing = models.get("duffing")
-    unknown = (type(duffing.kernel[0])(99), duffing.n_state, duffing.n_position, 1)
+    unknown = duffing.kernel._replace(tag=type(duffing.kernel.tag)(99))
     opts = ig.settings()
     out = shooting.shoot_staged(unknown, np.zeros(2), np.zeros(4), 1.0, opts, shooting.early_settings(opts), 1e-9, 5)
     assert out[2] == shooting.NOT_CONVERGED and out[3] == shooting.R_UNKNOWN_MODEL

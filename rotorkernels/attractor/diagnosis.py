@@ -2,11 +2,12 @@
 multipliers of its period-k orbit, from a transient, Poincare samples and, where needed, a
 Lyapunov run."""
 from collections import namedtuple
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from rotorkernels import floquet, integrators as ig, shooting
-from rotorkernels.attractor.lyapunov import _run_benettin
+from rotorkernels.attractor import lyapunov
 from rotorkernels.attractor.period import default_period_rtol, detect_period
 from rotorkernels.attractor.poincare import _poincare
 
@@ -320,30 +321,84 @@ def _on_settled_orbit(model, orbit, p, period, opts, n_samples, reached):
                      np.asarray(reached, float).copy(), ig.STATUS_OK, 0.0, expo, lams, True)
 
 
-def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_period=32,
-             period_rtol=None, orbit_lle=True, lyapunov_always=False, stable_orbit=None,
-             renorm_periods=1.0, max_periods=2000, n_blocks=10, rtol_stop=0.02, min_periods=None,
-             atol_stop=1e-4, align_periods=20.0, weighted=True, periodic=True, settle_early=False,
-             converged_stop=False, continued_period=0):
-    """One parameter point from u0 at tau = 0: Poincare samples after a transient, their period
-    (tolerance `default_period_rtol(opts)` unless given), the largest exponent, and `classify`.
+@dataclass(frozen=True)
+class Settings:
+    """How `diagnose` treats every point. The first eight fields are the scene's [analysis] keys of
+    the same names (`from_keys` picks them from that section; the scene's defaults stop settled
+    transients and converged Lyapunov runs, these do not); the others are fixed by the pipeline.
+
+    transient_periods: forcing periods integrated before the Poincare samples; poincare_samples:
+    how many samples; max_period: the longest period k looked for in them; derive_when_stable: a
+    stable periodic attractor's exponents come from its multipliers (False: always a Lyapunov
+    run); stop_when_settled: the transient stops once the map has settled on a stable period-k
+    orbit. A Lyapunov run (`lyapunov.lyapunov_spectrum`, whose arguments the lyapunov_ fields
+    are) measures lyapunov_min_periods (None: min(lyapunov_max_periods, 100)) to
+    lyapunov_max_periods periods, and stops once stderr <= lyapunov_rtol |lle| + lyapunov_atol,
+    or with lyapunov_converged_stop also once its weighted average has converged (a torus).
+    period_rtol: the period test's tolerance (None: `default_period_rtol(opts)`)."""
+    transient_periods: int = 200
+    poincare_samples: int = 128
+    max_period: int = 32
+    derive_when_stable: bool = True
+    stop_when_settled: bool = False
+    lyapunov_max_periods: int = 2000
+    lyapunov_rtol: float = 0.02
+    lyapunov_converged_stop: bool = False
+    lyapunov_min_periods: float | None = None
+    lyapunov_atol: float = 1e-4
+    lyapunov_align_periods: float = 20.0
+    lyapunov_weighted: bool = True
+    lyapunov_renorm_periods: float = 1.0
+    lyapunov_blocks: int = 10
+    period_rtol: float | None = None
+
+    @classmethod
+    def from_keys(cls, section):
+        """The settings named in `section` (a mapping such as a scene's [analysis] table; keys that
+        are no field are ignored), the others at their defaults."""
+        return cls(**{f.name: section[f.name] for f in fields(cls) if f.name in section})
+
+    def problems(self, where=""):
+        """Messages for settings that cannot work, each naming its field as `where` + name (e.g.
+        "analysis."); checked before any work starts."""
+        out = [f"{where}{name}: must be an integer >= {lo} (got {getattr(self, name)!r})"
+               for name, lo in (("transient_periods", 0), ("max_period", 1), ("poincare_samples", 1))
+               if int(getattr(self, name)) < lo]
+        if self.poincare_samples < 4 * self.max_period:
+            out.append(f"{where}poincare_samples: must be >= 4 x {where}max_period (= {4 * self.max_period}): "
+                       "a period is detected on the second half of the samples and must repeat there at least twice")
+        for name in ("lyapunov_rtol", "lyapunov_atol", "lyapunov_align_periods", "lyapunov_min_periods"):
+            value = getattr(self, name)
+            if value is not None and not value >= 0:
+                out.append(f"{where}{name}: must be >= 0 (got {value!r})")
+        if self.period_rtol is not None and not self.period_rtol > 0:
+            out.append(f"{where}period_rtol: must be > 0 (got {self.period_rtol!r})")
+        return out + [where + text for text in lyapunov.run_problems(
+            self.lyapunov_renorm_periods, self.lyapunov_blocks, self.lyapunov_max_periods)]
+
+
+def diagnose(model, u0, p, period, opts, settings=Settings(), *, stable_orbit=None, continued_period=0,
+             periodic=True):
+    """One parameter point from u0 at tau = 0: Poincare samples after a transient, their period,
+    the largest exponent, and `classify`; how, `settings` (a Settings) says. Settings that cannot
+    work raise ValueError before any work.
 
     A periodic attractor (period k found) is refined by shooting on k T from the last sample
     (already on the orbit: one or two iterations; `periodic_orbit_of`), and its multipliers are
-    returned. When orbit_lle is set and the orbit is stable, the exponents follow from them,
-    ln|lambda_i| / (k T), stderr 0 (derived=True) -- unless lyapunov_always.
+    returned. When the orbit is stable, the exponents follow from them, ln|lambda_i| / (k T),
+    stderr 0 (derived=True) -- unless not derive_when_stable.
     stable_orbit = (state, multipliers) of a stable period-1 orbit found by shooting: the
     transient stops as soon as the state reaches it (`settle_on_orbit`), and the point is that
     orbit (samples = its state) with derived exponents -- the 'derive when stable' shortcut.
-    settle_early: the transient stops once the map has settled on a stable period-k orbit
+    stop_when_settled: the transient stops once the map has settled on a stable period-k orbit
     (`settle_periodic`); the point is that orbit, its samples the orbit's k points repeated,
     derived exponents; with continued_period = k > 0 (the neighbour's attractor was a period-k
     orbit) it first refines that orbit from u0 and settles onto it when it is stable
-    (`settle_on_continued_orbit`), as stable_orbit does for period 1. converged_stop: a
+    (`settle_on_continued_orbit`), as stable_orbit does for period 1. lyapunov_converged_stop: a
     Lyapunov run also stops once its weighted average has converged (`lyapunov.CONVERGED_FRACTION`:
-    a torus's run no longer goes to max_periods).
+    a torus's run no longer goes to lyapunov_max_periods).
     Samples that repeat on an unstable orbit (a start on or next to it) are retaken after a kick
-    off it (ESCAPES). Otherwise (no period, the shooting fails, or lyapunov_always) a Lyapunov
+    off it (ESCAPES). Otherwise (no period, the shooting fails, or not derive_when_stable) a Lyapunov
     run starts where the samples end (no second transient). Returns an Attractor: code, period k, lle and lle_stderr
     in 1/s (NaN when not computed), samples, end_state (the state at the last whole period
     reached: the start of the next speed in a continuation of the attractor), status,
@@ -352,64 +407,68 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
     periodic=False: a quasi-periodically forced model (not 1-periodic in tau): time runs on
     through the whole diagnosis, the samples are stroboscopic at tau = 1, 2, ..., and no
     periodic orbit is refined (there is none to shoot for)."""
+    problems = settings.problems()
+    if problems:
+        raise ValueError("attractor settings: " + "; ".join(problems))
     clock = 0.0 if periodic else 1.0
-    if period_rtol is None:
-        period_rtol = default_period_rtol(opts)
+    period_rtol = default_period_rtol(opts) if settings.period_rtol is None else settings.period_rtol
+    n_transient, n_samples = int(settings.transient_periods), int(settings.poincare_samples)
+    max_period = int(settings.max_period)
+    derive = settings.derive_when_stable
     u0 = np.asarray(u0, float)
-    if stable_orbit is not None and not lyapunov_always:
+    if stable_orbit is not None and derive:
         state, lams = stable_orbit
         u0, used, reached = settle_on_orbit(model, u0, p, opts, state, n_transient, period_rtol,
-                                            multipliers=lams if settle_early else None)
+                                            multipliers=lams if settings.stop_when_settled else None)
         if reached:
-            return _on_stable_orbit(model, state, lams, period, int(n_samples), state.copy())
+            return _on_stable_orbit(model, state, lams, period, n_samples, state.copy())
         n_transient -= used
     nan = np.full(model.n_state, np.nan)
-    settling = settle_early and periodic and orbit_lle and not lyapunov_always
+    settling = settings.stop_when_settled and periodic and derive
     if settling and continued_period > 0:
         orbit, u0, used = settle_on_continued_orbit(model, u0, p, opts, int(continued_period), n_transient,
                                                     period_rtol)
         if orbit is not None:
-            return _on_settled_orbit(model, orbit, p, period, opts, int(n_samples), u0)
+            return _on_settled_orbit(model, orbit, p, period, opts, n_samples, u0)
         n_transient -= used
     if settling:
-        orbit, u0, used, status = settle_periodic(model, u0, p, opts, int(n_transient), max_period, period_rtol)
+        orbit, u0, used, status = settle_periodic(model, u0, p, opts, n_transient, max_period, period_rtol)
         if status != ig.STATUS_OK:
-            return Attractor(failure_class(status), 0, np.nan, np.nan, np.full((int(n_samples), model.n_state), np.nan),
+            return Attractor(failure_class(status), 0, np.nan, np.nan, np.full((n_samples, model.n_state), np.nan),
                              u0, status, 0.0, nan, nan * (1 + 1j), False)
         if orbit is not None:
-            return _on_settled_orbit(model, orbit, p, period, opts, int(n_samples), u0)
+            return _on_settled_orbit(model, orbit, p, period, opts, n_samples, u0)
         n_transient -= used
     for attempt in range(1 + ESCAPES):
-        samples, status, end = _poincare(model.kernel, u0, p, opts, int(n_transient), int(n_samples), 0.0, clock)
+        samples, status, end = _poincare(model.kernel, u0, p, opts, n_transient, n_samples, 0.0, clock)
         if status != ig.STATUS_OK:
             return Attractor(failure_class(status), 0, np.nan, np.nan, samples, end, int(status), 0.0,
                              nan, nan * (1 + 1j), False)
         k = detect_period(samples, max_period, period_rtol)
-        refine = k > 0 and orbit_lle and periodic
-        orbit = periodic_orbit_of(model, end, p, opts, k, period_rtol) if refine else None
+        orbit = periodic_orbit_of(model, end, p, opts, k, period_rtol) if k > 0 and periodic else None
         # Samples that repeat on an unstable orbit only show a start too close to it (a weakly
         # unstable orbit is left slowly): take a new transient from off it.
         if orbit is None or np.abs(orbit[2]).max() <= 1.0 + UNSTABLE_MARGIN or attempt == ESCAPES:
             break
         u0 = escape_from(model, orbit, end, p, opts, period_rtol)
-        n_transient = max(int(n_transient), 1)
+        n_transient = max(n_transient, 1)
     lams = nan * (1 + 1j)      # no orbit: both parts NaN
     if orbit is not None:
         k, _, lams = orbit
-        if np.abs(lams).max() < 1.0 and not lyapunov_always:
+        if np.abs(lams).max() < 1.0 and derive:
             expo = exponents_of_orbit(lams, k, period)
             return Attractor(PERIODIC, k, float(expo[0]), 0.0, samples, end, int(status), 0.0,
                              expo, lams, True)
-    if k > 0 and not orbit_lle and not lyapunov_always:
-        return Attractor(PERIODIC, k, np.nan, np.nan, samples, end, int(status), 0.0, nan, lams, False)
-    expo, stderr, n_done, lstatus, end2, t_end = _run_benettin(
-        model, end, p, opts, 0, renorm_periods, max_periods, n_blocks, rtol_stop, min_periods,
-        atol_stop, align_periods, weighted, clock * (n_transient + n_samples - 1), clock, converged_stop)
+    s = settings
+    expo, stderr, n_done, lstatus, end2, t_end = lyapunov.run_benettin(
+        model, end, p, opts, 0, s.lyapunov_renorm_periods, s.lyapunov_max_periods, s.lyapunov_blocks,
+        s.lyapunov_rtol, s.lyapunov_min_periods, s.lyapunov_atol, s.lyapunov_align_periods, s.lyapunov_weighted,
+        clock * (n_transient + n_samples - 1), clock, s.lyapunov_converged_stop)
     code, k = classify(samples, expo[0], stderr[0], k, lstatus, forced_torus=not periodic)
     if code == NOT_SETTLED and lstatus == ig.STATUS_OK:
         # a contracting attractor whose samples had not settled: by the end of the Lyapunov run
         # they have, so sample again there
-        again, status2, end3 = _poincare(model.kernel, end2, p, opts, 0, int(n_samples), clock * t_end, clock)
+        again, status2, end3 = _poincare(model.kernel, end2, p, opts, 0, n_samples, clock * t_end, clock)
         k2 = detect_period(again, max_period, period_rtol) if status2 == ig.STATUS_OK else 0
         orbit = periodic_orbit_of(model, end3, p, opts, k2, period_rtol) if k2 > 0 and periodic else None
         if orbit is not None and np.abs(orbit[2]).max() < 1.0:
@@ -418,5 +477,5 @@ def diagnose(model, u0, p, period, opts, *, n_transient=200, n_samples=128, max_
     if code != PERIODIC or k == 0:
         lams = nan * (1 + 1j)      # no orbit: both parts NaN
     return Attractor(code, k, float(expo[0]) / period, float(stderr[0]) / period, samples, end2,
-                     int(lstatus), n_done * float(renorm_periods), np.asarray(expo) / period, lams,
+                     int(lstatus), n_done * float(s.lyapunov_renorm_periods), np.asarray(expo) / period, lams,
                      False)

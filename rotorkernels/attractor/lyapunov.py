@@ -146,7 +146,7 @@ def _benettin(kernel, u0, p, opts, n_transient, align_intervals, renorm,
     end state, end time); the end state is taken at the next whole period. start: the time of
     u0; clock as in _poincare (1: time runs on through the transient). converged_stop (weighted
     runs only): also stop once the weighted average has converged (CONVERGED_FRACTION)."""
-    n = kernel[1]
+    n = kernel.n_state
     nan = np.full(n, np.nan)
     u = u0.copy()
     h = 0.0
@@ -198,16 +198,34 @@ def _benettin(kernel, u0, p, opts, n_transient, align_intervals, renorm,
     return expo, stderr, n_done, ig.STATUS_OK, u, max(t, t_end)
 
 
-def _run_benettin(model, u0, p, opts, n_transient, renorm_periods, max_periods, n_blocks, rtol_stop,
-                  min_periods=None, atol_stop=1e-4, align_periods=20.0, weighted=True, start=0.0,
-                  clock=0.0, converged_stop=False):
-    renorm = float(renorm_periods)
-    if not renorm > 0:
-        raise ValueError(f"renorm_periods must be > 0, got {renorm_periods!r}")
+def entry_points(kernel, opts):
+    """(jitted function, example arguments) with the types `run_benettin` calls it with (warm-up)."""
+    return [(_benettin, (kernel, np.zeros(kernel.n_state), np.zeros(1), opts, 0, 0, 1.0, 1, 2, 2, 1e-3, 1e-4, True,
+                         0.0, 0.0, False))]
+
+
+def run_problems(renorm_periods, n_blocks, max_periods):
+    """Messages for run lengths a Lyapunov run cannot work with."""
+    out = []
+    if not renorm_periods > 0:
+        out.append(f"renorm_periods must be > 0, got {renorm_periods!r}")
     if n_blocks < 2:
-        raise ValueError(f"n_blocks must be >= 2, got {n_blocks!r}")
-    if not max_periods >= renorm:
-        raise ValueError(f"max_periods must be >= renorm_periods, got {max_periods!r}")
+        out.append(f"n_blocks must be >= 2, got {n_blocks!r}")
+    if not max_periods >= renorm_periods:
+        out.append(f"max_periods must be >= renorm_periods, got {max_periods!r}")
+    return out
+
+
+def run_benettin(model, u0, p, opts, n_transient, renorm_periods, max_periods, n_blocks, rtol_stop,
+                 min_periods=None, atol_stop=1e-4, align_periods=20.0, weighted=True, start=0.0,
+                 clock=0.0, converged_stop=False):
+    """`lyapunov_spectrum`'s run from u0 at time `start` (clock as in `poincare`), also returning
+    its end state at a whole period and that time: (exponents per unit tau, stderr, intervals
+    measured, status, end state, end time). Run lengths that cannot work raise ValueError."""
+    problems = run_problems(renorm_periods, n_blocks, max_periods)
+    if problems:
+        raise ValueError("; ".join(problems))
+    renorm = float(renorm_periods)
     max_intervals = max(1, int(round(max_periods / renorm)))
     if min_periods is None:
         min_periods = min(max_periods, 100.0)
@@ -234,7 +252,7 @@ def lyapunov_spectrum(model, u0, p, opts, n_transient=200, renorm_periods=1.0, m
     stop once the weighted average has converged to 0 within atol_stop (a torus:
     CONVERGED_FRACTION; stderr stays the block estimate). A failed integration returns NaN
     exponents and its STATUS_* code. Divide by T for 1/s (`lyapunov_si`)."""
-    expo, stderr, n_done, status, _, _ = _run_benettin(
+    expo, stderr, n_done, status, _, _ = run_benettin(
         model, u0, p, opts, n_transient, renorm_periods, max_periods, n_blocks, rtol_stop,
         min_periods, atol_stop, align_periods, weighted, converged_stop=converged_stop)
     return expo, stderr, n_done * float(renorm_periods), int(status)

@@ -43,6 +43,11 @@ def _detect_period(samples, max_period, rel_tol, floor):
     return 0
 
 
+def entry_points(n_state):
+    """(jitted function, example arguments) with the types `detect_period` calls it with (warm-up)."""
+    return [(_detect_period, (np.zeros((2, n_state)), 1, 1e-6, 1e-3))]
+
+
 def default_period_rtol(opts):
     """Tolerance for detect_period on samples computed with integrator settings `opts`: the
     stroboscopic samples of a settled orbit jitter by about 1e2-1e3 x rtol of the adaptive

@@ -12,7 +12,7 @@ def _poincare(kernel, u0, p, opts, n_transient, n_samples, t0=0.0, clock=0.0):
     clock: 0 for a model 1-periodic in tau; 1 for a quasi-periodically forced one, whose time
     runs on from t0 (the time of u0). Returns (samples, status, end state); rows after a failure
     stay NaN."""
-    out = np.full((n_samples, kernel[1]), np.nan)
+    out = np.full((n_samples, kernel.n_state), np.nan)
     u = u0.copy()
     h = 0.0
     # Every period is integrated over tau in [0, 1] (the models are 1-periodic in tau) and the
@@ -36,6 +36,11 @@ def _poincare(kernel, u0, p, opts, n_transient, n_samples, t0=0.0, clock=0.0):
             return out, status, u
         t += clock
     return out, ig.STATUS_OK, u
+
+
+def entry_points(kernel, opts):
+    """(jitted function, example arguments) with the types `diagnosis` calls it with (warm-up)."""
+    return [(_poincare, (kernel, np.zeros(kernel.n_state), np.zeros(1), opts, 0, 1, 0.0, 0.0))]
 
 
 def poincare(model, u0, p, opts, n_transient, n_samples):

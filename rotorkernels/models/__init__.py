@@ -19,7 +19,7 @@ import sys
 from rotorkernels import PLUGINS_VARIABLE, plugin_modules
 from rotorkernels.models import (asymmetric5, damped_mathieu, duffing, jeffcott_clearance, linear_oscillator,
                                  rigid_preloaded, symmetric4)
-from rotorkernels.models.spec import Built, ModelSpec, Observable, Parameter  # noqa: F401 (API)
+from rotorkernels.models.spec import Built, KernelId, ModelSpec, Observable, Parameter  # noqa: F401 (API)
 
 BUILTIN = (jeffcott_clearance, linear_oscillator, damped_mathieu, duffing, rigid_preloaded, symmetric4, asymmetric5)
 BUILTIN_NAMES = tuple(m.SPEC.name for m in BUILTIN)
@@ -55,7 +55,7 @@ def get(name):
 
 
 def kernel_tag(spec):
-    """The tag of `spec` in the kernels' dispatch (`ModelSpec.kernel[0]`): its type names the
+    """The tag of `spec` in the kernels' dispatch (`ModelSpec.kernel.tag`): its type names the
     model's kernel group, its id the model within the group."""
     tag = dispatch.TAGS.get(spec.name)
     if tag is None or tag.id != spec.id:

@@ -267,7 +267,7 @@ class _ValidationKernels:
 
 # tag class -> the bodies of its group
 _GROUPS = {Asymmetric5: _Asymmetric5Kernels, Duffing: _DuffingKernels, JeffcottClearance: _JeffcottClearanceKernels, RigidPreloaded: _RigidPreloadedKernels, Symmetric4: _Symmetric4Kernels, Validation: _ValidationKernels}
-# model name -> its kernel tag (ModelSpec.kernel[0])
+# model name -> its kernel tag (ModelSpec.kernel.tag)
 TAGS = {'jeffcott_clearance': JeffcottClearance(0), 'linear_oscillator': Validation(1), 'damped_mathieu': Validation(2), 'duffing': Duffing(3), 'rigid_preloaded': RigidPreloaded(4), 'symmetric4': Symmetric4(5), 'asymmetric5': Asymmetric5(6)}
 
 
@@ -275,7 +275,7 @@ def _kernels(tag):
     """The group of a tag's Numba type (typing time)."""
     group = _GROUPS.get(getattr(tag, "instance_class", None))
     if group is None:
-        raise TypingError(f"{tag} is not a kernel tag (ModelSpec.kernel[0])")
+        raise TypingError(f"{tag} is not a kernel tag (ModelSpec.kernel.tag)")
     return group
 
 

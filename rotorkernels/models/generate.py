@@ -1,7 +1,7 @@
 """Writes the kernels' model dispatch (`models/dispatch.py`) from the registry.
 
 The integrators reach a model's njit functions through `dispatch.rhs/jac/rhs_jac/known/tangent/
-combine(tag, ...)`, where `tag = ModelSpec.kernel[0]`. A jitted function passed as an argument
+combine(tag, ...)`, where `tag = ModelSpec.kernel.tag`. A jitted function passed as an argument
 would be recompiled in every worker process and defeat Numba's disk cache; a branch on a plain
 integer id (the former dispatch) put every model into every compiled kernel, so each model
 added compile time to all others. The tag instead is an instance of a small NamedTuple class per
@@ -123,14 +123,14 @@ def dispatch_source(specs):
         lines += _group_source(group, members)
     lines += ["", "", "# tag class -> the bodies of its group",
               "_GROUPS = {" + ", ".join(f"{class_name(g)}: _{class_name(g)}Kernels" for g, _ in groups) + "}",
-              "# model name -> its kernel tag (ModelSpec.kernel[0])",
+              "# model name -> its kernel tag (ModelSpec.kernel.tag)",
               "TAGS = {" + ", ".join(f"{s.name!r}: {class_name(s.group)}({s.id})"
                                      for s in sorted(specs, key=lambda s: s.id)) + "}",
               "", "", "def _kernels(tag):",
               '    """The group of a tag\'s Numba type (typing time)."""',
               '    group = _GROUPS.get(getattr(tag, "instance_class", None))',
               "    if group is None:",
-              '        raise TypingError(f"{tag} is not a kernel tag (ModelSpec.kernel[0])")',
+              '        raise TypingError(f"{tag} is not a kernel tag (ModelSpec.kernel.tag)")',
               "    return group"]
     for name, args, doc, *_ in _MODEL_FUNCTIONS:
         lines += _dispatch_function(name, args, doc)

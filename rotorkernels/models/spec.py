@@ -59,6 +59,17 @@ class PolynomialSystem(NamedTuple):
     units: tuple
 
 
+class KernelId(NamedTuple):
+    """The kernel identity every njit function takes (`ModelSpec.kernel`), read by field name
+    in jitted and Python code alike. tag: its type names the model's kernel group, so Numba
+    compiles and caches each kernel once per group; its value is the model's id within the group.
+    velocity_form: 1 when the state is (positions, velocities), as `ModelSpec.velocity_form`."""
+    tag: object
+    n_state: int
+    n_position: int
+    velocity_form: int
+
+
 class Built(NamedTuple):
     """A model's kernel inputs at one parameter point."""
     p: np.ndarray       # kernel parameter vector (scaled units)
@@ -102,12 +113,10 @@ class ModelSpec:
 
     @property
     def kernel(self):
-        """The kernel identity every njit function takes: (tag, n_state, n_position, velocity form).
-        The tag's type names the model's kernel group, so Numba compiles and caches each kernel
-        once per group; its value is the model's id within the group."""
+        """The model's `KernelId`, which every njit function takes."""
         from rotorkernels.models import kernel_tag   # the registry imports this module
 
-        return (kernel_tag(self), self.n_state, self.n_position, int(self.velocity_form))
+        return KernelId(kernel_tag(self), self.n_state, self.n_position, int(self.velocity_form))
 
     @property
     def axes(self):

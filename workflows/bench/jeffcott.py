@@ -218,7 +218,7 @@ def _variational_loop(kernel, taus, states, p):
 
 
 def rhs_loop(taus, states, p, model=JEFF):
-    return _rhs_loop(model.kernel[0], taus, states, p)
+    return _rhs_loop(model.kernel.tag, taus, states, p)
 
 
 def force_loop(taus, states, p):

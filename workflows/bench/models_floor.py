@@ -31,7 +31,7 @@ def _kernel_values(spec, p, taus, states, phi):
     var = np.empty((len(states), n + n * n))
     jbuf = np.empty((n, n))
     for i, (tau, u) in enumerate(zip(taus, states)):
-        models.dispatch.rhs(spec.kernel[0], tau, u, p, f[i])
+        models.dispatch.rhs(spec.kernel.tag, tau, u, p, f[i])
         ig.derivative(spec.kernel, tau, np.concatenate([u, phi.ravel()]), p, True, var[i], jbuf)
     return f, var
 
@@ -68,7 +68,7 @@ def _rhs_steps(tag, taus, states, p, z, du):
 
 
 def rhs_steps(spec, taus, states, p):
-    return _rhs_steps(spec.kernel[0], taus, states, p, np.empty(spec.n_state), np.empty(spec.n_state))
+    return _rhs_steps(spec.kernel.tag, taus, states, p, np.empty(spec.n_state), np.empty(spec.n_state))
 
 
 @lru_cache(maxsize=None)
@@ -96,7 +96,7 @@ def constant_size_var(spec, taus, states, p):
     n = spec.n_state
     z = np.zeros(n + n * n)
     z[n::n + 1] = 1.0
-    return _constant_size_loop(n)(spec.kernel[0], taus, states, p, z, np.empty(n + n * n), np.empty((n, n)))
+    return _constant_size_loop(n)(spec.kernel.tag, taus, states, p, z, np.empty(n + n * n), np.empty((n, n)))
 
 
 def _keep_min(row, values):
