@@ -174,11 +174,9 @@ def polynomial_system(v, n, disk_position):
 
 def linear_frequencies(system):
     """Natural frequencies [rad/s] of M q'' + G q' + K q = 0, ascending, each pair once."""
-    n = system.M.shape[0]
-    m_inv = np.linalg.inv(system.M)
-    a = np.block([[np.zeros((n, n)), np.eye(n)], [-m_inv @ system.K, -m_inv @ system.G]])
-    w = np.linalg.eigvals(a).imag
-    return np.sort(w[w > 0])
+    from rotorkernels.nnm import linear, system as ps   # lazily: nnm imports the registry, which imports this
+
+    return linear.eigenpairs(ps.state_matrix(system))[0].imag
 
 
 def build_for(n, disk_position):
@@ -228,7 +226,7 @@ ROTOR_PARAMETERS = (
 )
 DERIVED = {
     "contact_angle_used": ("degree", "contact angle in the force law (loaded, or imposed)"),
-    "axial_approach": ("m", "axial approach z0 of each bearing under the preload"),
+    "axial_approach": ("m", "preload's axial approach z0 of each bearing (the series law holds for |q| << z0)"),
     "contact_constant": ("N m-1.5", "ball contact constant K"),
 }
 REFERENCES = "Filipkovsky S.V. (2010), nonlinear normal modes of a rotor on ball bearings (symmetric, axial)"

@@ -1,7 +1,10 @@
-"""Linear modes of the gyroscopic system M q'' + G q' + K q = 0 and their labels.
+"""Linear modes of M q'' + D q' + K q = 0 (D: damping plus gyroscopic) and their labels: the one
+linear-modes implementation of rotorsweep (`rotorsweep modes`, the nonlinear normal modes, the
+backbones' starting modes and the series rotors' time scale all call it).
 
-The first-order form x' = A x (x = (q, q')) of a conservative gyroscopic system has eigenvalues in
-pairs +-i omega; each mode is reported once (omega > 0), by increasing frequency.
+The first-order form x' = A x (x = (q, q')) has eigenvalues in conjugate pairs s = -zeta w_n +- i w_d
+(w_d = w_n sqrt(1 - zeta^2), w_n = |s|); each oscillating mode is reported once (w_d > 0), by
+increasing w_d (`eigenpairs`); a conservative gyroscopic system (`linear_modes`) has s = +-i omega.
 
 Labels come from a per-coordinate description the model provides, `kinds`: one (axis, station)
 tag per coordinate, axis "x" or "y" (transverse displacement) or "z" (axial), station any name of
@@ -12,9 +15,11 @@ the journal or section the coordinate belongs to (e.g. ("x", "A"), ("y", "A"), (
 - axial: the axial coordinates carry most of the mode's kinetic energy Re(conj(phi) M phi);
 - otherwise, with two or more stations, cylindrical when the first two stations move in phase
   (Re(conj(x_a) x_b + conj(y_a) y_b) > 0), conical in anti-phase; with one station, transverse.
-- whirl (the convention of pipeline.modes): the shaft turns from +x to +y; a station's orbit
+- whirl: the shaft turns from +x to +y; a station's orbit
   x = Re(X e^{i w t}), y = Re(Y e^{i w t}) has the mean angular momentum x y' - y x' = -w Im(conj(X) Y),
-  summed over stations: positive is forward, negative backward, zero (within WHIRL_TOL) "none".
+  summed over stations: positive is forward, negative backward, zero (within WHIRL_TOL) "none";
+  "none" also without gyroscopic coupling (G = 0: a shaft at rest, where degenerate pairs may mix
+  either way).
 
 Degenerate pairs (two modes at one frequency within DEGENERATE_RTOL: an isotropic rotor's
 cylindrical modes, untouched by the gyroscopic moment) have no defined eigenvectors; as in the
@@ -36,16 +41,22 @@ WHIRL_TOL = 1e-6
 
 
 class LinearMode(NamedTuple):
-    omega: float             # [rad/s]
-    frequency: float         # [Hz]
+    omega: float             # damped natural frequency w_d = Im s [rad/s]
+    frequency: float         # damped natural frequency [Hz]
     whirl: str               # forward / backward / none
     label: str               # axial / cylindrical / conical / transverse / unknown
-    vector: np.ndarray       # complex eigenvector of A for +i omega, (q, q'), largest |q_n| = 1
+    vector: np.ndarray       # complex eigenvector of A for s, (q, q'), largest |q_n| = 1
+    damping_ratio: float = 0.0   # zeta = -Re s / |s|
 
     @property
     def shape(self):
         """Complex displacement shape (q part of the eigenvector)."""
         return self.vector[:len(self.vector) // 2]
+
+    @property
+    def undamped_frequency(self):
+        """w_n / 2 pi = |s| / 2 pi [Hz] (equal to `frequency` without damping)."""
+        return self.frequency / np.sqrt(1.0 - self.damping_ratio ** 2)
 
 
 def kinds_from_names(coordinates):
@@ -108,30 +119,49 @@ def _normalized(vector):
     return vector / vector[np.argmax(np.abs(vector[:n]))]
 
 
-def linear_modes(system, kinds=None):
-    """The modes of the linear part, by increasing frequency (list of LinearMode)."""
-    ps.validate(system)
-    kinds = kinds if kinds is not None else kinds_from_names(system.coordinates)
-    if kinds is not None and len(kinds) != len(system.coordinates):
-        raise ValueError(f"{len(kinds)} kinds for {len(system.coordinates)} coordinates")
-    eigvals, eigvecs = np.linalg.eig(ps.state_matrix(system))
-    if np.any(np.abs(eigvals.real) > CONSERVATIVE_RTOL * np.abs(eigvals)) or np.any(eigvals == 0):
-        raise ValueError("the linear system has eigenvalues off the imaginary axis or at zero "
-                         "(K not positive definite): it has no normal modes")
+def eigenpairs(a):
+    """(eigenvalues s with Im s > 0, ascending in Im s; their eigenvectors as columns) of the
+    real matrix `a`: each oscillating pair once, the non-oscillating (real) eigenvalues left out."""
+    eigvals, eigvecs = np.linalg.eig(a)
     upper = np.flatnonzero(eigvals.imag > 0)
     upper = upper[np.argsort(eigvals.imag[upper])]
-    omegas = eigvals.imag[upper]
-    vectors = [eigvecs[:, k] for k in upper]
+    return eigvals[upper], eigvecs[:, upper]
+
+
+def modes_of(mass, damping, gyroscopic, stiffness, kinds):
+    """The oscillating modes of M q'' + (C + G) q' + K q = 0 (C = `damping`, G = `gyroscopic`,
+    already times the shaft speed), by increasing damped frequency (list of LinearMode); kinds as
+    in the module docstring (None: labels "unknown", whirl "none")."""
+    if kinds is not None and len(kinds) != len(mass):
+        raise ValueError(f"{len(kinds)} kinds for {len(mass)} coordinates")
+    rotating = bool(np.any(gyroscopic))
+    eigvals, eigvecs = eigenpairs(ps.first_order(mass, damping + gyroscopic, stiffness))
+    omegas = eigvals.imag
+    vectors = [eigvecs[:, k] for k in range(len(eigvals))]
     k = 0
-    while k < len(upper) - 1:
+    while k < len(omegas) - 1:
         if omegas[k + 1] - omegas[k] <= DEGENERATE_RTOL * omegas[k] and kinds is not None:
             vectors[k], vectors[k + 1] = _planar_pair(np.stack(vectors[k:k + 2], axis=1), kinds)
             k += 1
         k += 1
     modes = []
-    for omega, vector in zip(omegas, vectors):
+    for s, vector in zip(eigvals, vectors):
         vector = _normalized(vector)
         shape = vector[:len(vector) // 2]
-        modes.append(LinearMode(float(omega), float(omega / (2 * np.pi)), whirl(shape, omega, kinds),
-                                label(shape, system.M, kinds), vector))
+        turn = whirl(shape, s.imag, kinds) if rotating else "none"
+        modes.append(LinearMode(float(s.imag), float(s.imag / (2 * np.pi)), turn, label(shape, mass, kinds), vector,
+                                float(-s.real / abs(s))))
     return modes
+
+
+def linear_modes(system, kinds=None):
+    """The normal modes of a conservative system's linear part, by increasing frequency (list of
+    LinearMode); ValueError when it has none (an eigenvalue off the imaginary axis or at zero)."""
+    ps.validate(system)
+    n = len(system.coordinates)
+    kinds = kinds if kinds is not None else kinds_from_names(system.coordinates)
+    modes = modes_of(system.M, np.zeros((n, n)), system.G, system.K, kinds)
+    if len(modes) < n or any(abs(m.damping_ratio) > CONSERVATIVE_RTOL for m in modes):
+        raise ValueError("the linear system has eigenvalues off the imaginary axis or at zero "
+                         "(K not positive definite): it has no normal modes")
+    return [m._replace(damping_ratio=0.0) for m in modes]

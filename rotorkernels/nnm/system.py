@@ -36,15 +36,20 @@ def validate(system):
         raise ValueError("M is not positive definite")
 
 
-def state_matrix(system):
-    """A of the linear part of x' = A x + ..., x = (q, q')."""
-    n = len(system.coordinates)
-    m_inv = np.linalg.inv(system.M)
+def first_order(mass, damping, stiffness):
+    """A of x' = A x, x = (q, q'), for M q'' + D q' + K q = 0."""
+    n = len(mass)
+    m_inv = np.linalg.inv(mass)
     a = np.zeros((2 * n, 2 * n))
     a[:n, n:] = np.eye(n)
-    a[n:, :n] = -m_inv @ system.K
-    a[n:, n:] = -m_inv @ system.G
+    a[n:, :n] = -m_inv @ stiffness
+    a[n:, n:] = -m_inv @ damping
     return a
+
+
+def state_matrix(system):
+    """A of the linear part of x' = A x + ..., x = (q, q')."""
+    return first_order(system.M, system.G, system.K)
 
 
 def rhs(system):
