@@ -4,7 +4,7 @@ Campbell table over shaft speed for the models that name one (`ModelSpec.speed`)
 
 Linearization about the static equilibrium q_s: M q'' + (C + G) q' + K q = 0 (the model's own,
 e.g. rigid_preloaded's analytic stiffness of the ball sums). The modes, their damped and undamped
-natural frequencies, damping ratios, whirl directions and labels are rotorkernels.nnm.linear's
+natural frequencies, damping ratios, whirl directions and labels are rotorkernels.modal's
 (`modes_of`, whose docstring gives the conventions): eigenvalues s = -zeta w_n +- i w_d, each mode
 once (w_d > 0), by increasing damped frequency; the logarithmic decrement is 2 pi zeta / sqrt(1 - zeta^2).
 """
@@ -15,7 +15,7 @@ import numpy as np
 
 from pipeline import compute
 from pipeline.config import ConfigError
-from rotorkernels.nnm import linear
+from rotorkernels import modal
 
 
 def scene_values(data, point):
@@ -32,10 +32,10 @@ def require_linearization(spec):
 
 
 def modes(spec, values, equilibrium=None):
-    """The modes at `values` (list of rotorkernels.nnm.linear.LinearMode), by increasing damped
+    """The modes at `values` (list of rotorkernels.modal.LinearMode), by increasing damped
     frequency; `equilibrium`: the static state if already known (it does not depend on speed)."""
     _, system = spec.linear_system(values, equilibrium)
-    return linear.modes_of(system.M, system.C, system.G, system.K, linear.kinds_from_names(system.coordinates))
+    return modal.modes_of(system.M, system.C, system.G, system.K, modal.kinds_from_names(system.coordinates))
 
 
 def campbell(spec, values, speeds_hz):

@@ -9,10 +9,9 @@ import pytest
 import sympy as sp
 
 from pipeline import compute, config, modes
-from rotorkernels import integrators as ig, models, shooting, continuation
+from rotorkernels import integrators as ig, modal, models, shooting, continuation
 from rotorkernels.attractor.poincare import _poincare
 from rotorkernels.models import rigid_preloaded as rp
-from rotorkernels.nnm import system as ps
 
 SPEC = models.get("rigid_preloaded")
 L = rp.LENGTH_SCALE
@@ -229,7 +228,7 @@ def test_linear_frequencies_analytic_equal_eigenvalues_of_the_finite_difference_
         stiffness = np.diag([s.radial_stiffness] * 4 + [2 * s.axial_stiffness])
         r = rp.Rotor.of(v)
         damping = r.damping * np.eye(5) + 2.0 * np.pi * v["speed"] * rp.gyroscopic_matrix(r)
-        analytic = np.linalg.eigvals(ps.first_order(rp.mass_matrix(r), damping, stiffness))
+        analytic = np.linalg.eigvals(modal.first_order(rp.mass_matrix(r), damping, stiffness))
         built = SPEC.build(v)
         h, fd = 1e-3, np.zeros((10, 10))
         for j in range(10):

@@ -36,7 +36,7 @@ import numpy as np
 from rotorkernels import floquet, shooting
 from rotorkernels.continuation.arclength import (END_REASONS, INTEGRATION_FAILED, LEFT_RANGE, NEWTON_FAILED,
                                                  START_FAILED, STEP_BUDGET, Counter, Settings, rejected)
-from rotorkernels.nnm.linear import eigenpairs
+from rotorkernels.modal import eigenpairs
 from rotorkernels.orbits import AutonomousOrbitProblem
 
 # Relative gap below which two linear frequencies count as one repeated frequency.

@@ -54,7 +54,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from rotorkernels import bearing
+from rotorkernels import bearing, modal
 from rotorkernels.contact import ring_force, ring_load
 from rotorkernels.cubic_law import cubic_coefficients, cubic_load
 from rotorkernels.models.spec import Built, Equilibrium, LinearSystem, ModelSpec, Observable, Parameter
@@ -498,11 +498,9 @@ def omega_l(v):
     """omega_l [Hz]: the lowest damped natural frequency at `v` with its bearing replaced by the
     paper's 15 deg row (loaded angle from the preload solve, no imposed angle or R2). With the
     paper's rotor it is the axial mode, which the shaft speed does not move."""
-    from rotorkernels.nnm import linear   # lazily: nnm imports the registry, which imports this
-
     v = {**v, "nominal_angle": OMEGA_L_ANGLE, "contact_angle": None, "outer_race_radius": None}
     system = linearization(v, static_equilibrium(v))
-    return linear.modes_of(system.M, system.C, system.G, system.K, linear.kinds_from_names(COORDINATES))[0].frequency
+    return modal.modes_of(system.M, system.C, system.G, system.K, modal.kinds_from_names(COORDINATES))[0].frequency
 
 
 def _angle(name, long_name, help, unset=None):

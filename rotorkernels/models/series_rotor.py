@@ -38,6 +38,7 @@ import math
 import numpy as np
 from numba import njit
 
+from rotorkernels import modal
 from rotorkernels.cubic_law import cubic_coefficients, cubic_load, derivative_tensor, potential_monomials
 from rotorkernels.models import rigid_preloaded as rp
 from rotorkernels.models.spec import Built, Observable, Parameter, PolynomialSystem
@@ -174,9 +175,7 @@ def polynomial_system(v, n, disk_position):
 
 def linear_frequencies(system):
     """Natural frequencies [rad/s] of M q'' + G q' + K q = 0, ascending, each pair once."""
-    from rotorkernels.nnm import linear, system as ps   # lazily: nnm imports the registry, which imports this
-
-    return linear.eigenpairs(ps.state_matrix(system))[0].imag
+    return modal.eigenpairs(modal.first_order(system.M, system.G, system.K))[0].imag
 
 
 def build_for(n, disk_position):

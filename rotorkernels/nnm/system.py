@@ -4,6 +4,7 @@ linear part and its right-hand side for scipy.
 """
 import numpy as np
 
+from rotorkernels import modal
 from rotorkernels.models.spec import PolynomialSystem  # noqa: F401 (the package's API)
 
 # M symmetric and G skew to this relative accuracy (the models assemble them in floating point).
@@ -36,20 +37,9 @@ def validate(system):
         raise ValueError("M is not positive definite")
 
 
-def first_order(mass, damping, stiffness):
-    """A of x' = A x, x = (q, q'), for M q'' + D q' + K q = 0."""
-    n = len(mass)
-    m_inv = np.linalg.inv(mass)
-    a = np.zeros((2 * n, 2 * n))
-    a[:n, n:] = np.eye(n)
-    a[n:, :n] = -m_inv @ stiffness
-    a[n:, n:] = -m_inv @ damping
-    return a
-
-
 def state_matrix(system):
     """A of the linear part of x' = A x + ..., x = (q, q')."""
-    return first_order(system.M, system.G, system.K)
+    return modal.first_order(system.M, system.G, system.K)
 
 
 def rhs(system):
