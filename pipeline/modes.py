@@ -18,6 +18,10 @@ from pipeline.config import ConfigError
 from rotorkernels import modal
 
 
+# |zeta| below this is the eigen-solver's rounding of an undamped mode (|Re s| ~ eps |s|): printed as 0.
+ZETA_ROUNDING = 1e-12
+
+
 def scene_values(data, point):
     """The model's values at a point {axis: value} of the scene (its fixed values filled in)."""
     spec = compute.model_of(data)
@@ -25,9 +29,9 @@ def scene_values(data, point):
 
 
 def require_linearization(spec):
-    """ConfigError saying why, for a model without a linearization."""
+    """ConfigError saying why, for a model without a linearization (one line, exit status 2)."""
     if not spec.has_linearization:
-        raise ConfigError(f"modes: model {spec.name} has no linearization"
+        raise ConfigError(f"model {spec.name} has no linearization"
                           + (f": {spec.no_linearization}" if spec.no_linearization else ""))
 
 
@@ -96,8 +100,9 @@ def summary(spec, values):
               "damping ratio zeta = -Re(s) / |s|",
               f"{'#':>2} {'f_d [Hz]':>14} {'f_n [Hz]':>14} {'zeta':>8} {'whirl':>9} {'label':>12}"]
     for k, m in enumerate(rec["modes"]):
+        zeta = m["damping_ratio"] if abs(m["damping_ratio"]) > ZETA_ROUNDING else 0.0
         lines.append(f"{k:>2} {m['damped_frequency_hz']:>14.6g} {m['undamped_frequency_hz']:>14.6g} "
-                     f"{m['damping_ratio']:>8.4f} {m['whirl']:>9} {m['label']:>12}")
+                     f"{zeta:>8.4f} {m['whirl']:>9} {m['label']:>12}")
     return "\n".join(lines)
 
 
