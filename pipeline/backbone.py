@@ -14,12 +14,11 @@ Amplitude: the first harmonic of the master coordinate's displacement [m] (the m
 amplitude; each continued orbit's is taken from its samples), on a log-spaced grid. The manifold
 and the continuation use the same master: the position with the largest component of the mode.
 A repeated linear frequency (symmetric4's cylindrical pair) is continued in the model's invariant
-plane holding the manifold's planar mode (the model module's PLANAR_SUBSPACES).
+plane holding the manifold's planar mode (the spec's `invariant_subspaces`).
 
 The continuation frequency on the grid interpolates the continued points by a cubic spline in A^2
 (omega is a smooth function of A^2: omega_0 + kappa A^2 + O(A^4)), inside the amplitudes reached.
 """
-import importlib
 import itertools
 import json
 import re
@@ -230,7 +229,7 @@ def _subspace(spec, modes, k):
         return None
     scale = spec.to_physical(np.ones(spec.n_state), 1.0)
     v = modes[k].vector / scale
-    for basis in getattr(importlib.import_module(spec.module), "PLANAR_SUBSPACES", {}).values():
+    for basis in spec.invariant_subspaces.values():
         q = np.linalg.qr(basis)[0]
         if np.linalg.norm(v - q @ (q.T @ v)) <= 1e-8 * np.linalg.norm(v):
             return basis

@@ -313,7 +313,7 @@ def build_parser():
              "scene TOML with a [continuation] section (default: the demo scene, along speed)"),
             ("backbone", cmd_backbone, "nonlinear normal modes and backbone curves of a conservative model "
              "(invariant manifold and continuation) into a netCDF result",
-             "scene TOML of symmetric4 or asymmetric5, [backbone] section optional")):
+             "scene TOML of a conservative model (symmetric4, asymmetric5, ...), [backbone] section optional")):
         c = sub.add_parser(name, help=help_text)
         c.add_argument("config", nargs="?" if name == "continue" else None, help=config_help)
         c.add_argument("-o", "--output", help=f"result path (default out/<scene name>_{name.replace('continue', 'continuation')}.nc)")

@@ -118,6 +118,8 @@ class ModelSpec:
     #                                                    given nor swept ("derived from X ...")
     amplitude_bound: str = ""       # a Built.derived value [m] the amplitudes must stay below (the
     #                                 series law's axial approach); "": no bound
+    invariant_subspaces: dict = field(default_factory=dict)   # name -> basis (n_state x k) of an invariant
+    #                                 subspace in which a repeated linear frequency is simple (backbones)
 
     @property
     def n_state(self):
