@@ -31,8 +31,7 @@ def scene_values(data, point):
 def require_linearization(spec):
     """ConfigError saying why, for a model without a linearization (one line, exit status 2)."""
     if not spec.has_linearization:
-        raise ConfigError(f"model {spec.name} has no linearization"
-                          + (f": {spec.no_linearization}" if spec.no_linearization else ""))
+        raise ConfigError(spec.linearization_problem())
 
 
 def modes(spec, values, equilibrium=None):

@@ -1,5 +1,7 @@
 """What a model declares to the rest of rotorsweep: its parameters (config keys and sweep axes),
-how to build the kernel's parameter vector, its observables and checks.
+how to build the kernel's parameter vector, its observables and checks, and its capabilities (a
+static equilibrium, a linearization, a shaft speed, omega_l, ...: what `pipeline/` reads instead of
+the model's name).
 
 `pipeline/` knows a model only through its `ModelSpec` (looked up in `models.REGISTRY`); the
 kernels know it only through `ModelSpec.kernel`, whose tag the generated `models.dispatch` turns
@@ -150,12 +152,17 @@ class ModelSpec:
     def has_linearization(self):
         return self.linearization is not None or self.polynomial is not None
 
+    def linearization_problem(self):
+        """"" for a model with a linearization, else one line saying why it has none."""
+        if self.has_linearization:
+            return ""
+        return f"model {self.name} has no linearization" + (f": {self.no_linearization}" if self.no_linearization else "")
+
     def linear_system(self, values, equilibrium=None):
         """(Equilibrium, LinearSystem) at `values` (the equilibrium solved unless given);
         ValueError saying why for a model without a linearization."""
         if not self.has_linearization:
-            raise ValueError(f"model {self.name} has no linearization"
-                             + (f": {self.no_linearization}" if self.no_linearization else ""))
+            raise ValueError(self.linearization_problem())
         if self.linearization is None:
             system = self.polynomial(values)
             eq = Equilibrium(np.zeros(self.n_position))
