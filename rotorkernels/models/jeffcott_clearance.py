@@ -271,6 +271,7 @@ SPEC = ModelSpec(
     derived={"contact_angle_used": ("degree", "contact angle used in the force law")},
     check=check,
     fill_defaults=fill_defaults,
+    speed="speed",
     no_linearization="its bearing stiffness varies with the rolling balls' positions (the ball passage is its "
                      "forcing), so it has no static equilibrium to linearize about; its orbits' Floquet "
                      "multipliers (`rotorsweep point`) give its linear stability",
