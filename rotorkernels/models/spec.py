@@ -110,7 +110,8 @@ class ModelSpec:
     polynomial: Callable = None     # polynomial(values) -> PolynomialSystem (conservative models)
     kernel_group: str = ""          # models compiled together (default: the model alone), see models.dispatch
     # capabilities (pipeline/ reads these, never a model's name):
-    equilibrium: Callable = None    # equilibrium(values) -> Equilibrium (None: q = 0)
+    equilibrium: Callable = None    # equilibrium(values) -> Equilibrium (None: q = 0); independent of the
+    #                                 shaft speed (Campbell tables solve it once)
     linearization: Callable = None  # linearization(values, Equilibrium) -> LinearSystem (None: `polynomial`'s
     #                                 linear part if given, else no linear analysis)
     no_linearization: str = ""      # why a model without one has none (what `rotorsweep modes` says)
