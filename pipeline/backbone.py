@@ -14,12 +14,11 @@ Amplitude: the first harmonic of the master coordinate's displacement [m] (the m
 amplitude; each continued orbit's is taken from its samples), on a log-spaced grid. The manifold
 and the continuation use the same master: the position with the largest component of the mode.
 A repeated linear frequency (symmetric4's cylindrical pair) is continued in the model's invariant
-plane holding the manifold's planar mode (the model module's PLANAR_SUBSPACES).
+plane holding the manifold's planar mode (the spec's `invariant_subspaces`).
 
 The continuation frequency on the grid interpolates the continued points by a cubic spline in A^2
 (omega is a smooth function of A^2: omega_0 + kappa A^2 + O(A^4)), inside the amplitudes reached.
 """
-import importlib
 import itertools
 import json
 import re
@@ -36,7 +35,7 @@ from rotorkernels import nnm
 from rotorkernels.continuation import backbone as cb
 from rotorkernels.continuation.arclength import Settings
 
-AUTO_FRACTION = 0.25        # default amplitude_max: this fraction of the preload's axial approach z0
+AUTO_FRACTION = 0.25        # default amplitude_max: this fraction of the model's amplitude bound (series: z0)
 PART_RTOL = 0.01            # the manifold and the continuation "part" at this relative difference
 SURFACE_POINTS = 21         # the report's manifold surface: a SURFACE_POINTS^2 grid in (p, r)
 ORBIT_PERIODS, ORBIT_SAMPLES = 10, 32   # the full-system orbit drawn on the surface (the papers' check)
@@ -70,6 +69,9 @@ def plan(data, check_lines=True):
                         tol=data["numerics"]["newton_tol"])
     errors += [f"backbone.{p}" for p in settings.problems()]
     a_max, a_min = sec["amplitude_max"], sec["amplitude_min"]
+    if a_max is None and not spec.amplitude_bound:
+        errors.append(f"backbone.amplitude_max: required for model {spec.name} (it states no amplitude bound "
+                      "to take a default from)")
     if a_max is not None and a_min is not None and a_min >= a_max:
         errors.append(f"backbone.amplitude_min: {a_min!r} m must be below backbone.amplitude_max ({a_max!r} m)")
     axes = tuple(data["sweep"])
@@ -100,14 +102,21 @@ def _modes(text, errors):
     return tuple(sorted({m - 1 for m in numbers}))
 
 
+def amplitude_bound(spec, values):
+    """The model's amplitude bound [m] at `values` (ModelSpec.amplitude_bound; the series rotors'
+    preload axial approach z0, where the cubic series, the ball sum's Taylor expansion about the
+    preloaded state, loses its meaning); inf for a model without one."""
+    return spec.build(values).derived[spec.amplitude_bound] if spec.amplitude_bound else np.inf
+
+
 def _line_problems(data, pl):
-    """Per line: the modes exist, the amplitudes stay below the preload's axial approach z0 (where
-    the cubic series has a meaning: it is the ball sum's Taylor expansion about the preloaded state)."""
+    """Per line: the modes exist, the amplitudes stay below the model's amplitude bound."""
+    spec = compute.model_of(data)
     out = []
     for where in pl.lines:
         values = line_values(data, where)
-        n = len(nnm.linear_modes(compute.model_of(data).polynomial(values)))
-        z0 = compute.model_of(data).build(values).derived["axial_approach"]
+        n = len(nnm.linear_modes(spec.polynomial(values)))
+        z0 = amplitude_bound(spec, values)
         label = ", ".join(f"{k} = {v:g}" for k, v in where.items()) or "the scene"
         wanted = list(pl.modes or ()) + [pl.surface_mode]
         if max(wanted) >= n:
@@ -115,8 +124,8 @@ def _line_problems(data, pl):
             out.append(f"{key}: mode {max(wanted) + 1} does not exist; the model has {n} modes (1 to {n})")
         a_max, a_min = (float(a) for a in amplitudes(pl, z0)[[-1, 0]])
         if a_max >= z0:
-            out.append(f"backbone.amplitude_max: {a_max:g} m reaches the preload's axial approach z0 = {z0:.4g} m "
-                       f"at {label}: the cubic series is meaningless there (keep amplitudes well below z0)")
+            out.append(f"backbone.amplitude_max: {a_max:g} m reaches the {spec.derived[spec.amplitude_bound][1]} = "
+                       f"{z0:.4g} m at {label}: the model's law is meaningless there (keep amplitudes well below it)")
         elif a_min >= a_max:
             out.append(f"backbone.amplitude_min: {a_min:g} m must be below the amplitude_max {a_max:.4g} m at {label}")
         if out:
@@ -131,7 +140,7 @@ def line_values(data, where):
 
 
 def amplitudes(pl, z0):
-    """The amplitude grid [m] of a line whose axial approach is z0."""
+    """The amplitude grid [m] of a line whose amplitude bound is z0."""
     a_max = pl.amplitude_max if pl.amplitude_max is not None else AUTO_FRACTION * z0
     a_min = pl.amplitude_min if pl.amplitude_min is not None else a_max / 100
     return np.geomspace(a_min, a_max, pl.points)
@@ -145,7 +154,7 @@ def backbone_line(data, where):
     spec = compute.model_of(data)
     values = line_values(data, where)
     system = spec.polynomial(values)
-    z0 = spec.build(values).derived["axial_approach"]
+    z0 = amplitude_bound(spec, values)
     grid = amplitudes(pl, z0)
     modes = nnm.linear_modes(system)
     chosen = pl.modes if pl.modes is not None else tuple(range(len(modes)))
@@ -153,7 +162,8 @@ def backbone_line(data, where):
     records = [mode_record(spec, values, system, modes, k, grid, pl, opts) for k in chosen]
     man = records[chosen.index(pl.surface_mode)]["manifold"] if pl.surface_mode in chosen else None
     surface = surface_record(system, man or _manifold_or_none(system, pl.surface_mode), grid[-1])
-    return {"grid": grid, "z0": z0, "modes": chosen, "records": [_plain(r) for r in records], "surface": surface}
+    return {"grid": grid, "z0": z0 if np.isfinite(z0) else np.nan, "modes": chosen,
+            "records": [_plain(r) for r in records], "surface": surface}
 
 
 def _manifold_or_none(system, k):
@@ -197,7 +207,7 @@ def mode_record(spec, values, system, modes, k, grid, pl, opts):
 def continued_backbone(spec, values, modes, k, grid, pl, opts):
     """The continuation backbone of mode k, reaching a little beyond the grid (its amplitude is q_j
     at the turning point, a little above the first harmonic), from half the grid's first value."""
-    z0 = spec.build(values).derived["axial_approach"]
+    z0 = amplitude_bound(spec, values)
     subspace = _subspace(spec, modes, k)
     index = _index_in(spec, values, subspace, modes[k].frequency)
     top = min(1.1 * grid[-1], 0.5 * (grid[-1] + z0))
@@ -218,7 +228,7 @@ def _subspace(spec, modes, k):
         return None
     scale = spec.to_physical(np.ones(spec.n_state), 1.0)
     v = modes[k].vector / scale
-    for basis in getattr(importlib.import_module(spec.module), "PLANAR_SUBSPACES", {}).values():
+    for basis in spec.invariant_subspaces.values():
         q = np.linalg.qr(basis)[0]
         if np.linalg.norm(v - q @ (q.T @ v)) <= 1e-8 * np.linalg.norm(v):
             return basis

@@ -118,7 +118,7 @@ def cmd_modes(args):
     if args.campbell:
         start, stop, num = args.campbell.split(":")
         speeds = np.linspace(float(start), float(stop), int(num))
-    print(modes.command(pipeline.as_config(args.config, whole_grid=False), _at(args.at), speeds, args.output))
+    print(modes.command(pipeline.as_config(args.config, whole_grid=False), _at(args.at), speeds, args.output, args.json))
     return 0
 
 
@@ -299,7 +299,7 @@ def build_parser():
              "scene TOML with a [continuation] section (default: the demo scene, along speed)"),
             ("backbone", cmd_backbone, "nonlinear normal modes and backbone curves of a conservative model "
              "(invariant manifold and continuation) into a netCDF result",
-             "scene TOML of symmetric4 or asymmetric5, [backbone] section optional")):
+             "scene TOML of a conservative model (symmetric4, asymmetric5, ...), [backbone] section optional")):
         c = sub.add_parser(name, help=help_text)
         c.add_argument("config", nargs="?" if name == "continue" else None, help=config_help)
         c.add_argument("-o", "--output", help=f"result path (default out/<scene name>_{name.replace('continue', 'continuation')}.nc)")
@@ -354,11 +354,13 @@ def build_parser():
                          "`rotorsweep continue` result along a frequency in Hz, e.g. rigid_preloaded, law = cubic)")
     rp.set_defaults(func=cmd_report)
 
-    m = sub.add_parser("modes", help="static equilibrium, natural frequencies, whirl, Campbell table (rigid_preloaded)")
-    m.add_argument("config", help="scene TOML of a model with linear analysis (rigid_preloaded)")
+    m = sub.add_parser("modes", help="static equilibrium, natural frequencies, damping, whirl, Campbell table "
+                                     "(every model with a linearization)")
+    m.add_argument("config", help="scene TOML of a model with a linearization")
     m.add_argument("--at", action="append", metavar="AXIS=VALUE", help="axis value (default: the first grid value)")
     m.add_argument("--campbell", metavar="START:STOP:NUM", help="shaft speeds [Hz] of the Campbell table")
     m.add_argument("-o", "--output", help="Campbell table CSV (speed_hz, mode, frequency_hz, damping_ratio, whirl, label)")
+    m.add_argument("--json", action="store_true", help="print the equilibrium and the modes as JSON")
     m.set_defaults(func=cmd_modes)
 
     w = sub.add_parser("warmup", help="compile the kernels of models into the Numba cache (a cluster "

@@ -31,10 +31,8 @@ CHUNK_BYTES = 4 << 20
 # An axis parameter that is neither swept nor fixed (given as NaN) is derived per point: it gets no
 # coordinate (CF: no NaN coordinates) but a line in the global attribute DERIVED_ATTR saying where
 # its per-point value comes from.
-# The text says what the value is derived from ("derived from X ..."; plan.fmt shows "from X").
-DERIVED = {"contact_angle": "derived from clearance per point, see contact_angle_used"}
-DERIVED_BY_MODEL = {"rigid_preloaded": {"contact_angle": "derived from the preload solve per point, "
-                                                         "see contact_angle_used"}}
+# The text, the model's (ModelSpec.derived_axes), says what the value is derived from ("derived
+# from X ..."; plan.fmt shows "from X").
 DERIVED_ATTR = "derived_parameters"
 _NETCDF_MAGIC = (b"CDF\x01", b"CDF\x02", b"CDF\x05", b"\x89HDF\r\n\x1a\n")
 
@@ -74,7 +72,7 @@ def build_dataset(axes, fixed, results, attrs, extra_attrs=None):
     ds.attrs = {"Conventions": CONVENTIONS, "title": "rotorsweep result cube", **attrs,
                 "rotorsweep_schema_version": schema.SCHEMA_VERSION}
     if derived:
-        notes = DERIVED_BY_MODEL.get(spec.name, DERIVED)
+        notes = spec.derived_axes
         ds.attrs[DERIVED_ATTR] = "; ".join(f"{name}: {notes.get(name, 'not fixed')}" for name in derived)
     return ds
 

@@ -1,137 +1,59 @@
-"""Linear analysis of a `rigid_preloaded` scene (`rotorsweep modes`): static equilibrium under
-preload (and weight), the linearized natural frequencies and mode shapes with gyroscopic
-forward/backward whirl, mode labels, and a Campbell table over shaft speed.
+"""Linear analysis of a scene (`rotorsweep modes`), for every model whose spec has a linearization
+(`ModelSpec.linear_system`): its static equilibrium, the linearized modes at one point, and a
+Campbell table over shaft speed for the models that name one (`ModelSpec.speed`).
 
-Linearization about the static equilibrium q_s: M q'' + (C + Omega G) q' + K_s q = 0 with
-K_s = dP/dq(q_s), the analytic stiffness of the ball sums (the kernel's). Eigenvalues of the
-first-order form come in pairs s = -zeta w +- i w_d; each mode is reported once (w_d > 0).
-
-Whirl: the shaft turns from +x to +y (the unbalance force is m0 a Omega^2 (cos, sin)(Omega t)),
-so a journal orbit x = Re(X e^{i w t}), y = Re(Y e^{i w t}) whirls forward when
-Im(conj(X) Y) < 0 (X = 1, Y = -i: x = cos, y = sin) and backward when > 0; at zero speed the pairs are degenerate and the
-direction is not defined ("none"). Labels: axial (z carries most of the mode's kinetic
-energy), cylindrical (both journals move in phase), conical (in opposite phase).
+Linearization about the static equilibrium q_s: M q'' + (C + G) q' + K q = 0 (the model's own,
+e.g. rigid_preloaded's analytic stiffness of the ball sums). The modes, their damped and undamped
+natural frequencies, damping ratios, whirl directions and labels are rotorkernels.modal's
+(`modes_of`, whose docstring gives the conventions): eigenvalues s = -zeta w_n +- i w_d, each mode
+once (w_d > 0), by increasing damped frequency; the logarithmic decrement is 2 pi zeta / sqrt(1 - zeta^2).
 """
 import csv
-from typing import NamedTuple
+import json
 
 import numpy as np
 
 from pipeline import compute
-from rotorkernels.models import rigid_preloaded as rp
-
-# The static equilibrium is converged when |P(q) - f_g| <= EQUILIBRIUM_RTOL x the preload.
-EQUILIBRIUM_RTOL = 1e-13
-# A pair of eigenvalues is degenerate (no whirl direction) when Im(conj(X) Y) is this small
-# relative to |X|^2 + |Y|^2.
-WHIRL_TOL = 1e-6
+from pipeline.config import ConfigError
+from rotorkernels import modal
 
 
-class Equilibrium(NamedTuple):
-    position: np.ndarray     # q_s [m]
-    residual: float          # |P(q_s) - f_g| / P0
-    stiffness: np.ndarray    # dP/dq at q_s [N/m]
-    iterations: int
-
-
-class Mode(NamedTuple):
-    frequency: float         # damped natural frequency [Hz]
-    damping_ratio: float
-    whirl: str               # forward / backward / none
-    label: str               # axial / cylindrical / conical
-    shape: np.ndarray        # complex (x1, y1, x2, y2, z), largest component 1
+# |zeta| below this is the eigen-solver's rounding of an undamped mode (|Re s| ~ eps |s|): printed as 0.
+ZETA_ROUNDING = 1e-12
 
 
 def scene_values(data, point):
     """The model's values at a point {axis: value} of the scene (its fixed values filled in)."""
     spec = compute.model_of(data)
-    if spec.name != rp.SPEC.name:
-        raise ValueError(f"modes: model {spec.name!r} has no linear analysis (only {rp.SPEC.name})")
     return {**compute.scene_values(data, spec), **compute.fixed_values(data), **point}
 
 
-def static_equilibrium(values, max_iter=50):
-    """Newton on P(q) = f_g from the centred rotor (where P = 0 by the preload's symmetry)."""
-    state = rp.bearing_state(values)
-    n_balls = rp.n_balls_of(values)
-    load = rp.weight(rp.Rotor.of(values))
-    q = np.zeros(rp.N_POS)
-    scale = float(values["preload"])
-    for it in range(max_iter + 1):
-        force, stiffness = rp.bearing_load(q, state, n_balls, values["law"], arrangement=rp.arrangement_of(values))
-        residual = np.abs(force - load).max() / scale
-        if residual <= EQUILIBRIUM_RTOL or it == max_iter:
-            break
-        q -= np.linalg.solve(stiffness, force - load)
-    return Equilibrium(q, residual, stiffness, it)
+def require_linearization(spec):
+    """ConfigError saying why, for a model without a linearization (one line, exit status 2)."""
+    if not spec.has_linearization:
+        raise ConfigError(spec.linearization_problem())
 
 
-def state_matrix(rotor, stiffness, speed_hz):
-    """A of x' = A x, x = (q, q'), SI."""
-    m_inv = np.linalg.inv(rp.mass_matrix(rotor))
-    damp = rotor.damping * np.eye(rp.N_POS) + 2.0 * np.pi * speed_hz * rp.gyroscopic_matrix(rotor)
-    n = rp.N_POS
-    a = np.zeros((2 * n, 2 * n))
-    a[:n, n:] = np.eye(n)
-    a[n:, :n] = -m_inv @ stiffness
-    a[n:, n:] = -m_inv @ damp
-    return a
+def modes(spec, values, equilibrium=None):
+    """The modes at `values` (list of rotorkernels.modal.LinearMode), by increasing damped
+    frequency; `equilibrium`: the static state if already known (it does not depend on speed)."""
+    _, system = spec.linear_system(values, equilibrium)
+    return modal.modes_of(system.M, system.C, system.G, system.K, modal.kinds_from_names(system.coordinates))
 
 
-def _whirl(shape, speed_hz):
-    """forward / backward / none from the journals' orbit sense (module docstring); none at
-    zero speed, where a degenerate pair's eigenvectors may mix either way."""
-    sense = sum(np.imag(np.conj(shape[i]) * shape[i + 1]) for i in (0, 2))
-    size = float(np.sum(np.abs(shape) ** 2))
-    if speed_hz == 0 or abs(sense) <= WHIRL_TOL * size:
-        return "none"
-    return "forward" if sense < 0 else "backward"
-
-
-def _label(shape, mass):
-    energy = np.real(np.conj(shape) * (mass @ shape))
-    if energy[4] > 0.5 * energy.sum():
-        return "axial"
-    in_phase = np.real(np.conj(shape[0]) * shape[2] + np.conj(shape[1]) * shape[3])
-    return "cylindrical" if in_phase > 0 else "conical"
-
-
-def modes(values, speed_hz, equilibrium=None):
-    """The modes at one shaft speed [Hz], by increasing frequency."""
-    eq = static_equilibrium(values) if equilibrium is None else equilibrium
-    rotor = rp.Rotor.of(values)
-    eigvals, eigvecs = np.linalg.eig(state_matrix(rotor, eq.stiffness, speed_hz))
-    mass = rp.mass_matrix(rotor)
-    out = []
-    for k in np.flatnonzero(eigvals.imag > 0):
-        s = eigvals[k]
-        shape = eigvecs[:rp.N_POS, k]
-        shape = shape / shape[np.argmax(np.abs(shape))]
-        out.append(Mode(s.imag / (2.0 * np.pi), -s.real / abs(s), _whirl(shape, speed_hz), _label(shape, mass), shape))
-    return sorted(out, key=lambda m: m.frequency)
-
-
-def campbell(values, speeds_hz):
-    """Rows (speed [Hz], mode index, frequency [Hz], damping ratio, whirl, label) over the speeds."""
-    eq = static_equilibrium(values)
+def campbell(spec, values, speeds_hz):
+    """Rows (speed [Hz], mode index, damped frequency [Hz], damping ratio, whirl, label) over the
+    speeds (the model's `speed` parameter)."""
+    eq, _ = spec.linear_system(values)
     return [(float(f), k, m.frequency, m.damping_ratio, m.whirl, m.label)
-            for f in speeds_hz for k, m in enumerate(modes(values, f, eq))]
-
-
-# Filipkovsky 2016's frequency unit omega_l: the lowest natural frequency of the linearized
-# system with the bearing of the 15 deg row of the paper's table.
-OMEGA_L_ANGLE = 15.0
+            for f in speeds_hz for k, m in enumerate(modes(spec, {**values, spec.speed: float(f)}, eq))]
 
 
 def omega_l(data):
-    """omega_l [Hz] of a scene: the lowest damped natural frequency at the scene's first grid
-    point, its bearing replaced by the paper's 15 deg row (loaded angle from the preload solve,
-    no imposed angle or R2), at that point's shaft speed. With the paper's rotor it is the axial
-    mode, which the shaft speed does not move."""
+    """omega_l [Hz] of a scene: the model's own (`ModelSpec.omega_l`) at the scene's first grid point."""
+    spec = compute.model_of(data)
     first = {name: float(values[0]) for name, values in data["sweep"].items()}
-    values = {**scene_values(data, first), "nominal_angle": OMEGA_L_ANGLE, "contact_angle": None,
-              "outer_race_radius": None}
-    return modes(values, values["speed"])[0].frequency
+    return spec.omega_l(scene_values(data, first))
 
 
 CAMPBELL_COLUMNS = ("speed_hz", "mode", "frequency_hz", "damping_ratio", "whirl", "label")
@@ -144,31 +66,67 @@ def write_campbell(rows, path):
         writer.writerows(rows)
 
 
-def summary(values, speed_hz):
-    """Text: the static state and the modes at one speed (what `rotorsweep modes` prints)."""
-    eq = static_equilibrium(values)
-    state = rp.bearing_state(values)
-    lines = [f"static equilibrium: q = {np.array2string(eq.position, precision=4)} m, "
-             f"residual {eq.residual:.1e} x P0 ({eq.iterations} Newton iterations)",
-             f"contact angle {np.degrees(state.contact_angle):.4f} deg, axial approach z0 = "
-             f"{state.axial_approach:.4e} m, K = {state.contact_constant:.4e} N/m^1.5, "
-             f"k_r = {state.radial_stiffness:.4e} N/m, k_a = {state.axial_stiffness:.4e} N/m per bearing",
-             f"modes at {speed_hz:g} Hz:",
-             f"{'#':>2} {'frequency [Hz]':>15} {'zeta':>8} {'whirl':>9} {'label':>12}"]
-    for k, m in enumerate(modes(values, speed_hz, eq)):
-        lines.append(f"{k:>2} {m.frequency:>15.4f} {m.damping_ratio:>8.4f} {m.whirl:>9} {m.label:>12}")
+def log_decrement(zeta):
+    return 2.0 * np.pi * zeta / np.sqrt(1.0 - zeta ** 2)
+
+
+def records(spec, values):
+    """The static state and the modes at one point as plain data (what `modes --json` prints)."""
+    eq, system = spec.linear_system(values)
+    found = modes(spec, values, eq)
+    return {
+        "model": spec.name,
+        "speed_hz": float(values[spec.speed]) if spec.speed else None,
+        "equilibrium": {"coordinates": list(system.coordinates), "position": eq.position.tolist(),
+                        "residual": float(eq.residual), "iterations": int(eq.iterations), "note": eq.note},
+        "modes": [{"damped_frequency_hz": m.frequency, "undamped_frequency_hz": float(m.undamped_frequency),
+                   "damping_ratio": m.damping_ratio, "log_decrement": float(log_decrement(m.damping_ratio)),
+                   "whirl": m.whirl, "label": m.label,
+                   "shape_real": m.shape.real.tolist(), "shape_imag": m.shape.imag.tolist()} for m in found],
+    }
+
+
+def summary(spec, values):
+    """Text: the static state and the modes at one point (what `rotorsweep modes` prints)."""
+    rec = records(spec, values)
+    eq = rec["equilibrium"]
+    where = f" at {rec['speed_hz']:g} Hz shaft speed" if spec.speed else ""
+    lines = [f"static equilibrium: q = {np.array2string(np.array(eq['position']), precision=4)} "
+             f"({', '.join(eq['coordinates'])}, SI), relative residual {eq['residual']:.1e} "
+             f"({eq['iterations']} Newton iterations)"]
+    lines += [eq["note"]] if eq["note"] else []
+    lines += [f"modes{where}: damped frequency f_d = Im(s) / 2 pi, undamped f_n = |s| / 2 pi, "
+              "damping ratio zeta = -Re(s) / |s|",
+              f"{'#':>2} {'f_d [Hz]':>14} {'f_n [Hz]':>14} {'zeta':>8} {'whirl':>9} {'label':>12}"]
+    for k, m in enumerate(rec["modes"]):
+        zeta = m["damping_ratio"] if abs(m["damping_ratio"]) > ZETA_ROUNDING else 0.0
+        lines.append(f"{k:>2} {m['damped_frequency_hz']:>14.6g} {m['undamped_frequency_hz']:>14.6g} "
+                     f"{zeta:>8.4f} {m['whirl']:>9} {m['label']:>12}")
     return "\n".join(lines)
 
 
-def command(cfg, at, campbell_speeds=None, output=None):
+def command(cfg, at, campbell_speeds=None, output=None, as_json=False):
     """`rotorsweep modes`: the summary at the scene's first grid point (axis values from `at`
     {axis: value} where given) and, with `output`, the Campbell table over `campbell_speeds`
     [Hz] (default: the scene's speed axis) as CSV. Returns the text to print."""
+    spec = compute.model_of(cfg.data)
+    require_linearization(spec)
     first = {name: float(values[0]) for name, values in cfg.axes.items()}
     values = scene_values(cfg.data, {**first, **at})
-    text = summary(values, values["speed"])
+    text = json.dumps(records(spec, values), indent=1) if as_json else summary(spec, values)
     if output is not None:
-        speeds = cfg.axes["speed"] if campbell_speeds is None else campbell_speeds
-        write_campbell(campbell(values, speeds), output)
-        text += f"\nCampbell table ({len(speeds)} speeds): {output}"
+        speeds = _campbell_speeds(spec, cfg, campbell_speeds)
+        write_campbell(campbell(spec, values, speeds), output)
+        if not as_json:
+            text += f"\nCampbell table ({len(speeds)} speeds): {output}"
     return text
+
+
+def _campbell_speeds(spec, cfg, given):
+    if not spec.speed:
+        raise ConfigError(f"modes --output: model {spec.name} has no shaft speed, so no Campbell table")
+    if given is not None:
+        return given
+    if spec.speed not in cfg.axes:
+        raise ConfigError(f"modes --output: the scene does not sweep {spec.speed}; give --campbell START:STOP:NUM")
+    return cfg.axes[spec.speed]

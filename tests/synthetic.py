@@ -10,6 +10,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline import cube, schema
+from rotorkernels.models.jeffcott_clearance import SPEC as JEFFCOTT
 
 JEFFCOTT_VARIABLES = schema.variables_of(schema.model_of({}))
 
@@ -74,7 +75,7 @@ def synthetic_cube(speed=None, clearance=None, n_multipliers=4, attractor=False,
         "rotorsweep_schema_version": schema.SCHEMA_VERSION,
         "config_toml": "[scene]\nname = \"synthetic\"\n",
         "config_hash": "0" * 64,
-        cube.DERIVED_ATTR: f"contact_angle: {cube.DERIVED['contact_angle']}",
+        cube.DERIVED_ATTR: f"contact_angle: {JEFFCOTT.derived_axes['contact_angle']}",
     })
     return add_boundary_table(ds) if boundaries else ds
 

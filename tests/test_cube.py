@@ -8,6 +8,7 @@ import pytest
 import xarray as xr
 
 from pipeline import cube, schema
+from rotorkernels.models.jeffcott_clearance import SPEC as JEFFCOTT
 from tests import cfcheck
 from tests.synthetic import synthetic_cube
 
@@ -90,7 +91,7 @@ def test_build_follows_the_schema():
     assert built.attrs["rotorsweep_schema_version"] == schema.SCHEMA_VERSION
     # a contact angle derived per point is no (NaN) coordinate; the cube says where it comes from
     assert "contact_angle" not in built.coords
-    assert cube.derived_parameters(built) == {"contact_angle": cube.DERIVED["contact_angle"]}
+    assert cube.derived_parameters(built) == {"contact_angle": JEFFCOTT.derived_axes["contact_angle"]}
     np.testing.assert_array_equal(built["multiplier"].values, np.arange(4))
 
 

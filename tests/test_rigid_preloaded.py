@@ -9,7 +9,7 @@ import pytest
 import sympy as sp
 
 from pipeline import compute, config, modes
-from rotorkernels import integrators as ig, models, shooting, continuation
+from rotorkernels import integrators as ig, modal, models, shooting, continuation
 from rotorkernels.attractor.poincare import _poincare
 from rotorkernels.models import rigid_preloaded as rp
 
@@ -178,7 +178,7 @@ def test_static_equilibrium_under_preload():
     single = 7 * s.contact_constant * (s.axial_approach * math.sin(s.contact_angle)) ** 1.5 * math.sin(s.contact_angle)
     assert abs(single - 300.0) <= 1e-12 * 300.0
     v = values(gravity=9.81)
-    eq = modes.static_equilibrium(v)
+    eq = rp.static_equilibrium(v)
     s = rp.bearing_state(v)
     force = _paper_forces(eq.position, s.contact_angle, s.axial_approach, s.contact_constant, 7)
     assert np.abs(force - rp.weight(rp.Rotor.of(v))).max() <= 1e-12 * 300.0
@@ -228,7 +228,9 @@ def test_linear_frequencies_analytic_equal_eigenvalues_of_the_finite_difference_
         v = values(nominal_angle=angle, eccentricity=0.0)
         s = rp.bearing_state(v)
         stiffness = np.diag([s.radial_stiffness] * 4 + [2 * s.axial_stiffness])
-        analytic = np.linalg.eigvals(modes.state_matrix(rp.Rotor.of(v), stiffness, v["speed"]))
+        r = rp.Rotor.of(v)
+        damping = r.damping * np.eye(5) + 2.0 * np.pi * v["speed"] * rp.gyroscopic_matrix(r)
+        analytic = np.linalg.eigvals(modal.first_order(rp.mass_matrix(r), damping, stiffness))
         built = SPEC.build(v)
         h, fd = 1e-3, np.zeros((10, 10))
         for j in range(10):
@@ -248,17 +250,17 @@ def test_gyroscopic_splitting_grows_with_speed_and_vanishes_at_rest():
     """Forward minus backward frequency of the conical pair: 0 at rest (to eigen-solver
     rounding), increasing with speed; forward whirl stiffens (the gyroscopic sign)."""
     v = values()
-    eq = modes.static_equilibrium(v)
+    eq = rp.static_equilibrium(v)
     split = []
     for f in (0.0, 100.0, 300.0, 1000.0):
-        conical = [m for m in modes.modes(v, f, eq) if m.label == "conical"]
+        conical = [m for m in modes.modes(SPEC, {**v, "speed": f}, eq) if m.label == "conical"]
         assert len(conical) == 2
         split.append(conical[1].frequency - conical[0].frequency)
         if f > 0:
             assert [m.whirl for m in conical] == ["backward", "forward"]
     assert abs(split[0]) <= 1e-9 * conical[0].frequency
     assert all(b > a for a, b in zip(split, split[1:]))
-    labels = [m.label for m in modes.modes(v, 250.0, eq)]
+    labels = [m.label for m in modes.modes(SPEC, {**v, "speed": 250.0}, eq)]
     assert labels == ["axial", "cylindrical", "cylindrical", "conical", "conical"]
 
 

@@ -30,8 +30,8 @@ def values(**over):
 def test_linear_frequencies_of_the_series_equal_those_of_the_ball_sum(preload_law):
     """Same stiffness matrix at rest (the series' linear terms are the sum's derivatives, exact
     up to rounding of two different formulas: 1e-10 relative)."""
-    exact = modes.modes(values(preload_law=preload_law), 250.0)
-    series = modes.modes(values(preload_law=preload_law, law="cubic"), 250.0)
+    exact = modes.modes(SPEC, values(preload_law=preload_law))
+    series = modes.modes(SPEC, values(preload_law=preload_law, law="cubic"))
     f_exact = np.array([m.frequency for m in exact])
     f_series = np.array([m.frequency for m in series])
     assert np.allclose(f_series, f_exact, rtol=1e-10, atol=0)

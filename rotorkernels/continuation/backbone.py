@@ -36,6 +36,7 @@ import numpy as np
 from rotorkernels import floquet, shooting
 from rotorkernels.continuation.arclength import (END_REASONS, INTEGRATION_FAILED, LEFT_RANGE, NEWTON_FAILED,
                                                  START_FAILED, STEP_BUDGET, Counter, Settings, rejected)
+from rotorkernels.modal import eigenpairs
 from rotorkernels.orbits import AutonomousOrbitProblem
 
 # Relative gap below which two linear frequencies count as one repeated frequency.
@@ -137,10 +138,8 @@ def linear_modes(model, p, basis):
     n = model.n_state
     jac = np.empty((n, n))
     dispatch.jac(model.kernel[0], 0.0, np.zeros(n), p, jac)
-    lam, vec = np.linalg.eig(basis.T @ jac @ basis)
-    keep = np.flatnonzero(lam.imag > 0)
-    keep = keep[np.argsort(lam.imag[keep])]
-    return lam.imag[keep], basis @ vec[:, keep]
+    lam, vec = eigenpairs(basis.T @ jac @ basis)
+    return lam.imag, basis @ vec
 
 
 def _problems(model, built, mode, omegas, amplitude_max, amplitude_start):

@@ -53,5 +53,5 @@ SPEC = ModelSpec(
                   help="disk position l1 from bearing A (paper: 0.125 m)"),) + sr.BEARING_PARAMETERS,
     build=sr.build_for(N_POS, disk_position), cold_guess=lambda p: np.zeros(2 * N_POS),
     length_scale=sr.LENGTH_SCALE, observables=sr.observables(N_POS), derived=sr.DERIVED, check=sr.check,
-    references=sr.REFERENCES, polynomial=polynomial,
+    references=sr.REFERENCES, polynomial=polynomial, speed="speed", amplitude_bound="axial_approach",
 )

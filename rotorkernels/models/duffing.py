@@ -4,7 +4,7 @@ and autonomous (free oscillation, backbone); hardening for gamma > 0, softening 
 import numpy as np
 from numba import njit
 
-from rotorkernels.models.spec import Built, ModelSpec, Observable, Parameter
+from rotorkernels.models.spec import Built, LinearSystem, ModelSpec, Observable, Parameter
 from rotorkernels.models.velocity import upper_rows, velocity_rows
 
 P_T2, P_DAMP, P_GAMMA, P_FORCE = range(4)   # T^2, 2 zeta T, gamma, F
@@ -36,6 +36,11 @@ def build(v):
     return Built(p, period, {})
 
 
+def linearization(v, equilibrium):
+    """x'' + 2 zeta x' + x = 0 about x = 0 (time in the model's unit: linear natural frequency 1)."""
+    return LinearSystem(np.eye(1), np.array([[2.0 * v["zeta"]]]), np.zeros((1, 1)), np.eye(1), ("x",))
+
+
 SPEC = ModelSpec(
     name="duffing", id=3, module=__name__, n_position=1,
     description="validation: forced Duffing oscillator (scaled time tau = omega t / 2 pi)",
@@ -49,6 +54,7 @@ SPEC = ModelSpec(
     continuation=("omega",),
     build=build, cold_guess=lambda p: np.zeros(2), length_scale=1.0,
     observables=(Observable("x", (1.0,), "1", "displacement"),),
+    linearization=linearization,
     # its own kernel group, not the test-only validation models': it has a scene of its own
     # (configs/duffing_resonance.toml), whose first point would otherwise compile their
     # equations too (docs/benchmarks/compile.md)

@@ -276,6 +276,11 @@ SPEC = ModelSpec(
     derived={"contact_angle_used": ("degree", "contact angle used in the force law")},
     check=check,
     fill_defaults=fill_defaults,
+    speed="speed",
+    no_linearization="its bearing stiffness varies with the rolling balls' positions (the ball passage is its "
+                     "forcing), so it has no static equilibrium to linearize about; its orbits' Floquet "
+                     "multipliers (`rotorsweep point`) give its linear stability",
+    derived_axes={"contact_angle": "derived from clearance per point, see contact_angle_used"},
     references=("Bai C., Xu Q., Zhang X.: Nonlinear stability of balanced rotor due to the effect of "
                 "ball bearing internal clearance, Applied Mathematics and Mechanics 27(2), 159-169 "
                 "(2006) (clearance law, 209 bearing); Filipkovsky S. V.: nonlinear normal modes of "

@@ -46,9 +46,10 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from rotorkernels import modal
 from rotorkernels.contact import ring_force, ring_load
 from rotorkernels.cubic_law import cubic_coefficients, cubic_load
-from rotorkernels.models.spec import Built, ModelSpec, Observable, Parameter
+from rotorkernels.models.spec import Built, Equilibrium, LinearSystem, ModelSpec, Observable, Parameter
 from rotorkernels.models.preloaded_pair import (  # noqa: F401 (the pair's API, read as rp.*)
     ARRANGEMENTS, BEARING_DERIVED, BEARING_KEYS, DEFAULT_NOMINAL_ANGLE, NOMINAL_ANGLES,
     arrangement_of, bearing_derived, bearing_problems, bearing_state, geometry, n_balls_of, preload_of,
@@ -407,6 +408,52 @@ def static_guess(p):
     return np.zeros(2 * N_POS)
 
 
+# --- linear analysis (the spec's capabilities: `rotorsweep modes`, omega_l) -------------------------
+
+# The static equilibrium is converged when |P(q) - f_g| <= EQUILIBRIUM_RTOL x the preload.
+EQUILIBRIUM_RTOL = 1e-13
+COORDINATES = ("x1", "y1", "x2", "y2", "z")
+# Filipkovsky 2016's frequency unit omega_l: the lowest natural frequency of the linearized
+# system with the bearing of the 15 deg row of the paper's table.
+OMEGA_L_ANGLE = 15.0
+
+
+def static_equilibrium(v, max_iter=50):
+    """Newton on P(q) = f_g from the centred rotor (where P = 0 by the preload's symmetry)."""
+    state = bearing_state(v)
+    n_balls = n_balls_of(v)
+    load = weight(Rotor.of(v))
+    q = np.zeros(N_POS)
+    for it in range(max_iter + 1):
+        force, stiffness = bearing_load(q, state, n_balls, v["law"], arrangement=arrangement_of(v))
+        residual = np.abs(force - load).max() / float(v["preload"])
+        if residual <= EQUILIBRIUM_RTOL or it == max_iter:
+            break
+        q -= np.linalg.solve(stiffness, force - load)
+    note = (f"contact angle {np.degrees(state.contact_angle):.4f} deg, axial approach z0 = "
+            f"{state.axial_approach:.4e} m, K = {state.contact_constant:.4e} N/m^1.5, "
+            f"k_r = {state.radial_stiffness:.4e} N/m, k_a = {state.axial_stiffness:.4e} N/m per bearing")
+    return Equilibrium(q, residual, it, note)
+
+
+def linearization(v, equilibrium):
+    """M q'' + (C + Omega G) q' + K_s q = 0 with K_s = dP/dq(q_s), the kernel's analytic stiffness."""
+    rotor = Rotor.of(v)
+    _, stiffness = bearing_load(equilibrium.position, bearing_state(v), n_balls_of(v), v["law"],
+                                arrangement=arrangement_of(v))
+    return LinearSystem(mass_matrix(rotor), rotor.damping * np.eye(N_POS),
+                        2.0 * np.pi * v["speed"] * gyroscopic_matrix(rotor), stiffness, COORDINATES)
+
+
+def omega_l(v):
+    """omega_l [Hz]: the lowest damped natural frequency at `v` with its bearing replaced by the
+    paper's 15 deg row (loaded angle from the preload solve, no imposed angle or R2). With the
+    paper's rotor it is the axial mode, which the shaft speed does not move."""
+    v = {**v, "nominal_angle": OMEGA_L_ANGLE, "contact_angle": None, "outer_race_radius": None}
+    system = linearization(v, static_equilibrium(v))
+    return modal.modes_of(system.M, system.C, system.G, system.K, modal.kinds_from_names(COORDINATES))[0].frequency
+
+
 def _angle(name, long_name, help, unset=None):
     return Parameter(name=name, section="bearing", unit="degree", long_name=long_name, axis=True,
                      lo=0, hi=90, lo_open=True, hi_open=True, unset=unset, help=help)
@@ -486,4 +533,6 @@ SPEC = ModelSpec(
         "frequency_ratio_q": ("1", "q: shaft revolutions per common forcing period"),
     },
     check=check,
+    equilibrium=static_equilibrium, linearization=linearization, speed="speed", omega_l=omega_l,
+    derived_axes={"contact_angle": "derived from the preload solve per point, see contact_angle_used"},
 )

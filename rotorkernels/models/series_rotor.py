@@ -45,6 +45,7 @@ import math
 import numpy as np
 from numba import njit
 
+from rotorkernels import modal
 from rotorkernels.cubic_law import cubic_coefficients, cubic_load, derivative_tensor, potential_monomials
 from rotorkernels.models import rigid_preloaded as rp
 from rotorkernels.models.spec import Built, Observable, Parameter, PolynomialSystem
@@ -185,11 +186,7 @@ def polynomial_system(v, n, disk_position):
 
 def linear_frequencies(system):
     """Natural frequencies [rad/s] of M q'' + G q' + K q = 0, ascending, each pair once."""
-    n = system.M.shape[0]
-    m_inv = np.linalg.inv(system.M)
-    a = np.block([[np.zeros((n, n)), np.eye(n)], [-m_inv @ system.K, -m_inv @ system.G]])
-    w = np.linalg.eigvals(a).imag
-    return np.sort(w[w > 0])
+    return modal.eigenpairs(modal.first_order(system.M, system.G, system.K))[0].imag
 
 
 def build_for(n, disk_position):

@@ -1,5 +1,7 @@
 """What a model declares to the rest of rotorsweep: its parameters (config keys and sweep axes),
-how to build the kernel's parameter vector, its observables and checks.
+how to build the kernel's parameter vector, its observables and checks, and its capabilities (a
+static equilibrium, a linearization, a shaft speed, omega_l, ...: what `pipeline/` reads instead of
+the model's name).
 
 `pipeline/` knows a model only through its `ModelSpec` (looked up in `models.REGISTRY`); the
 kernels know it only through `ModelSpec.kernel`, whose tag the generated `models.dispatch` turns
@@ -70,6 +72,23 @@ class KernelId(NamedTuple):
     velocity_form: int
 
 
+class Equilibrium(NamedTuple):
+    """A model's static equilibrium at one parameter point (what its linearization is about)."""
+    position: np.ndarray     # q_s, SI
+    residual: float = 0.0    # the static balance's relative residual (0: exact by construction)
+    iterations: int = 0      # Newton iterations it took (0: known in closed form)
+    note: str = ""           # the model's own lines about its static state (`rotorsweep modes` prints them)
+
+
+class LinearSystem(NamedTuple):
+    """M q'' + (C + G) q' + K q = 0 about a static equilibrium, SI (G already times the shaft speed)."""
+    M: np.ndarray
+    C: np.ndarray
+    G: np.ndarray
+    K: np.ndarray
+    coordinates: tuple       # names as PolynomialSystem's ("x1", "y1", ... give the mode labels)
+
+
 class Built(NamedTuple):
     """A model's kernel inputs at one parameter point."""
     p: np.ndarray       # kernel parameter vector (scaled units)
@@ -101,6 +120,20 @@ class ModelSpec:
     references: str = ""            # the model's sources (the cube's CF `references` attribute)
     polynomial: Callable = None     # polynomial(values) -> PolynomialSystem (conservative models)
     kernel_group: str = ""          # models compiled together (default: the model alone), see models.dispatch
+    # capabilities (pipeline/ reads these, never a model's name):
+    equilibrium: Callable = None    # equilibrium(values) -> Equilibrium (None: q = 0); independent of the
+    #                                 shaft speed (Campbell tables solve it once)
+    linearization: Callable = None  # linearization(values, Equilibrium) -> LinearSystem (None: `polynomial`'s
+    #                                 linear part if given, else no linear analysis)
+    no_linearization: str = ""      # why a model without one has none (what `rotorsweep modes` says)
+    speed: str = ""                 # the parameter that is the shaft speed [Hz] (Campbell diagrams, the 1x line)
+    omega_l: Callable = None        # omega_l(values) -> [Hz]: the reports' frequency unit (None: Hz only)
+    derived_axes: dict = field(default_factory=dict)   # axis -> how it is derived per point when neither
+    #                                                    given nor swept ("derived from X ...")
+    amplitude_bound: str = ""       # a Built.derived value [m] the amplitudes must stay below (the
+    #                                 series law's axial approach); "": no bound
+    invariant_subspaces: dict = field(default_factory=dict)   # name -> basis (n_state x k) of an invariant
+    #                                 subspace in which a repeated linear frequency is simple (backbones)
 
     @property
     def n_state(self):
@@ -124,6 +157,30 @@ class ModelSpec:
 
     def parameter(self, name):
         return next(p for p in self.parameters if p.name == name)
+
+    @property
+    def has_linearization(self):
+        return self.linearization is not None or self.polynomial is not None
+
+    def linearization_problem(self):
+        """"" for a model with a linearization, else one line saying why it has none."""
+        if self.has_linearization:
+            return ""
+        return f"model {self.name} has no linearization" + (f": {self.no_linearization}" if self.no_linearization else "")
+
+    def linear_system(self, values, equilibrium=None):
+        """(Equilibrium, LinearSystem) at `values` (the equilibrium solved unless given);
+        ValueError saying why for a model without a linearization."""
+        if not self.has_linearization:
+            raise ValueError(self.linearization_problem())
+        if self.linearization is None:
+            system = self.polynomial(values)
+            eq = Equilibrium(np.zeros(self.n_position))
+            n = len(system.coordinates)
+            return eq, LinearSystem(system.M, np.zeros((n, n)), system.G, system.K, system.coordinates)
+        eq = equilibrium if equilibrium is not None else (
+            self.equilibrium(values) if self.equilibrium is not None else Equilibrium(np.zeros(self.n_position)))
+        return eq, self.linearization(values, eq)
 
     def to_physical(self, u, period):
         """Scaled state(s) (..., n_state) -> SI: positions in m, velocities in m/s (velocity form)."""

@@ -1,137 +1,24 @@
-"""Linear modes of the gyroscopic system M q'' + G q' + K q = 0 and their labels.
-
-The first-order form x' = A x (x = (q, q')) of a conservative gyroscopic system has eigenvalues in
-pairs +-i omega; each mode is reported once (omega > 0), by increasing frequency.
-
-Labels come from a per-coordinate description the model provides, `kinds`: one (axis, station)
-tag per coordinate, axis "x" or "y" (transverse displacement) or "z" (axial), station any name of
-the journal or section the coordinate belongs to (e.g. ("x", "A"), ("y", "A"), ("x", "B"),
-("y", "B"), ("z", None)). Without kinds they are read from the coordinate names "x1", "y1", "z"
-(axis = first letter, station = the rest); other names give the label "unknown".
-
-- axial: the axial coordinates carry most of the mode's kinetic energy Re(conj(phi) M phi);
-- otherwise, with two or more stations, cylindrical when the first two stations move in phase
-  (Re(conj(x_a) x_b + conj(y_a) y_b) > 0), conical in anti-phase; with one station, transverse.
-- whirl (the convention of pipeline.modes): the shaft turns from +x to +y; a station's orbit
-  x = Re(X e^{i w t}), y = Re(Y e^{i w t}) has the mean angular momentum x y' - y x' = -w Im(conj(X) Y),
-  summed over stations: positive is forward, negative backward, zero (within WHIRL_TOL) "none".
-
-Degenerate pairs (two modes at one frequency within DEGENERATE_RTOL: an isotropic rotor's
-cylindrical modes, untouched by the gyroscopic moment) have no defined eigenvectors; as in the
-2010 papers ("oscillations in two planes") they are returned as the two planar modes, the x-plane
-one (least y motion) first, whirl "none".
-"""
-from typing import NamedTuple
-
+"""Normal modes of the linear part of a conservative gyroscopic PolynomialSystem (the nonlinear
+normal modes' starting point): `rotorkernels.modal.modes_of` with D = G, which also gives the
+labels, whirl directions and degenerate-pair conventions."""
 import numpy as np
 
+from rotorkernels import modal
+from rotorkernels.modal import LinearMode, kinds_from_names  # noqa: F401 (the package's API)
 from rotorkernels.nnm import system as ps
 
 # Relative size of Re(s) to |s| above which an eigenvalue is not on the imaginary axis.
 CONSERVATIVE_RTOL = 1e-8
-# Two frequencies closer than this (relative) form a degenerate pair.
-DEGENERATE_RTOL = 1e-8
-# No whirl when |angular momentum| is below this, relative to the shape's squared size times w.
-WHIRL_TOL = 1e-6
-
-
-class LinearMode(NamedTuple):
-    omega: float             # [rad/s]
-    frequency: float         # [Hz]
-    whirl: str               # forward / backward / none
-    label: str               # axial / cylindrical / conical / transverse / unknown
-    vector: np.ndarray       # complex eigenvector of A for +i omega, (q, q'), largest |q_n| = 1
-
-    @property
-    def shape(self):
-        """Complex displacement shape (q part of the eigenvector)."""
-        return self.vector[:len(self.vector) // 2]
-
-
-def kinds_from_names(coordinates):
-    """(axis, station) per coordinate from names like "x1", "yB", "z"; None if a name does not
-    start with x, y or z."""
-    if not all(name[:1] in ("x", "y", "z") for name in coordinates):
-        return None
-    return tuple((name[0], name[1:] or None) for name in coordinates)
-
-
-def _stations(kinds):
-    """{station: (x index, y index)} for the stations having both transverse coordinates, in order."""
-    found = {}
-    for i, (axis, station) in enumerate(kinds):
-        if axis in ("x", "y"):
-            found.setdefault(station, {})[axis] = i
-    return {s: (c["x"], c["y"]) for s, c in found.items() if len(c) == 2}
-
-
-def whirl(shape, omega, kinds):
-    """forward / backward / none from the mean angular momentum of the stations' orbits."""
-    stations = _stations(kinds) if kinds else {}
-    momentum = sum(-omega * np.imag(np.conj(shape[ix]) * shape[iy]) for ix, iy in stations.values())
-    if not stations or abs(momentum) <= WHIRL_TOL * omega * float(np.sum(np.abs(shape) ** 2)):
-        return "none"
-    return "forward" if momentum > 0 else "backward"
-
-
-def label(shape, mass, kinds):
-    """axial / cylindrical / conical / transverse / unknown (module docstring)."""
-    if not kinds:
-        return "unknown"
-    energy = np.real(np.conj(shape) * (mass @ shape))
-    axial = [i for i, (axis, _) in enumerate(kinds) if axis == "z"]
-    if energy[axial].sum() > 0.5 * energy.sum():
-        return "axial"
-    stations = list(_stations(kinds).values())
-    if len(stations) < 2:
-        return "transverse"
-    (xa, ya), (xb, yb) = stations[:2]
-    in_phase = np.real(np.conj(shape[xa]) * shape[xb] + np.conj(shape[ya]) * shape[yb])
-    return "cylindrical" if in_phase > 0 else "conical"
-
-
-def _planar_pair(vectors, kinds):
-    """The x-plane and y-plane modes spanning a degenerate pair's eigenspace (columns of vectors)."""
-    basis, _ = np.linalg.qr(vectors)
-    n = len(vectors) // 2
-    out = []
-    for other in ("y", "x"):
-        rows = [i for i, (axis, _) in enumerate(kinds) if axis == other]
-        rows = rows + [n + i for i in rows]
-        _, _, vh = np.linalg.svd(basis[rows])
-        out.append(basis @ np.conj(vh[-1]))   # the combination with the least `other` motion
-    return out
-
-
-def _normalized(vector):
-    n = len(vector) // 2
-    return vector / vector[np.argmax(np.abs(vector[:n]))]
 
 
 def linear_modes(system, kinds=None):
-    """The modes of the linear part, by increasing frequency (list of LinearMode)."""
+    """The normal modes of a conservative system's linear part, by increasing frequency (list of
+    LinearMode); ValueError when it has none (an eigenvalue off the imaginary axis or at zero)."""
     ps.validate(system)
+    n = len(system.coordinates)
     kinds = kinds if kinds is not None else kinds_from_names(system.coordinates)
-    if kinds is not None and len(kinds) != len(system.coordinates):
-        raise ValueError(f"{len(kinds)} kinds for {len(system.coordinates)} coordinates")
-    eigvals, eigvecs = np.linalg.eig(ps.state_matrix(system))
-    if np.any(np.abs(eigvals.real) > CONSERVATIVE_RTOL * np.abs(eigvals)) or np.any(eigvals == 0):
+    modes = modal.modes_of(system.M, np.zeros((n, n)), system.G, system.K, kinds)
+    if len(modes) < n or any(abs(m.damping_ratio) > CONSERVATIVE_RTOL for m in modes):
         raise ValueError("the linear system has eigenvalues off the imaginary axis or at zero "
                          "(K not positive definite): it has no normal modes")
-    upper = np.flatnonzero(eigvals.imag > 0)
-    upper = upper[np.argsort(eigvals.imag[upper])]
-    omegas = eigvals.imag[upper]
-    vectors = [eigvecs[:, k] for k in upper]
-    k = 0
-    while k < len(upper) - 1:
-        if omegas[k + 1] - omegas[k] <= DEGENERATE_RTOL * omegas[k] and kinds is not None:
-            vectors[k], vectors[k + 1] = _planar_pair(np.stack(vectors[k:k + 2], axis=1), kinds)
-            k += 1
-        k += 1
-    modes = []
-    for omega, vector in zip(omegas, vectors):
-        vector = _normalized(vector)
-        shape = vector[:len(vector) // 2]
-        modes.append(LinearMode(float(omega), float(omega / (2 * np.pi)), whirl(shape, omega, kinds),
-                                label(shape, system.M, kinds), vector))
-    return modes
+    return [m._replace(damping_ratio=0.0) for m in modes]

@@ -4,6 +4,7 @@ linear part and its right-hand side for scipy.
 """
 import numpy as np
 
+from rotorkernels import modal
 from rotorkernels.models.spec import PolynomialSystem  # noqa: F401 (the package's API)
 
 # M symmetric and G skew to this relative accuracy (the models assemble them in floating point).
@@ -38,13 +39,7 @@ def validate(system):
 
 def state_matrix(system):
     """A of the linear part of x' = A x + ..., x = (q, q')."""
-    n = len(system.coordinates)
-    m_inv = np.linalg.inv(system.M)
-    a = np.zeros((2 * n, 2 * n))
-    a[:n, n:] = np.eye(n)
-    a[n:, :n] = -m_inv @ system.K
-    a[n:, n:] = -m_inv @ system.G
-    return a
+    return modal.first_order(system.M, system.G, system.K)
 
 
 def rhs(system):

@@ -5,6 +5,7 @@ defined modulo 1/T; arg in [0, pi] puts it in [0, 1/(2T)]."""
 import numpy as np
 import xarray as xr
 
+from pipeline import schema
 from pipeline.report import style
 from pipeline.report.branches import hover
 from pipeline.report.cubeinfo import continued_axis, select
@@ -67,6 +68,11 @@ def fig_campbell(ds, backend="bokeh"):
                         "arg(λ)/2π · 1/T", panel, sizes)
 
 
+def along_shaft_speed(ds):
+    """The cube is continued along its model's shaft speed (ModelSpec.speed) and has orbits."""
+    return continued_axis(ds) == schema.model_of(ds).speed and bool((ds["orbit_status"].values == 0).any())
+
+
 register(Figure(name="campbell", filename="campbell.png", title="Campbell-type plot (critical multiplier)",
-                applies=lambda ds: continued_axis(ds) == "speed" and bool((ds["orbit_status"].values == 0).any()),
+                applies=along_shaft_speed,
                 build=lambda ds, backend, intervals: fig_campbell(ds, backend)))

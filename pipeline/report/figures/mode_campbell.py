@@ -1,14 +1,16 @@
 """Campbell diagram of the linear modes (pipeline.modes.campbell): natural frequency against
 shaft speed, forward whirl solid, backward and axial (no whirl) dashed, with the 1x line (unbalance resonances where a forward mode crosses it) and the
-scene's shaft speeds marked. For the models with a linear analysis (rigid_preloaded); the sweep
-and the continuation reports both draw it from the scene stored in the result."""
+scene's shaft speeds marked. For the models with a linearization and a shaft speed (their spec's
+`has_linearization`, `speed`); the sweep and the continuation reports both draw it from the scene
+stored in the result."""
 import json
 
 import numpy as np
 
-from pipeline import modes
+from pipeline import compute, modes
 from pipeline.report import style
 from pipeline.report.registry import Figure, register
+from rotorkernels import models
 
 CAMPBELL_SPEEDS = 41            # speeds of the drawn table, 0 to the top speed
 WHIRL_DASH = {"forward": False, "backward": True}
@@ -17,7 +19,11 @@ WHIRL_DASH = {"forward": False, "backward": True}
 def campbell_speeds(data, top=None):
     """Shaft speeds [Hz] above 0 (where the whirl directions are not defined) to the top:
     `top`, else 1.25 x the scene's highest grid speed."""
-    top = 1.25 * max(float(s) for s in data["sweep"]["speed"]) if top is None else float(top)
+    if top is None:
+        name = compute.model_of(data).speed
+        first = {axis: float(v[0]) for axis, v in data["sweep"].items()}
+        top = 1.25 * max(float(s) for s in data["sweep"].get(name, [modes.scene_values(data, first)[name]]))
+    top = float(top)
     return np.linspace(0.0, top, CAMPBELL_SPEEDS + 1)[1:]
 
 
@@ -32,12 +38,12 @@ def mode_series(rows):
 
 
 def fig_mode_campbell(data, backend="bokeh", speeds=None, marks=()):
-    """The Campbell diagram of a rigid_preloaded scene (data: a validated config's data) over
-    `speeds` [Hz] (default campbell_speeds), the 1x line, and vertical lines at `marks`."""
+    """The Campbell diagram of a scene (data: a validated config's data) over `speeds` [Hz]
+    (default campbell_speeds), the 1x line, and vertical lines at `marks`."""
     hv = style.holoviews()
     speeds = campbell_speeds(data) if speeds is None else speeds
     first = {name: float(v[0]) for name, v in data["sweep"].items()}
-    rows = modes.campbell(modes.scene_values(data, first), speeds)
+    rows = modes.campbell(compute.model_of(data), modes.scene_values(data, first), speeds)
     dims = (hv.Dimension("speed", label="shaft speed [Hz]"), hv.Dimension("frequency", label="natural frequency [Hz]"))
     elements, named = [], set()
     for (k, whirl, label), (x, y) in sorted(mode_series(rows).items()):
@@ -64,14 +70,17 @@ def result_figure(ds, backend):
     from pipeline.report.points import scene_data
 
     data = scene_data(ds)
-    if ds.attrs.get("parameter") == "speed":
+    speed = compute.model_of(data).speed
+    if ds.attrs.get("parameter") == speed:
         top = 1.25 * max(json.loads(ds.attrs["range"]))
         return fig_mode_campbell(data, backend, campbell_speeds(data, top))
-    return fig_mode_campbell(data, backend, marks=sorted({float(s) for s in np.atleast_1d(ds["speed"].values)}))
+    return fig_mode_campbell(data, backend, marks=sorted({float(s) for s in np.atleast_1d(ds[speed].values)}))
 
 
 def has_linear_analysis(ds):
-    return ds.attrs.get("model") == "rigid_preloaded" and bool(ds.attrs.get("config_toml"))
+    """The result's model has a linearization and a shaft speed, and the result stores its scene."""
+    spec = models.REGISTRY.get(ds.attrs.get("model"))
+    return spec is not None and spec.has_linearization and bool(spec.speed) and bool(ds.attrs.get("config_toml"))
 
 
 register(Figure(name="mode_campbell", filename="mode_campbell.png",

@@ -1,0 +1,93 @@
+"""`rotorsweep modes` for every model with a linearization, and the one linear-modes function
+(rotorkernels.modal) against closed forms."""
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline import cli, modes
+from rotorkernels import modal, models
+
+ROOT_CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+
+
+def test_damped_two_dof_modes_against_the_closed_form():
+    """Uncoupled m_i x'' + c_i x' + k_i x = 0: s = -c / 2m +- i sqrt(k/m - (c/2m)^2); the damped and
+    undamped frequencies and zeta = c / (2 sqrt(k m)) to rounding (a 4x4 eigenproblem: 1e-12)."""
+    m, c, k = np.array([2.0, 1.0]), np.array([0.4, 3.0]), np.array([50.0, 400.0])
+    found = modal.modes_of(np.diag(m), np.diag(c), np.zeros((2, 2)), np.diag(k), None)
+    w_n = np.sqrt(k / m)
+    zeta = c / (2 * np.sqrt(k * m))
+    order = np.argsort(w_n * np.sqrt(1 - zeta ** 2))
+    for mode, i in zip(found, order):
+        assert mode.omega == pytest.approx(w_n[i] * np.sqrt(1 - zeta[i] ** 2), rel=1e-12)
+        assert mode.undamped_frequency == pytest.approx(w_n[i] / (2 * np.pi), rel=1e-12)
+        assert mode.damping_ratio == pytest.approx(zeta[i], rel=1e-12)
+        assert (mode.whirl, mode.label) == ("none", "unknown")
+
+
+def test_gyroscopic_pair_whirls_backward_below_and_forward_above():
+    """m (x'' , y'') + g (y', -x') + k (x, y) = 0: x = cos, y = sin (forward whirl) solves it when
+    m w^2 - g w - k = 0, so forward w = (g + sqrt(g^2 + 4 m k)) / 2m, backward (-g + ...) / 2m."""
+    m, g, k = 1.5, 0.8, 30.0
+    gyro = np.array([[0.0, g], [-g, 0.0]])
+    found = modal.modes_of(m * np.eye(2), np.zeros((2, 2)), gyro, k * np.eye(2), modal.kinds_from_names(("x", "y")))
+    root = np.sqrt(g * g + 4 * m * k)
+    assert [mode.whirl for mode in found] == ["backward", "forward"]
+    np.testing.assert_allclose([mode.omega for mode in found], [(root - g) / (2 * m), (root + g) / (2 * m)], rtol=1e-12)
+
+
+def test_modes_of_duffing_json_against_the_closed_form(capsys):
+    """Duffing's declared linearization x'' + 2 zeta x' + x = 0: w_n = 1, zeta as given, f_d =
+    sqrt(1 - zeta^2) / 2 pi; log decrement 2 pi zeta / sqrt(1 - zeta^2)."""
+    assert cli.main(["modes", str(ROOT_CONFIGS / "duffing_resonance.toml"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    (mode,) = out["modes"]
+    zeta = 0.05
+    assert mode["undamped_frequency_hz"] == pytest.approx(1 / (2 * np.pi), rel=1e-12)
+    assert mode["damped_frequency_hz"] == pytest.approx(np.sqrt(1 - zeta ** 2) / (2 * np.pi), rel=1e-12)
+    assert mode["damping_ratio"] == pytest.approx(zeta, rel=1e-12)
+    assert mode["log_decrement"] == pytest.approx(2 * np.pi * zeta / np.sqrt(1 - zeta ** 2), rel=1e-12)
+
+
+def test_modes_text_labels_damped_and_undamped_frequencies(capsys):
+    assert cli.main(["modes", str(ROOT_CONFIGS / "filipkovsky2010_symmetric.toml")]) == 0
+    text = capsys.readouterr().out
+    assert "damped frequency f_d" in text and "undamped f_n" in text and "at 100 Hz shaft speed" in text
+    assert len([line for line in text.splitlines() if line.split()[:1] and line.split()[0].isdigit()]) == 4
+
+
+def test_modes_of_the_clearance_rotor_says_why_not_in_one_line(capsys):
+    spec = models.get("jeffcott_clearance")
+    assert not spec.has_linearization
+    assert cli.main(["modes", str(ROOT_CONFIGS / "bai2006_fig13.toml")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "model jeffcott_clearance has no linearization: its bearing stiffness varies" in err
+
+
+AXES_WITHOUT_UNSET = {"duffing": {"omega": 1.0}, "rigid_preloaded": {"speed": 250.0}}   # the build needs them
+
+
+@pytest.mark.parametrize("name", [n for n, s in models.REGISTRY.items() if s.has_linearization])
+def test_declared_linearization_equals_the_kernels_jacobian_at_the_equilibrium(name):
+    """The spec's capability and the kernel agree: the eigenvalues of the model's Jacobian
+    (dispatch.jac, scaled time) at its static equilibrium, over the period, are the modes'
+    s = -zeta w_n + i w_d (SI). Two assemblies of one matrix: rounding only, 1e-9 relative."""
+    from rotorkernels.models import dispatch
+
+    spec = models.get(name)
+    values = {p.name: (p.unset if p.axis else p.default) for p in spec.parameters}
+    values.update(AXES_WITHOUT_UNSET.get(name, {}))
+    eq, _ = spec.linear_system(values)
+    built = spec.build(values)
+    u = np.zeros(spec.n_state)
+    u[:spec.n_position] = eq.position / spec.length_scale
+    jac = np.zeros((spec.n_state, spec.n_state))
+    dispatch.jac(spec.kernel[0], 0.0, u, built.p, jac)
+    s_kernel, _ = modal.eigenpairs(jac)
+    s_kernel = s_kernel / built.period
+    found = modes.modes(spec, values)
+    s_spec = np.array([complex(-m.damping_ratio * m.undamped_frequency, m.frequency) for m in found]) * 2 * np.pi
+    np.testing.assert_allclose(s_kernel, s_spec, rtol=1e-9, atol=1e-9 * np.abs(s_spec).max())
