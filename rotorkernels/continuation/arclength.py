@@ -33,7 +33,7 @@ from rotorkernels import floquet, integrators as ig
 from rotorkernels.continuation import engine, events as ev
 from rotorkernels.continuation.engine import (  # noqa: F401 (the names this module has always offered)
     CLOSED_LOOP, END_REASONS, INTEGRATION_FAILED, LEFT_RANGE, NEWTON_FAILED, REJOINED, START_FAILED, START_NEWTON,
-    STEP_BUDGET, Counter, Settings, rejected)
+    STEP_BUDGET, Counter, Settings)
 from rotorkernels.continuation.events import (  # noqa: F401
     BRANCH_POINT, EVENT_LABELS, EVENT_TYPES, FOLD, NEIMARK_SACKER, PERIOD_DOUBLING)
 from rotorkernels.orbits import ForcedOrbitProblem
