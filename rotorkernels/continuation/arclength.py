@@ -197,8 +197,7 @@ class Rejoin(ev.BranchPoint):
     end = REJOINED
 
     def end_detail(self, family, point, a, b):
-        at = f"at {family.where(point)}" if point is not None else f"between {family.where(a)} and {family.where(b)}"
-        return f"met the period-{family.periods / 2:g} branch {at}"
+        return f"met the period-{family.periods / 2:g} branch {ev.at_or_between(family, point, a, b)}"
 
 
 def follow_branch(family, first, lam_range, settings=Settings(), stop_at_branch_point=False, counter=None):

@@ -70,8 +70,8 @@ class Settings:
     max_newton: int = 8
     fast_newton: int = 3        # a corrector this quick lets the step grow
     grow: float = 1.5
-    tol: float = 1e-10          # Newton: max|phi - s| / max(1, max|s|)
-    fd_step: float = 1e-5       # mu step of the central difference dphi/dmu
+    tol: float = 1e-10          # corrector: relative residual (orbits: max|phi - s| / max(1, max|s|))
+    fd_step: float = 1e-5       # step of the problems' central differences in a scaled parameter
     locate_xtol: float = 1e-11  # arclength tolerance of event location (normalized units)
 
     def problems(self):
@@ -249,7 +249,8 @@ def follow(problem, first, bounds, settings=Settings(), events=(), counter=None)
             b, failure = None, NEWTON_FAILED
         if b is None:
             if ds <= settings.ds_min * 1.000001:
-                end, detail = failure, f"{END_REASONS[failure]} at the minimum step {settings.ds_min} after {problem.where(a)}"
+                end = failure
+                detail = f"{END_REASONS[failure]} at the minimum step {settings.ds_min} after {problem.where(a)}"
                 break
             ds = max(settings.ds_min, ds / 2.0)
             continue

@@ -87,8 +87,12 @@ class BranchEvent:
         return None
 
     def end_detail(self, problem, point, a, b):
-        where = f"at {problem.where(point)}" if point is not None else f"between {problem.where(a)} and {problem.where(b)}"
-        return f"{self.label} {where}"
+        return f"{self.label} {at_or_between(problem, point, a, b)}"
+
+
+def at_or_between(problem, point, a, b):
+    """Where an event lies in words: at its located point, else between the step's ends."""
+    return f"at {problem.where(point)}" if point is not None else f"between {problem.where(a)} and {problem.where(b)}"
 
 
 class Zero(BranchEvent):
