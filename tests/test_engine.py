@@ -37,7 +37,7 @@ class Circle(NamedTuple):
         return None, engine.NEWTON_FAILED
 
     def point(self, sol, at, settings, counter):
-        return sol._replace(tangent=engine.tangent(2.0 * sol.X[None, :], at.tangent))
+        return sol._replace(tangent=engine.tangent(np.vstack([2.0 * sol.X, at.tangent])))
 
     def where(self, point):
         return f"y = {point.X[1]!r}"

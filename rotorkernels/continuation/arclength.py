@@ -127,7 +127,7 @@ class Family(NamedTuple):
             if status != ig.STATUS_OK:
                 return None, INTEGRATION_FAILED
             try:
-                X = X + np.linalg.solve(np.vstack([_jacobian(mono, dphi), c]), np.append(-r, target - c @ X))
+                X = X + np.linalg.solve(_bordered(mono, dphi, c), np.append(-r, target - c @ X))
             except np.linalg.LinAlgError:
                 break
         return None, NEWTON_FAILED
@@ -139,7 +139,7 @@ class Family(NamedTuple):
         if status != ig.STATUS_OK:
             return None
         try:
-            t = engine.tangent(_jacobian(sol.monodromy, dphi), at.tangent)
+            t = engine.tangent(_bordered(sol.monodromy, dphi, at.tangent))
         except np.linalg.LinAlgError:
             return None
         return Point(sol.X, self.lam(sol.X), sol.monodromy, sol.multipliers, t, dphi, sol.iterations, sol.residual)
@@ -151,9 +151,14 @@ class Family(NamedTuple):
         return True
 
 
-def _jacobian(mono, dphi):
-    """[M - I, dphi/dmu]: the Jacobian of phi(s, lam) - s in X."""
-    return np.hstack([mono - np.eye(dphi.size), dphi[:, None]])
+def _bordered(mono, dphi, c):
+    """[[M - I, dphi/dmu], [c]]: the Jacobian of phi(s, lam) - s in X bordered by the row c."""
+    n = dphi.size
+    A = np.empty((n + 1, n + 1))
+    A[:n, :n] = mono - np.eye(n)
+    A[:n, n] = dphi
+    A[n] = c
+    return A
 
 
 class Event(NamedTuple):
@@ -208,9 +213,7 @@ def follow_branch(family, first, lam_range, settings=Settings(), stop_at_branch_
     branch point)."""
     counter = counter or Counter()
     # located with this module's root finder, looked up at each call (it can be replaced)
-    events = ev.orbit_events(brent_root)
-    if stop_at_branch_point:
-        events = tuple(Rejoin(brent_root) if isinstance(e, ev.BranchPoint) else e for e in events)
+    events = ev.orbit_events(brent_root, Rejoin if stop_at_branch_point else ev.BranchPoint)
     run = engine.follow(family, first, [lam_range], settings, events, counter)
     located = [Event(f.event.code, f.point, f.index, f.evaluations) for f in run.found]
     return Branch(run.points, located, run.end, run.detail, family.periods, counter.n)

@@ -113,12 +113,12 @@ class Run(NamedTuple):
     detail: str             # the end in words, and the events detected but not located
 
 
-def tangent(J, t_prev):
-    """Unit null vector of J (one row fewer than columns), oriented like t_prev: the solution of
-    [J; t_prev] t = e_last (t . t_prev > 0 by construction)."""
-    rhs = np.zeros(J.shape[1])
+def tangent(bordered):
+    """The unit null vector of J oriented like t_prev, from bordered = [J; t_prev] (J with one row
+    fewer than columns): the solution of bordered t = e_last (so t . t_prev > 0)."""
+    rhs = np.zeros(bordered.shape[1])
     rhs[-1] = 1.0
-    t = np.linalg.solve(np.vstack([J, t_prev]), rhs)
+    t = np.linalg.solve(bordered, rhs)
     return t / np.linalg.norm(t)
 
 

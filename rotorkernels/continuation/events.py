@@ -131,16 +131,38 @@ def test_value(lams, which):
     return signs(lams)[which] * float(np.abs(factors).min())
 
 
+class RecentSigns:
+    """`signs` of the last two multiplier arrays asked for, by identity: on a branch each point's
+    signs serve four events on two steps, computed once (they cost as much as the step's linear
+    algebra on a small model)."""
+
+    def __init__(self):
+        self.recent = []
+
+    def __call__(self, lams):
+        for known, values in self.recent:
+            if known is lams:
+                return values
+        values = signs(lams)
+        self.recent = [(lams, values)] + self.recent[:1]
+        return values
+
+
 class Multiplier(Zero):
     """A multiplier test function (`which`: 0 fold/branch point, 1 period doubling, 2
-    Neimark-Sacker) of points with `.multipliers`."""
+    Neimark-Sacker) of points with `.multipliers`; `signs`: the function of their signs, shared by
+    the events of one branch (RecentSigns)."""
     which = 0
+
+    def __init__(self, root=brent_root, signs=signs):
+        super().__init__(root)
+        self.signs = signs
 
     def value(self, solution):
         return test_value(solution.multipliers, self.which)
 
     def detect(self, problem, a, b):
-        return signs(a.multipliers)[self.which] != signs(b.multipliers)[self.which]
+        return self.signs(a.multipliers)[self.which] != self.signs(b.multipliers)[self.which]
 
 
 def _turns(problem, a, b):
@@ -183,9 +205,12 @@ def _has_complex_critical(a, b):
     return bool(near_circle_complex(a.multipliers)) and bool(near_circle_complex(b.multipliers))
 
 
-def orbit_events(root=brent_root):
-    """The bifurcations of orbits located on a branch, in the order they are detected."""
-    return tuple(kind(root) for kind in (Fold, BranchPoint, PeriodDoubling, NeimarkSacker))
+def orbit_events(root=brent_root, branch_point=BranchPoint):
+    """The bifurcations of orbits located on a branch (with `root` as root finder), in the order
+    they are detected; `branch_point`: the class of its branch points (a subclass may end the
+    branch there)."""
+    recent = RecentSigns()
+    return tuple(kind(root, recent) for kind in (Fold, branch_point, PeriodDoubling, NeimarkSacker))
 
 
 def same_value(level, value):

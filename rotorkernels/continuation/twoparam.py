@@ -348,7 +348,7 @@ class BifurcationCurve(NamedTuple):
         plane, kind, Y, lin = self.plane, self.kind, sol.Y, sol.lin
         try:
             Jphi, rows = _jacobian(plane, kind, Y, lin, settings.fd_step, counter)
-            t = engine.tangent(_system(Jphi, rows, at.border[2]), at.tangent)
+            t = engine.tangent(np.vstack([_system(Jphi, rows, at.border[2]), at.tangent]))
         except (_IntegrationFailed, np.linalg.LinAlgError):
             return None
         _, lam, nu = plane.split(Y)
