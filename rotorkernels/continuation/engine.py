@@ -187,12 +187,18 @@ def solve_at(problem, a, b, index, value, settings, counter):
     return None if failure is not None else problem.point(sol, a, settings, counter)
 
 
+def parameter_value(problem, point, k):
+    """The value of the continued parameter k at a point (problem.parameters' units)."""
+    _, index, scale = problem.parameters[k]
+    return float(point.X[index] * scale)
+
+
 def _exit(problem, bounds, a, b):
     """(fraction of the step, k, edge) of the first edge crossed from a (inside) to b, or None
     when b is inside."""
     crossings = []
-    for k, ((_, index, scale), (lo, hi)) in enumerate(zip(problem.parameters, bounds)):
-        va, vb = float(a.X[index] * scale), float(b.X[index] * scale)
+    for k, (lo, hi) in enumerate(bounds):
+        va, vb = parameter_value(problem, a, k), parameter_value(problem, b, k)
         crossings += [((edge - va) / (vb - va), k, edge) for edge, beyond in ((lo, vb < lo), (hi, vb > hi)) if beyond]
     return min(crossings) if crossings else None
 

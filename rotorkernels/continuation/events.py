@@ -226,16 +226,12 @@ class Level(BranchEvent):
         self.level, self.k = level, k
         self.label = f"level {level!r}"
 
-    def _value(self, problem, point):
-        _, index, scale = problem.parameters[self.k]
-        return float(point.X[index] * scale)
-
     def detect(self, problem, a, b):
-        m, va, vb = self.level, self._value(problem, a), self._value(problem, b)
+        m, va, vb = self.level, engine.parameter_value(problem, a, self.k), engine.parameter_value(problem, b, self.k)
         return not same_value(m, va) and ((va - m) * (vb - m) < 0 or same_value(m, vb))
 
     def locate(self, problem, a, b, settings, counter):
-        if same_value(self.level, self._value(problem, b)):
+        if same_value(self.level, engine.parameter_value(problem, b, self.k)):
             return b, 0
         _, index, scale = problem.parameters[self.k]
         point = engine.solve_at(problem, a, b, index, self.level / scale, settings, counter)
