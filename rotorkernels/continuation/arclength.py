@@ -177,11 +177,6 @@ class Branch(NamedTuple):
     n_rhs: int
 
 
-class _Seed(NamedTuple):
-    """A stand-in for the point a corrector starts from: its tangent orients the new one."""
-    tangent: np.ndarray
-
-
 def start(family, lam0, guess, direction=1, settings=Settings(), counter=None):
     """The first point: Newton shooting at fixed lam0 from `guess` (a state near the orbit, e.g.
     from natural continuation or a settled transient), tangent pointing to increasing lambda
@@ -191,10 +186,11 @@ def start(family, lam0, guess, direction=1, settings=Settings(), counter=None):
     c = np.zeros(X.size)
     c[-1] = 1.0
     patient = replace(settings, max_newton=max(settings.max_newton, START_NEWTON))
-    sol, failure = family.correct(X, c, X[-1], None, patient, counter)
+    seed = engine.Seed(direction * c)
+    sol, failure = family.correct(X, c, X[-1], seed, patient, counter)
     if failure is not None:
         return None
-    return family.point(sol, _Seed(direction * c), settings, counter)
+    return family.point(sol, seed, settings, counter)
 
 
 class Rejoin(ev.BranchPoint):
@@ -251,9 +247,9 @@ def switch_period_doubling(family, event, lam_range, settings=Settings()):
     d /= np.linalg.norm(d)
     ds = settings.ds
     while ds >= settings.ds_min:
-        sol, failure = doubled.correct(pd.X + ds * d, d, d @ pd.X + ds, None, settings, counter)
+        sol, failure = doubled.correct(pd.X + ds * d, d, d @ pd.X + ds, engine.Seed(d), settings, counter)
         if failure is None and _is_new_orbit(family, sol.X, settings):
-            first = doubled.point(sol, _Seed(d), settings, counter)
+            first = doubled.point(sol, engine.Seed(d), settings, counter)
             if first is not None:
                 first = first._replace(tangent=_away(first.tangent, sol.X - pd.X))
                 return follow_branch(doubled, first, lam_range, settings, True, counter)

@@ -139,10 +139,6 @@ class Shooting(NamedTuple):
         return edge > 0
 
 
-class _Seed(NamedTuple):
-    tangent: np.ndarray
-
-
 def _null_tangent(jac, t_prev):
     """Unit null vector of the Jacobian oriented like t_prev. By SVD, not engine.tangent: the
     Jacobian is square with one redundant row (energy is conserved)."""
@@ -210,7 +206,7 @@ def follow_backbone(model, values, opts, mode, amplitude_max, settings=Settings(
     e_a[-1] = 1.0
     counter = engine.Counter()
     patient = replace(settings, max_newton=max(settings.max_newton, engine.START_NEWTON))
-    first, failure = sh.correct(Y0, e_a, a0, _Seed(e_a), patient, counter)
+    first, failure = sh.correct(Y0, e_a, a0, engine.Seed(e_a), patient, counter)
     if first is None:
         points, end = [], engine.START_FAILED
         detail = f"no orbit at amplitude {amplitude_start!r} m ({engine.END_REASONS[failure]})"

@@ -98,6 +98,11 @@ class Counter:
         self.n = 0
 
 
+class Seed(NamedTuple):
+    """A stand-in for the point a first corrector starts from: its tangent orients the new one."""
+    tangent: np.ndarray
+
+
 class Found(NamedTuple):
     """An event met between points[index] and points[index + 1]."""
     event: object           # the events.BranchEvent
