@@ -180,7 +180,7 @@ def line_curves(data, pl, where, branch):
             curve = twoparam.continue_bifurcation(plane, event, where[pl.second], (pl.range, (lo2, hi2)), settings,
                                                   direction, pl.marks)
             out.append(curve_record(curve, event, where[pl.second]))
-            if curve.end == twoparam.END_REASONS.index("closed"):
+            if curve.end == twoparam.CLOSED:
                 break
     return out
 

@@ -22,11 +22,13 @@ backbone's amplitude is q_j at its turning point t = 0 [m] (SI: A times the mode
 Start: the linear mode (eigenvector of the linearized first-order system at rest, in the subspace)
 scaled to q_j = amplitude_start, period 2 pi / omega. A repeated linear frequency makes Newton
 ill-posed (a whole plane of linear modes): it is refused unless an invariant subspace in which
-the frequency is simple is given (e.g. symmetric4's planar cylindrical modes, `PLANAR_SUBSPACES`).
+the frequency is simple is given (e.g. symmetric4's planar cylindrical modes, its spec's
+`invariant_subspaces`).
 
-Step control reuses arclength.Settings (ds, ds_min, ds_max, max_steps, max_angle, max_newton,
-fast_newton, grow, tol), `arclength.rejected` and the END_REASONS vocabulary; a backbone that
-stops early is data (status + detail), never an exception.
+The family is a problem of the continuation engine (`Shooting`): `engine.follow` owns the steps
+(engine.Settings: ds, ds_min, ds_max, max_steps, max_angle, max_newton, fast_newton, grow, tol)
+and the END_REASONS vocabulary; the amplitude is bounded by (0, amplitude_max], the upper edge
+solved exactly. A backbone that stops early is data (status + detail), never an exception.
 """
 from dataclasses import replace
 from typing import NamedTuple
@@ -34,8 +36,8 @@ from typing import NamedTuple
 import numpy as np
 
 from rotorkernels import floquet, shooting
-from rotorkernels.continuation.arclength import (END_REASONS, INTEGRATION_FAILED, LEFT_RANGE, NEWTON_FAILED,
-                                                 START_FAILED, STEP_BUDGET, Counter, Settings, rejected)
+from rotorkernels.continuation import engine
+from rotorkernels.continuation.engine import Settings  # noqa: F401 (the settings this module takes)
 from rotorkernels.modal import eigenpairs
 from rotorkernels.orbits import AutonomousOrbitProblem
 
@@ -59,6 +61,11 @@ class BackbonePoint(NamedTuple):
     iterations: int
     residual: float
 
+    @property
+    def X(self):
+        """The unknowns (the engine's name for Y)."""
+        return self.Y
+
 
 class Backbone(NamedTuple):
     amplitude: np.ndarray       # q_j at its turning point [m]
@@ -75,11 +82,16 @@ class Backbone(NamedTuple):
     n_rhs: int
 
 
-class _Shooting(NamedTuple):
+class Shooting(NamedTuple):
+    """The autonomous orbit family along its amplitude, an engine problem (engine's contract):
+    unknowns Y = (c / S, T, A / S), Gauss-Newton corrector, SVD tangent."""
     orbit: AutonomousOrbitProblem
     basis: np.ndarray       # n x k, orthonormal columns
     j: int
     scale: float            # S (scaled units)
+
+    # the continued parameter: the amplitude in units of S, bounded by (0, 1)
+    parameters = (("amplitude / amplitude_max", -1, 1.0),)
 
     def state(self, Y):
         return self.basis @ (self.scale * Y[:-2])
@@ -101,9 +113,37 @@ class _Shooting(NamedTuple):
         residual = np.abs(r).max() / max(np.abs(s).max(), np.finfo(float).tiny)
         return F, jac, mono, ok, residual
 
+    def correct(self, Y0, c, target, at, settings, counter):
+        """Gauss-Newton on [F(Y) = 0, c . Y = target]: (BackbonePoint, None) or (None, failure);
+        the tangent (free with the Jacobian at hand) is oriented like at.tangent."""
+        Y = Y0.copy()
+        for it in range(settings.max_newton + 1):
+            F, jac, mono, ok, res = self.equations(Y, counter)
+            if not ok:
+                return None, engine.INTEGRATION_FAILED
+            if res <= settings.tol and np.abs(F[-2:]).max() <= settings.tol:
+                t = _null_tangent(jac, at.tangent)
+                return BackbonePoint(Y, self.state(Y), Y[-2], mono, floquet.multipliers(mono), t, it, res), None
+            if it == settings.max_newton:
+                break
+            A = np.vstack([jac, c])
+            Y = Y + np.linalg.lstsq(A, -np.append(F, c @ Y - target), rcond=None)[0]
+        return None, engine.NEWTON_FAILED
+
+    def point(self, solution, at, settings, counter):
+        return solution
+
+    def where(self, point):
+        return f"amplitude {point.Y[-1]!r} S"
+
+    def solves_edge(self, k, edge):
+        """Amplitude zero is the trivial orbit: the branch just ends there."""
+        return edge > 0
+
 
 def _null_tangent(jac, t_prev):
-    """Unit null vector of the Jacobian oriented like t_prev."""
+    """Unit null vector of the Jacobian oriented like t_prev. By SVD, not engine.tangent: the
+    Jacobian is square with one redundant row (energy is conserved)."""
     _, sigma, vt = np.linalg.svd(jac)
     if sigma.size > 1 and sigma[-2] <= NULL_RTOL * sigma[0]:
         t = vt[-2:].T @ (vt[-2:] @ t_prev)
@@ -113,23 +153,6 @@ def _null_tangent(jac, t_prev):
     return t if t @ t_prev >= 0 else -t
 
 
-def _correct(sh, Y0, c, target, t_prev, settings, counter):
-    """Gauss-Newton on [F(Y) = 0, c . Y = target]: (BackbonePoint, None) or (None, failure)."""
-    Y = Y0.copy()
-    for it in range(settings.max_newton + 1):
-        F, jac, mono, ok, res = sh.equations(Y, counter)
-        if not ok:
-            return None, INTEGRATION_FAILED
-        if res <= settings.tol and np.abs(F[-2:]).max() <= settings.tol:
-            t = _null_tangent(jac, t_prev)
-            return BackbonePoint(Y, sh.state(Y), Y[-2], mono, floquet.multipliers(mono), t, it, res), None
-        if it == settings.max_newton:
-            break
-        A = np.vstack([jac, c])
-        Y = Y + np.linalg.lstsq(A, -np.append(F, c @ Y - target), rcond=None)[0]
-    return None, NEWTON_FAILED
-
-
 def linear_modes(model, p, basis):
     """(omega [rad per unit tau], complex state vectors) of the linearization at rest restricted
     to the subspace, ascending in omega, each pair once."""
@@ -137,7 +160,7 @@ def linear_modes(model, p, basis):
 
     n = model.n_state
     jac = np.empty((n, n))
-    dispatch.jac(model.kernel[0], 0.0, np.zeros(n), p, jac)
+    dispatch.jac(model.kernel.tag, 0.0, np.zeros(n), p, jac)
     lam, vec = eigenpairs(basis.T @ jac @ basis)
     return lam.imag, basis @ vec
 
@@ -148,12 +171,12 @@ def _problems(model, built, mode, omegas, amplitude_max, amplitude_start):
         out.append(f"mode = {mode}: must be in [0, {len(omegas) - 1}] ({len(omegas)} linear modes)")
     elif (np.abs(np.delete(omegas, mode) / omegas[mode] - 1) < REPEATED_RTOL).any():
         out.append(f"mode = {mode}: its linear frequency is repeated; give an invariant subspace in which "
-                   "it is simple (e.g. symmetric4.PLANAR_SUBSPACES)")
-    z0 = built.derived.get("axial_approach")
-    hi = z0 if z0 else np.inf
+                   f"it is simple (the model's: {', '.join(model.invariant_subspaces) or 'none'})")
+    bound = model.amplitude_bound
+    hi = built.derived[bound] if bound else np.inf
     if not 0 < amplitude_max < hi:
         out.append(f"amplitude_max = {amplitude_max!r} m: must be in (0, {hi!r}) m"
-                   + (" (the preload's axial approach z0: the cubic series law holds for |q| << z0)" if z0 else ""))
+                   + (f" (the model's amplitude bound: {model.derived[bound][1]})" if bound else ""))
     elif not 0 < amplitude_start < amplitude_max:
         out.append(f"amplitude_start = {amplitude_start!r} m: must be in (0, amplitude_max = {amplitude_max!r}) m")
     return out
@@ -176,47 +199,20 @@ def follow_backbone(model, values, opts, mode, amplitude_max, settings=Settings(
     j = int(np.argmax(np.abs(v[:model.n_position])))
     v = (v / v[j]).real
     el = model.length_scale
-    sh = _Shooting(AutonomousOrbitProblem(model, built.p, opts, j), basis, j, amplitude_max / el)
+    sh = Shooting(AutonomousOrbitProblem(model, built.p, opts, j), basis, j, amplitude_max / el)
     a0 = amplitude_start / amplitude_max
     Y0 = np.concatenate([basis.T @ v * a0, [2 * np.pi / omegas[mode], a0]])
     e_a = np.zeros(Y0.size)
     e_a[-1] = 1.0
-    counter = Counter()
-    first, failure = _correct(sh, Y0, e_a, a0, e_a, replace(settings, max_newton=max(settings.max_newton, 30)),
-                              counter)
+    counter = engine.Counter()
+    patient = replace(settings, max_newton=max(settings.max_newton, engine.START_NEWTON))
+    first, failure = sh.correct(Y0, e_a, a0, engine.Seed(e_a), patient, counter)
     if first is None:
-        points, end, detail = [], START_FAILED, f"no orbit at amplitude {amplitude_start!r} m ({END_REASONS[failure]})"
+        points, end = [], engine.START_FAILED
+        detail = f"no orbit at amplitude {amplitude_start!r} m ({engine.END_REASONS[failure]})"
     else:
-        points, end, detail = _march(sh, first, settings, counter)
+        points, _, end, detail = engine.follow(sh, first, [(0.0, 1.0)], settings, counter=counter)
     return _result(model, values, built, sh, points, end, detail, omegas[mode], counter.n)
-
-
-def _march(sh, first, settings, counter):
-    """Predictor-corrector steps until the amplitude leaves (0, 1] (in units of S)."""
-    points, ds = [first], settings.ds
-    while len(points) <= settings.max_steps:
-        a = points[-1]
-        b, failure = _correct(sh, a.Y + ds * a.tangent, a.tangent, a.tangent @ a.Y + ds, a.tangent, settings, counter)
-        if b is not None and rejected(a, b, settings):
-            b, failure = None, NEWTON_FAILED
-        if b is None:
-            if ds <= settings.ds_min * 1.000001:
-                return points, failure, f"{END_REASONS[failure]} at the minimum step after amplitude {a.Y[-1]!r} S"
-            ds = max(settings.ds_min, ds / 2.0)
-            continue
-        if b.Y[-1] > 1.0:
-            w = (1.0 - a.Y[-1]) / (b.Y[-1] - a.Y[-1])
-            c = np.zeros(b.Y.size)
-            c[-1] = 1.0
-            edge, _ = _correct(sh, a.Y + w * (b.Y - a.Y), c, 1.0, a.tangent, settings, counter)
-            points += [edge] if edge is not None else []
-            return points, LEFT_RANGE, "reached amplitude_max"
-        if b.Y[-1] <= 0.0:
-            return points, LEFT_RANGE, "the amplitude turned back to zero"
-        points.append(b)
-        if b.iterations <= settings.fast_newton:
-            ds = min(settings.ds_max, ds * settings.grow)
-    return points, STEP_BUDGET, f"{settings.max_steps} steps"
 
 
 def energy(system, q, v):
@@ -252,4 +248,4 @@ def _result(model, values, built, sh, points, end, detail, omega, n_rhs):
         multipliers=np.array([pt.multipliers for pt in points]).reshape(-1, model.n_state),
         energy_drift=measures[:, 0],
         coordinate=sh.j, linear_frequency=omega / (2 * np.pi * built.period),
-        status=END_REASONS[end], detail=detail, n_rhs=n_rhs)
+        status=engine.END_REASONS[end], detail=detail, n_rhs=n_rhs)

@@ -37,13 +37,15 @@ columns enter only the Newton matrix and the tangent, never the residuals phi - 
 `arclength`, the converged curve points are exact to the Newton tolerances and the integrator's
 accuracy, and an error of the columns only slows Newton down a little.
 
-Steps as in `arclength`: tangent predictor, the step grows after a fast corrector and halves after
-a failed or slow one or a turn of the tangent by more than `max_angle`; B and C are renewed at
-every accepted point. A curve ends on the edge of the parameter box (the edge point is solved
-exactly), when it closes on its first point, when the step budget is spent or when the corrector
-fails at the minimum step, always with a status (END_REASONS) and never an exception. Curve points
-at given values of nu (`marks`: the clearances of a sweep's grid, for a cross-check with its
-refined boundaries) are solved exactly where the curve crosses them.
+A curve is a problem of the continuation engine (`BifurcationCurve`, engine's contract), which
+owns the steps as for every problem: tangent predictor, the step grows after a fast corrector and
+halves after a failed or slow one or a turn of the tangent by more than `max_angle`; B and C are
+renewed at every accepted point (carried on the points). A curve ends on the edge of the parameter
+box (the edge point is solved exactly), when it closes on its first point, when the step budget
+is spent or when the corrector fails at the minimum step, always with a status (engine's
+END_REASONS) and never an exception. Curve points at given values of nu (`marks`: the clearances
+of a sweep's grid, for a cross-check with its refined boundaries) are `events.Level` events,
+solved exactly where the curve crosses them; the codimension-2 points are `events.Flag` events.
 
 Codimension-2 points are flagged between two curve points, not located: on a fold curve, a cusp
 (the curve's projection on the (lambda, nu) plane reverses: both parameter components of the
@@ -59,11 +61,11 @@ from typing import Callable, NamedTuple
 import numpy as np
 
 from rotorkernels import floquet, integrators as ig
-from rotorkernels.continuation import arclength as al
+from rotorkernels.continuation import arclength as al, engine, events as ev
+from rotorkernels.continuation.engine import (  # noqa: F401 (the names this module has always offered)
+    END_REASONS, INTEGRATION_FAILED, LEFT_RANGE, NEWTON_FAILED, START_FAILED, STEP_BUDGET)
 
-# How a curve ended. The first five codes mean what they mean in arclength.END_REASONS.
-END_REASONS = al.END_REASONS[:5] + ("closed",)   # closed: came back to its first point (an isola)
-LEFT_RANGE, STEP_BUDGET, NEWTON_FAILED, INTEGRATION_FAILED, START_FAILED, CLOSED = range(6)
+CLOSED = engine.CLOSED_LOOP     # the curve came back to its first point (an isola)
 
 # The critical multiplier by event kind: A = M - critical I is singular on the curve.
 CRITICAL = {al.FOLD: 1.0, al.PERIOD_DOUBLING: -1.0}
@@ -75,8 +77,8 @@ STRONG_RESONANCES = ((RESONANCE_1_1, 1.0), (RESONANCE_1_2, -1.0), (RESONANCE_1_3
 
 
 @dataclass(frozen=True)
-class Settings(al.Settings):
-    """arclength.Settings and the tolerance on the solved entries of G (absolute: with orthonormal
+class Settings(engine.Settings):
+    """engine.Settings and the tolerance on the solved entries of G (absolute: with orthonormal
     B, C, |G| is about the distance of the critical multipliers from where they must be)."""
     tol_g: float = 1e-9
 
@@ -122,6 +124,11 @@ class CurvePoint(NamedTuple):
     @property
     def state(self):
         return self.Y[:self.monodromy.shape[0]]
+
+    @property
+    def X(self):
+        """The unknowns (the engine's name for Y)."""
+        return self.Y
 
 
 class Codim2(NamedTuple):
@@ -241,39 +248,6 @@ def _system(Jphi, rows, entries):
     return np.vstack([Jphi] + [rows[e] for e in entries])
 
 
-def _unit_null(J, t_prev):
-    """Unit null vector of J (one row fewer than columns) oriented like t_prev."""
-    rhs = np.zeros(J.shape[1])
-    rhs[-1] = 1.0
-    t = np.linalg.solve(np.vstack([J, t_prev]), rhs)
-    return t / np.linalg.norm(t)
-
-
-def correct(plane, kind, Y0, border, c, target, settings, counter):
-    """Newton on [phi - s = 0, G at border's entries = 0, c . Y = target] from Y0.
-
-    Returns (Y, linearization, iterations, residual, None) or (None, None, iterations, residual,
-    failure) with failure NEWTON_FAILED or INTEGRATION_FAILED."""
-    Y, res = Y0.copy(), np.inf
-    try:
-        for it in range(settings.max_newton + 1):
-            lin = _linearize(plane, kind, Y, border, counter)
-            g = _residual(lin, border)
-            res = np.abs(lin.r).max() / max(1.0, np.abs(plane.split(Y)[0]).max())
-            if res <= settings.tol and np.abs(g).max() <= settings.tol_g:
-                return Y, lin, it, res, None
-            if it == settings.max_newton:
-                break
-            Jphi, rows = _jacobian(plane, kind, Y, lin, settings.fd_step, counter)
-            K = np.vstack([_system(Jphi, rows, border[2]), c])
-            Y = Y + np.linalg.solve(K, -np.concatenate([lin.r, g, [c @ Y - target]]))
-    except _IntegrationFailed:
-        return None, None, it, res, INTEGRATION_FAILED
-    except np.linalg.LinAlgError:
-        pass
-    return None, None, it, res, NEWTON_FAILED
-
-
 def _best_entries(Jphi, rows, t):
     """For NS the two entries of G whose rows make the Newton matrix best conditioned (largest
     |det| with unit rows); for fold and PD the one entry."""
@@ -282,20 +256,6 @@ def _best_entries(Jphi, rows, t):
     unit = {e: r / np.linalg.norm(r) for e, r in rows.items()}
     pairs = list(itertools.combinations(sorted(unit), 2))
     return max(pairs, key=lambda pair: abs(np.linalg.det(np.vstack([_system(Jphi, unit, pair), t]))))
-
-
-def _point(plane, kind, Y, lin, border, t_prev, iterations, residual, settings, counter):
-    """A converged Y made a CurvePoint (tangent and renewed border there); None if that failed."""
-    try:
-        Jphi, rows = _jacobian(plane, kind, Y, lin, settings.fd_step, counter)
-        t = _unit_null(_system(Jphi, rows, border[2]), t_prev)
-    except (_IntegrationFailed, np.linalg.LinAlgError):
-        return None
-    _, lam, nu = plane.split(Y)
-    lams = floquet.multipliers(lin.monodromy)
-    renewed = (_orthonormal(lin.V), _orthonormal(lin.W), _best_entries(Jphi, rows, t))
-    return CurvePoint(Y, lam, nu, lin.monodromy, lams, _critical(kind, Y, lams), t, renewed, iterations, residual,
-                      float(np.abs(_residual(lin, border)).max()))
 
 
 def _orthonormal(X):
@@ -331,17 +291,91 @@ def _initial_unknowns(plane, event, nu0):
     return np.concatenate(Y + [[p.lam / plane.lam_scale, nu0 / plane.nu_scale]])
 
 
+class _Solution(NamedTuple):
+    Y: np.ndarray
+    lin: _Linearization
+    iterations: int
+    residual: float
+
+    @property
+    def X(self):
+        return self.Y
+
+
+class _Seed(NamedTuple):
+    """A stand-in for the point a corrector starts from: its tangent and border."""
+    tangent: np.ndarray
+    border: tuple
+
+
+class BifurcationCurve(NamedTuple):
+    """The curve of fold, PD or NS points (`kind`) of plane's orbits over (lambda, nu): an engine
+    problem (engine's contract), unknowns Y (module docstring), Newton corrector on the minimally
+    augmented system bordered with the border carried by the point it starts from."""
+    plane: Plane
+    kind: int
+
+    @property
+    def parameters(self):
+        return (("lambda", -2, self.plane.lam_scale), ("nu", -1, self.plane.nu_scale))
+
+    def correct(self, Y0, c, target, at, settings, counter):
+        """Newton on [phi - s = 0, G at the border's entries = 0, c . Y = target] from Y0:
+        (solution, None) or (None, failure), failure NEWTON_FAILED or INTEGRATION_FAILED."""
+        plane, kind, border = self.plane, self.kind, at.border
+        Y = Y0.copy()
+        try:
+            for it in range(settings.max_newton + 1):
+                lin = _linearize(plane, kind, Y, border, counter)
+                g = _residual(lin, border)
+                res = np.abs(lin.r).max() / max(1.0, np.abs(plane.split(Y)[0]).max())
+                if res <= settings.tol and np.abs(g).max() <= settings.tol_g:
+                    return _Solution(Y, lin, it, res), None
+                if it == settings.max_newton:
+                    break
+                Jphi, rows = _jacobian(plane, kind, Y, lin, settings.fd_step, counter)
+                K = np.vstack([_system(Jphi, rows, border[2]), c])
+                Y = Y + np.linalg.solve(K, -np.concatenate([lin.r, g, [c @ Y - target]]))
+        except _IntegrationFailed:
+            return None, INTEGRATION_FAILED
+        except np.linalg.LinAlgError:
+            pass
+        return None, NEWTON_FAILED
+
+    def point(self, sol, at, settings, counter):
+        """A converged solution made a CurvePoint (tangent and renewed border there); None if that
+        failed."""
+        plane, kind, Y, lin = self.plane, self.kind, sol.Y, sol.lin
+        try:
+            Jphi, rows = _jacobian(plane, kind, Y, lin, settings.fd_step, counter)
+            t = engine.tangent(np.vstack([_system(Jphi, rows, at.border[2]), at.tangent]))
+        except (_IntegrationFailed, np.linalg.LinAlgError):
+            return None
+        _, lam, nu = plane.split(Y)
+        lams = floquet.multipliers(lin.monodromy)
+        renewed = (_orthonormal(lin.V), _orthonormal(lin.W), _best_entries(Jphi, rows, t))
+        return CurvePoint(Y, lam, nu, lin.monodromy, lams, _critical(kind, Y, lams), t, renewed, sol.iterations,
+                          sol.residual, float(np.abs(_residual(lin, at.border)).max()))
+
+    def where(self, point):
+        return f"lambda = {point.lam!r}, nu = {point.nu!r}"
+
+    def solves_edge(self, k, edge):
+        return True
+
+
 def start(plane, event, nu0, direction=1, settings=Settings(), counter=None):
     """The first curve point: the event's point (a fold, period doubling or Neimark-Sacker point
     located by arclength on the branch at nu = nu0) corrected on the augmented system at fixed
     nu0, its tangent pointing to increasing nu for direction +1. Returns (CurvePoint or None,
     detail)."""
-    counter = counter or al.Counter()
+    counter = counter or engine.Counter()
     p = event.point
+    curve = BifurcationCurve(plane, event.kind)
     Y0 = _initial_unknowns(plane, event, nu0)
     fixed = np.zeros(Y0.size)
     fixed[-1] = 1.0
-    patient = replace(settings, max_newton=max(settings.max_newton, al.START_NEWTON))
+    patient = replace(settings, max_newton=max(settings.max_newton, engine.START_NEWTON))
     border = _border_at(event.kind, Y0, p.monodromy)
     try:
         lin = _linearize(plane, event.kind, Y0, border, counter)
@@ -349,154 +383,42 @@ def start(plane, event, nu0, direction=1, settings=Settings(), counter=None):
                                              fixed),)
     except (_IntegrationFailed, np.linalg.LinAlgError):
         return None, f"no linearization at the event (lambda = {p.lam!r}, nu = {nu0!r})"
-    Y, lin, it, res, failure = correct(plane, event.kind, Y0, border, fixed, Y0[-1], patient, counter)
+    seed = _Seed(direction * fixed, border)
+    sol, failure = curve.correct(Y0, fixed, Y0[-1], seed, patient, counter)
     if failure is not None:
         return None, f"{END_REASONS[failure]} correcting the event at lambda = {p.lam!r}, nu = {nu0!r}"
-    first = _point(plane, event.kind, Y, lin, border, direction * fixed, it, res, settings, counter)
+    first = curve.point(sol, seed, settings, counter)
     return first, ("" if first is not None else f"no tangent at lambda = {p.lam!r}, nu = {nu0!r}")
 
 
-def _step(plane, kind, a, ds, settings, counter):
-    """One predictor-corrector step of length ds from a: (CurvePoint, None) or (None, failure)."""
-    X0 = a.Y + ds * a.tangent
-    Y, lin, it, res, failure = correct(plane, kind, X0, a.border, a.tangent, a.tangent @ a.Y + ds, settings, counter)
-    if failure is not None:
-        return None, failure
-    b = _point(plane, kind, Y, lin, a.border, a.tangent, it, res, settings, counter)
-    return (b, None) if b is not None else (None, INTEGRATION_FAILED)
-
-
-def _solve_on_segment(plane, kind, a, b, index, value, settings, counter):
-    """The curve point between a and b where Y[index] = value (an edge or a mark), or None."""
-    frac = (value - a.Y[index]) / (b.Y[index] - a.Y[index])
-    c = np.zeros(a.Y.size)
-    c[index] = 1.0
-    Y, lin, it, res, failure = correct(plane, kind, a.Y + frac * (b.Y - a.Y), a.border, c, value, settings, counter)
-    return None if failure is not None else _point(plane, kind, Y, lin, a.border, a.tangent, it, res, settings,
-                                                   counter)
-
-
-def _exit(plane, a, b, box):
-    """(Y index, scaled edge value, text) of the first box edge crossed going from a (inside) to b
-    (outside)."""
-    crossings = []
-    for k, ((lo, hi), name, scale) in enumerate(zip(box, ("lambda", "nu"), (plane.lam_scale, plane.nu_scale))):
-        va, vb = (a.lam, b.lam) if k == 0 else (a.nu, b.nu)
-        for edge in [e for e, beyond in ((lo, vb < lo), (hi, vb > hi)) if beyond]:
-            crossings.append(((edge - va) / (vb - va), a.Y.size - 2 + k, edge / scale, f"{name} reached {edge!r}"))
-    return min(crossings)[1:]
-
-
-def _inside(point, box):
-    (lo, hi), (nlo, nhi) = box
-    return lo <= point.lam <= hi and nlo <= point.nu <= nhi
-
-
-def _passed_marks(a, b, marks):
-    """The marks crossed going from a to b, in the order met."""
-    passed = [m for m in marks if not _same(m, a.nu) and ((a.nu - m) * (b.nu - m) < 0 or _same(m, b.nu))]
-    return sorted(passed, key=lambda m: abs(m - a.nu))
-
-
-def _same(m, nu):
-    """nu is the mark m up to round-off (a point solved at eta = m / nu_scale)."""
-    return abs(nu - m) <= 1e-12 * abs(m)
+def _codim2_events(kind):
+    """The codimension-2 flags of a curve of `kind` (module docstring), in the order listed."""
+    if kind == al.NEIMARK_SACKER:
+        return [ev.KappaCrosses(code, kappa, CODIM2_LABELS[code]) for code, kappa in STRONG_RESONANCES]
+    flags = [ev.Cusp(CUSP, CODIM2_LABELS[CUSP])] if kind == al.FOLD else []
+    flags.append(ev.OtherMultiplierCrosses(FOLD_FLIP, -CRITICAL[kind], CODIM2_LABELS[FOLD_FLIP]))
+    if kind == al.PERIOD_DOUBLING:
+        flags.append(ev.OtherMultiplierCrosses(RESONANCE_1_2, -1.0, CODIM2_LABELS[RESONANCE_1_2]))
+    return flags
 
 
 def _codim2_between(kind, a, b):
     """Codimension-2 kinds flagged between a and b (module docstring)."""
-    if kind == al.NEIMARK_SACKER:
-        n = a.monodromy.shape[0]
-        return [k for k, kappa in STRONG_RESONANCES if (a.Y[n] - kappa) * (b.Y[n] - kappa) <= 0]
-    found = []
-    if kind == al.FOLD and a.tangent[-2:] @ b.tangent[-2:] < 0:
-        found.append(CUSP)
-    if _sign_change(_others(a), _others(b), -CRITICAL[kind]):
-        found.append(FOLD_FLIP)
-    if kind == al.PERIOD_DOUBLING and _sign_change(_others(a), _others(b), -1.0):
-        found.append(RESONANCE_1_2)
-    return found
-
-
-def _others(point):
-    """The multipliers without the critical one."""
-    lams = point.multipliers
-    return np.delete(lams, np.argmin(np.abs(lams - point.critical)))
-
-
-def _sign_change(la, lb, value):
-    """prod(lambda_i - value) changes sign (a real multiplier crossed value)."""
-    def sign(lams):
-        return np.prod((lams - value) / np.abs(lams - value)).real >= 0
-    return sign(la) != sign(lb)
-
-
-def _closes(first, a, b):
-    """The step a -> b passes the first point again, heading the same way: a closed curve. (The
-    first point projects inside the chord a -> b and lies near it: the chord's sagitta on a curve
-    turning by at most max_angle is below a tenth of its length.)"""
-    chord = b.Y - a.Y
-    along = (first.Y - a.Y) @ chord / (chord @ chord)
-    off = np.linalg.norm(first.Y - a.Y - along * chord)
-    return 0.0 < along <= 1.0 and off < 0.1 * np.linalg.norm(chord) and chord @ first.tangent > 0
+    return [flag.code for flag in _codim2_events(kind) if flag.detect(None, a, b)]
 
 
 def follow_curve(plane, kind, first, box, settings=Settings(), marks=(), counter=None):
     """Pseudo-arclength continuation of the bifurcation curve of `kind` from the CurvePoint
     `first` until it leaves box = ((lambda_lo, lambda_hi), (nu_lo, nu_hi)), closes, the step budget
-    is spent, or the corrector fails at the minimum step. Curve points at the nu values `marks`
-    are solved where the curve crosses them."""
-    counter = counter or al.Counter()
-    points, codim2 = [first], []
-    marked = [first for m in marks if _same(m, first.nu)]
-    ds = settings.ds
-    end, detail = STEP_BUDGET, f"{settings.max_steps} steps"
-    while len(points) <= settings.max_steps:
-        a = points[-1]
-        b, failure = _step(plane, kind, a, ds, settings, counter)
-        if b is not None and al.rejected(a, b, settings):
-            b, failure = None, NEWTON_FAILED
-        if b is None:
-            if ds <= settings.ds_min * 1.000001:
-                end = failure
-                detail = (f"{END_REASONS[failure]} at the minimum step {settings.ds_min} after "
-                          f"lambda = {a.lam!r}, nu = {a.nu!r}")
-                break
-            ds = max(settings.ds_min, ds / 2.0)
-            continue
-        if not _inside(b, box):
-            index, value, detail = _exit(plane, a, b, box)
-            edge = _solve_on_segment(plane, kind, a, b, index, value, settings, counter)
-            if edge is not None:
-                _record(plane, kind, a, edge, points, marked, codim2, marks, settings, counter)
-            end = LEFT_RANGE
-            break
-        if len(points) > 2 and _closes(first, a, b):
-            marked.extend(p for p in _marks_between(plane, kind, a, first, marks, settings, counter) if p is not first)
-            end, detail = CLOSED, f"back at the first point after {len(points)} steps"
-            break
-        _record(plane, kind, a, b, points, marked, codim2, marks, settings, counter)
-        if b.iterations <= settings.fast_newton:
-            ds = min(settings.ds_max, ds * settings.grow)
-    return Curve(kind, points, marked, codim2, end, detail, plane.periods, counter.n)
-
-
-def _marks_between(plane, kind, a, b, marks, settings, counter):
-    """The curve points at the marks crossed going from a to b, in the order met."""
-    found = []
-    for m in _passed_marks(a, b, marks):
-        at = b if _same(m, b.nu) else _solve_on_segment(plane, kind, a, b, len(a.Y) - 1, m / plane.nu_scale,
-                                                         settings, counter)
-        if at is not None:
-            found.append(at)
-    return found
-
-
-def _record(plane, kind, a, b, points, marked, codim2, marks, settings, counter):
-    """Append b, the marked points between a and b and the codimension-2 flags."""
-    marked.extend(_marks_between(plane, kind, a, b, marks, settings, counter))
-    codim2.extend(Codim2(k, len(points) - 1) for k in _codim2_between(kind, a, b))
-    points.append(b)
+    is spent, or the corrector fails at the minimum step (engine.follow). Curve points at the nu
+    values `marks` are solved where the curve crosses them."""
+    counter = counter or engine.Counter()
+    levels = [ev.Level(m, k=1) for m in marks]
+    run = engine.follow(BifurcationCurve(plane, kind), first, box, settings, levels + _codim2_events(kind), counter)
+    marked = [first for m in marks if ev.same_value(m, first.nu)]
+    marked += [f.point for f in run.found if f.event.locates]
+    codim2 = [Codim2(f.event.code, f.index) for f in run.found if not f.event.locates]
+    return Curve(kind, run.points, marked, codim2, run.end, run.detail, plane.periods, counter.n)
 
 
 def continue_bifurcation(plane, event, nu0, box, settings=Settings(), direction=1, marks=()):
@@ -514,7 +436,7 @@ def continue_bifurcation(plane, event, nu0, box, settings=Settings(), direction=
                         "neimark_sacker curves are continued")
     if problems:
         raise ValueError("; ".join(problems))
-    counter = al.Counter()
+    counter = engine.Counter()
     first, detail = start(plane, event, nu0, direction, settings, counter)
     if first is None:
         return Curve(event.kind, [], [], [], START_FAILED, detail, plane.periods, counter.n)
