@@ -9,11 +9,12 @@ import json
 import math
 import os
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
+from pipeline import units
 from rotorkernels import attractor, models
 from rotorkernels.models.spec import Parameter as Key
 
@@ -88,10 +89,10 @@ SCHEMA = {
     },
     "backbone": {   # `rotorsweep backbone`: nonlinear normal modes of a conservative model
         "modes": Key("str", default="all", help="mode numbers (1 = the lowest linear frequency), e.g. \"1, 3\"; or all"),
-        "amplitude_max": _num(0, lo_open=True, default=None,
+        "amplitude_max": _num(0, lo_open=True, default=None, unit="m",
                               help="largest master amplitude [m] (first harmonic; default: a quarter of the "
                                    "preload's axial approach z0; must stay below z0)"),
-        "amplitude_min": _num(0, lo_open=True, default=None, help="smallest master amplitude [m] (default: amplitude_max / 100)"),
+        "amplitude_min": _num(0, lo_open=True, default=None, unit="m", help="smallest master amplitude [m] (default: amplitude_max / 100)"),
         "amplitude_points": _num(3, 2000, kind="int", default=41, help="amplitudes of the grid (log-spaced)"),
         "continuation": Key("bool", default=True, help="also the reference backbone by continuation of the full model's orbits"),
         "ds": _num(0, lo_open=True, default=0.2, help="first arclength step (units of the largest amplitude)"),
@@ -176,6 +177,9 @@ def _check_number(v, k):
 
 def _check_value(v, k):
     """(normalized value, error text or None) for a scalar key."""
+    v, problem = units.key_value(v, k)
+    if problem:
+        return v, problem
     if k.kind == "str":
         if not isinstance(v, str):
             return v, f"must be a string (got {_type_name(v)})"
@@ -190,9 +194,7 @@ def _check_value(v, k):
             return v, f"unknown value {json.dumps(v) if isinstance(v, (str, int, float)) else _type_name(v)}; allowed: {allowed}"
         return v, None
     if k.kind == "float_or" and isinstance(v, str):
-        if v in k.choices:
-            return v, None
-        return v, f"unknown value {json.dumps(v)}; allowed: {', '.join(json.dumps(c) for c in k.choices)} or a number"
+        return v, None    # one of the choices (units.key_value converted or refused any other string)
     if k.kind == "int":
         if not isinstance(v, int) or isinstance(v, bool):
             return v, f"must be an integer (got {_type_name(v)} {v!r})"
@@ -429,6 +431,17 @@ def _report_checks(spec, rep):
     return errors
 
 
+def _continuation_keys(raw, spec):
+    """The [continuation] keys, start and stop in the unit of the parameter continued."""
+    table = raw.get("continuation")
+    name = (table.get("parameter") if isinstance(table, dict) else None) or spec.continuation[0]
+    par = next((p for p in spec.parameters if p.name == name), None)
+    keys = SCHEMA["continuation"]
+    if par is None:    # an unknown parameter: the continuation checks name it
+        return keys
+    return {**keys, **{k: replace(keys[k], unit=par.unit) for k in ("start", "stop")}}
+
+
 def _scene_model(raw):
     """The ModelSpec the scene names, or None (its problem is reported by the scene section)."""
     scene = raw.get("scene")
@@ -477,7 +490,7 @@ def parse_config(text, path=None, allow_large=False, whole_grid=True):
     errors = []
     spec = _scene_model(raw)
     sections, axis_keys = model_schema(spec) if spec else ({}, {})
-    tables = {**SCHEMA, **sections}
+    tables = {**SCHEMA, "continuation": _continuation_keys(raw, spec), **sections} if spec else SCHEMA
     known = list(tables) + ["sweep"]
     for section in raw:
         if section not in known and spec is not None:
@@ -487,6 +500,8 @@ def parse_config(text, path=None, allow_large=False, whole_grid=True):
             errors.append(f"{section}: required section missing")
     data = {name: _validate_section(name, raw.get(name, {}), table, errors) for name, table in tables.items()}
     sweep = raw.get("sweep", {})
+    if isinstance(sweep, dict):
+        sweep = units.sweep_table(sweep, axis_keys, errors)
     if isinstance(sweep, dict) and whole_grid:
         _check_grid_size(sweep, axis_keys, data, allow_large, errors, label)
     axes = _sweep_axes(sweep, axis_keys, errors) if spec else {}
@@ -546,3 +561,12 @@ def check_point(point, data):
         errors = spec.check(data, {k: [float(v)] for k, v in point.items() if v is not None})
     if errors:
         raise ConfigError("\n".join(errors))
+
+
+def flag_values(flags, spec, unit_of=None):
+    """{axis: value} from CLI flags {axis: (flag, text)}: units.flag_values, its problems as a
+    ConfigError."""
+    try:
+        return units.flag_values(flags, spec, unit_of)
+    except units.UnitError as exc:
+        raise ConfigError(str(exc)) from None
