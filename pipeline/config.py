@@ -52,25 +52,38 @@ FREQUENCY_UNITS = ("Hz", "omega_l")
 
 SCHEMA = {
     "scene": {
-        "name": Key("str", required=True, pattern=r"[A-Za-z0-9_.-]+"),
-        "model": Key("choice", required=True, choices=MODELS),
-        "description": Key("str", default=""),
+        "name": Key("str", required=True, pattern=r"[A-Za-z0-9_.-]+", help="name of the scene; default output out/<name>.nc"),
+        "model": Key("choice", required=True, choices=MODELS, help="the model (its sections and axes below)"),
+        "description": Key("str", default="", help="one line, stored in the cube"),
     },
     "analysis": {
         "floquet": Key("bool", default=True, help="periodic orbit by shooting, Floquet multipliers"),
         "attractor": Key("bool", default=False, help="Poincare section, period, attractor class, Lyapunov exponents"),
-        "derive_when_stable": Key("bool", default=True),
-        "sweep_direction": Key("choice", default="up", choices=("up", "down", "both")),
-        "transient_periods": _num(0, kind="int", default=200),
-        "poincare_samples": _num(8, 4096, kind="int", default=128),
-        "max_period": _num(1, 1024, kind="int", default=32),
-        "lyapunov_max_periods": _num(20, 1e6, kind="int", default=2000),
+        "derive_when_stable": Key("bool", default=True,
+                                  help="where the transient reaches a stable period-k orbit, take the exponents from its "
+                                       "multipliers, ln|lambda| / (k T), instead of a Lyapunov run"),
+        "sweep_direction": Key("choice", default="up", choices=("up", "down", "both"),
+                               help="continue the attractor with increasing speed, down, or both (adds *_down "
+                                    "variables and hysteresis)"),
+        "transient_periods": _num(0, kind="int", default=200, help="forcing periods before the Poincare samples "
+                                                                   "(from the previous speed's end state)"),
+        "poincare_samples": _num(8, 4096, kind="int", default=128,
+                                 help="stroboscopic samples per point (>= 4 x max_period)"),
+        "max_period": _num(1, 1024, kind="int", default=32, help="longest period k detected"),
+        "lyapunov_max_periods": _num(20, 1e6, kind="int", default=2000,
+                                     help="cap of a Lyapunov run (it stops earlier, after at least 300 periods, at "
+                                          "lyapunov_rtol)"),
         "lyapunov_rtol": _num(0, 1, lo_open=True, hi_open=True, default=0.02,
                               help="a Lyapunov run stops once the largest exponent's standard error is below this fraction of it"),
         "stop_when_settled": Key("bool", default=True,
-                                 help="end the transient once the samples repeat on a stable period-k orbit"),
+                                 help="end the transient once the samples repeat on a stable period-k orbit (tested every "
+                                      "8 periods), or once the state reaches the previous speed's period-k attractor "
+                                      "continued by shooting (a strongly stable orbit, max |lambda| <= 0.9, within 1e-3 "
+                                      "of its size); false: always transient_periods"),
         "lyapunov_converged_stop": Key("bool", default=True,
-                                       help="a Lyapunov run also stops once its weighted average has converged to 0 (tori)"),
+                                       help="a Lyapunov run also stops once its weighted average has converged to 0 (the "
+                                            "averages over N/2, 3N/4 and N periods within 1e-4 per period of 0, agreeing to "
+                                            "10 % of the standard error: a torus)"),
     },
     "continuation": {   # `rotorsweep continue`: pseudo-arclength branches, one per line of the other axes
         "parameter": Key("str", default="", help="the scene parameter continued (default: the model's continuation axis)"),
@@ -108,16 +121,20 @@ SCHEMA = {
                                    "contact angle (Filipkovsky 2016's nondimensional frequency; rigid_preloaded)"),
     },
     "numerics": {
-        "integrator": Key("choice", default="dop853", choices=("dop853", "rk4")),
-        "rtol": _num(0, 1e-2, lo_open=True, default=1e-10),
-        "atol": _num(0, 1, lo_open=True, hi_open=True, default=1e-12),
-        "rk4_steps": _num(16, kind="int", default=512),
-        "newton_tol": _num(0, lo_open=True, default=1e-9),
-        "max_newton_iter": _num(1, 1000, kind="int", default=30),
-        "transient_periods": _num(0, kind="int", default=30),
-        "segment_length": _num(1, kind="int", default=32),
-        "amplitude_limit": _num(0, lo_open=True, default=1e-3),
-        "max_points": _num(1, kind="int", default=200_000),
+        "integrator": Key("choice", default="dop853", choices=("dop853", "rk4"),
+                          help="adaptive DOP853, or RK4 with a fixed step (rk4_steps per period)"),
+        "rtol": _num(0, 1e-2, lo_open=True, default=1e-10, help="DOP853 relative tolerance"),
+        "atol": _num(0, 1, lo_open=True, hi_open=True, default=1e-12,
+                     help="DOP853 absolute tolerance (on the scaled state, e.g. um)"),
+        "rk4_steps": _num(16, kind="int", default=512, help="RK4 steps per period"),
+        "newton_tol": _num(0, lo_open=True, default=1e-9, help="shooting residual (relative) at which Newton stops"),
+        "max_newton_iter": _num(1, 1000, kind="int", default=30, help="Newton iteration cap"),
+        "transient_periods": _num(0, kind="int", default=30, help="forcing periods integrated before a cold Newton start"),
+        "segment_length": _num(1, kind="int", default=32, help="speeds per continuation segment (fixed by the config: "
+                                                                "results never depend on scheduling)"),
+        "amplitude_limit": _num(0, lo_open=True, default=1e-3, unit="m",
+                                help="displacement beyond which a state counts as diverged"),
+        "max_points": _num(1, kind="int", default=200_000, help="larger grids need --yes"),
     },
 }
 REQUIRED_SECTIONS = ("scene", "sweep")
