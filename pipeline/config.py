@@ -59,16 +59,14 @@ SCHEMA = {
     "analysis": {
         "floquet": Key("bool", default=True, help="periodic orbit by shooting, Floquet multipliers"),
         "attractor": Key("bool", default=False, help="Poincare section, period, attractor class, Lyapunov exponents"),
-        "derive_when_stable": Key("bool", default=True,
-                                  help="where the transient reaches a stable period-k orbit, take the exponents from its "
-                                       "multipliers, ln|lambda| / (k T), instead of a Lyapunov run"),
+        "derive_when_stable": Key("bool", default=True, help="where the transient reaches a stable period-k orbit, "
+                                  "take the exponents from its multipliers, ln|lambda| / (k T), not a Lyapunov run"),
         "sweep_direction": Key("choice", default="up", choices=("up", "down", "both"),
                                help="continue the attractor with increasing speed, down, or both (adds *_down "
                                     "variables and hysteresis)"),
         "transient_periods": _num(0, kind="int", default=200, help="forcing periods before the Poincare samples "
                                                                    "(from the previous speed's end state)"),
-        "poincare_samples": _num(8, 4096, kind="int", default=128,
-                                 help="stroboscopic samples per point (>= 4 x max_period)"),
+        "poincare_samples": _num(8, 4096, kind="int", default=128, help="stroboscopic samples per point (>= 4 x max_period)"),
         "max_period": _num(1, 1024, kind="int", default=32, help="longest period k detected"),
         "lyapunov_max_periods": _num(20, 1e6, kind="int", default=2000,
                                      help="cap of a Lyapunov run (it stops earlier, after at least 300 periods, at "
@@ -121,11 +119,9 @@ SCHEMA = {
                                    "contact angle (Filipkovsky 2016's nondimensional frequency; rigid_preloaded)"),
     },
     "numerics": {
-        "integrator": Key("choice", default="dop853", choices=("dop853", "rk4"),
-                          help="adaptive DOP853, or RK4 with a fixed step (rk4_steps per period)"),
+        "integrator": Key("choice", default="dop853", choices=("dop853", "rk4"), help="DOP853, or RK4 (rk4_steps per period)"),
         "rtol": _num(0, 1e-2, lo_open=True, default=1e-10, help="DOP853 relative tolerance"),
-        "atol": _num(0, 1, lo_open=True, hi_open=True, default=1e-12,
-                     help="DOP853 absolute tolerance (on the scaled state, e.g. um)"),
+        "atol": _num(0, 1, lo_open=True, hi_open=True, default=1e-12, help="DOP853 absolute tolerance (scaled state, e.g. um)"),
         "rk4_steps": _num(16, kind="int", default=512, help="RK4 steps per period"),
         "newton_tol": _num(0, lo_open=True, default=1e-9, help="shooting residual (relative) at which Newton stops"),
         "max_newton_iter": _num(1, 1000, kind="int", default=30, help="Newton iteration cap"),
@@ -498,7 +494,20 @@ def _check_grid_size(sweep, axis_names, data, allow_large, errors, label):
 def parse_config(text, path=None, allow_large=False, whole_grid=True):
     """Validate a TOML scene; returns a Config or raises ConfigError listing every problem.
     whole_grid: the command computes every grid point (`run`), so the grid's size is checked;
-    `point`, `continue`, `backbone` and `modes` do not, and a large grid is no reason to refuse them."""
+    `point`, `continue`, `backbone` and `modes` do not, and a large grid is no reason to refuse them.
+    Numbers are SI; a string with a unit is converted to the key's unit (pipeline.units).
+
+    >>> cfg = parse_config('''
+    ... [scene]
+    ... name = "rpm"
+    ... model = "jeffcott_clearance"
+    ... [sweep]
+    ... speed = {start = "600 rpm", stop = "3000 rpm", num = 5}
+    ... clearance = [7.6e-6, "19 um"]
+    ... ''')
+    >>> cfg.axes["speed"].tolist(), cfg.axes["clearance"].tolist(), cfg.n_points
+    ([10.0, 20.0, 30.0, 40.0, 50.0], [7.6e-06, 1.9e-05], 10)
+    """
     label = str(path) if path is not None else "<config>"
     try:
         raw = tomllib.loads(text)
@@ -538,6 +547,13 @@ MAX_CONFIG_BYTES = 1 << 20
 
 
 def load_config(path, allow_large=False, whole_grid=True):
+    """parse_config of a TOML file (at most MAX_CONFIG_BYTES, UTF-8); ConfigError names the file.
+
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp(), "demo.toml"); _ = path.write_text(DEFAULT_CONFIG_TOML)
+    >>> load_config(path).n_points
+    202
+    """
     return parse_config(_config_text(path), path=path, allow_large=allow_large, whole_grid=whole_grid)
 
 
