@@ -29,6 +29,14 @@ class _StreamOfRecord(logging.Handler):
             stream.flush()
 
 
+class _LogFile(logging.FileHandler):
+    """The log file; a record it cannot write (a full disk) is dropped without logging's traceback:
+    the command itself reports the disk's state where it matters, on its result."""
+
+    def handleError(self, record):
+        pass
+
+
 class _FileFormat(logging.Formatter):
     def format(self, record):
         prefix = PHASE if getattr(record, "phase", False) else ""
@@ -51,7 +59,7 @@ def log_file(output, command, append=False):
     """The records of one command into `<output>.log` (appended to on a resume), opened by a
     line naming the command and closed by its outcome and wall time."""
     path = f"{output}.log"
-    handler = logging.FileHandler(path, mode="a" if append else "w", encoding="utf-8")
+    handler = _LogFile(path, mode="a" if append else "w", encoding="utf-8")
     handler.setFormatter(_FileFormat())
     LOG.addHandler(handler)
     t0 = time.monotonic()
