@@ -11,7 +11,8 @@ from pathlib import Path
 import pytest
 
 import rotorsweep
-from pipeline import config_reference, units
+from pipeline import config, config_reference, units
+from rotorkernels import models
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
 
@@ -44,9 +45,8 @@ def test_the_committed_config_reference_is_current():
 
 def test_the_config_reference_names_every_key_of_every_model():
     text = config_reference.markdown()
-    for name in rotorsweep.parse_config.__globals__["MODELS"]:
-        sections, axes = rotorsweep.parse_config.__globals__["model_schema"](
-            rotorsweep.parse_config.__globals__["models"].get(name))
+    for name in config.MODELS:
+        sections, axes = config.model_schema(models.get(name))
         assert f"## Model `{name}`" in text
         assert all(f"`sweep.{axis}`" in text for axis in axes)
         assert all(f"`{section}.{key}`" in text for section, keys in sections.items() for key in keys)
