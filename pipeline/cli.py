@@ -116,7 +116,11 @@ def cmd_modes(args):
     cfg = pipeline.as_config(args.config, whole_grid=False)
     speeds = None
     if args.campbell:
-        start, stop, num = args.campbell.split(":")
+        parts = args.campbell.split(":")
+        if len(parts) != 3 or not parts[2].strip().isdigit():
+            raise config_mod.ConfigError(f"--campbell {args.campbell}: expected START:STOP:NUM, e.g. 10:100:19 "
+                                         "or \"600 rpm:3000 rpm:9\"")
+        start, stop, num = parts
         ends = config_mod.flag_values({"start": ("--campbell", start), "stop": ("--campbell", stop)},
                                       cfg.model, unit_of={"start": "Hz", "stop": "Hz"})
         speeds = np.linspace(ends["start"], ends["stop"], int(num))

@@ -165,3 +165,11 @@ def test_modes_at_and_campbell_take_unit_strings(monkeypatch, capsys):
                      "--campbell", "600 rpm:1.2 kHz:3"]) == 0
     assert seen["at"] == {"speed": pytest.approx(10.0)}
     np.testing.assert_allclose(seen["speeds"], [10.0, 605.0, 1200.0], rtol=1e-14)
+
+
+@pytest.mark.parametrize("value, fragment", [("600 rpm:3000 rpm", "START:STOP:NUM"), ("1:2:x", "START:STOP:NUM"),
+                                             ("600 rpm:3 um:5", "unit Hz")])
+def test_a_malformed_campbell_range_exits_2(capsys, value, fragment):
+    assert cli.main(["modes", "configs/filipkovsky2010_symmetric.toml", "--campbell", value]) == 2
+    err = capsys.readouterr().err
+    assert "--campbell" in err and fragment in err and "Traceback" not in err
