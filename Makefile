@@ -4,16 +4,29 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow check-cf screenshots upgrade bench bench-scaling bench-atlas bench-chunk-plans bench-attractor bench-revisions bench-continuation bench-reductions bench-compile bench-backbone bench-models fig13 cascade fold backbone clean
+.PHONY: demo docs test test-slow check-cf screenshots upgrade bench bench-scaling bench-atlas bench-chunk-plans bench-attractor bench-revisions bench-continuation bench-reductions bench-compile bench-backbone bench-models fig13 cascade fold backbone clean
 
 # CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
 CONSTRAINTS ?= constraints.txt
 
 $(STAMP): pyproject.toml $(CONSTRAINTS)
+	@echo "== installing rotorsweep and its dependencies into $(VENV) (about 2 minutes the first time)"
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet $(if $(CONSTRAINTS),-c $(CONSTRAINTS)) -e ".[test]"
+	$(BIN)/python -m pip install $(if $(CONSTRAINTS),-c $(CONSTRAINTS)) -e ".[test]"
 	touch $(STAMP)
+
+# the documentation site: Sphinx with myst-parser (the docs extra), warnings as errors
+DOCS_STAMP := $(VENV)/.docs-installed
+
+$(DOCS_STAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet $(if $(CONSTRAINTS),-c $(CONSTRAINTS)) -e ".[test,docs]"
+	touch $(DOCS_STAMP)
+
+docs: $(DOCS_STAMP)  ## the documentation site -> docs/_build/html/index.html (config reference regenerated first)
+	$(BIN)/python -m pipeline.config_reference
+	$(BIN)/python -m sphinx -W --keep-going -q -b html docs docs/_build/html
+	@echo "docs: docs/_build/html/index.html"
 
 demo: $(STAMP)  ## demo sweep on a local Dask cluster -> out/demo.nc and out/demo_report/
 	$(BIN)/rotorsweep run configs/demo.toml -o out/demo.nc --overwrite --report out/demo_report
@@ -77,7 +90,7 @@ bench-attractor: $(STAMP)  ## attractor diagnostics on Fig. 13 (full grid) and t
 	$(BIN)/python -m workflows.attractor_cost
 
 clean:
-	rm -rf out .pytest_cache
+	rm -rf out .pytest_cache docs/_build
 
 upgrade:  ## newest allowed versions: fresh venv without constraints, the tests, then constraints.txt from what passed
 	rm -rf $(VENV)

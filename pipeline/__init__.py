@@ -37,7 +37,23 @@ def _dataset(cube_or_path):
 
 def run(config=None, output=None, *, allow_large=False, **kwargs):
     """Run a sweep (config: path, Config or None for the demo scene); returns the cube path.
-    kwargs: workers, scheduler, resume, overwrite, chunk_points, progress."""
+    kwargs: workers, scheduler, resume, overwrite, chunk_points, progress.
+
+    >>> import tempfile, rotorsweep
+    >>> scene = rotorsweep.parse_config('''
+    ... [scene]
+    ... name = "two_points"
+    ... model = "jeffcott_clearance"
+    ... [bearing]
+    ... stiffness = "bai2006"
+    ... [sweep]
+    ... speed = [79.0, 82.0]        # either side of the period doubling at 80.88 Hz
+    ... clearance = ["7.6 um"]
+    ... ''')
+    >>> path = rotorsweep.run(scene, f"{tempfile.mkdtemp()}/two_points.nc", workers=1, progress=False)
+    >>> dict(rotorsweep.open_cube(path).sizes)["speed"]
+    2
+    """
     from pipeline import sweep
 
     cfg = as_config(config, allow_large)
@@ -54,12 +70,27 @@ def continue_branches(config=None, output=None, **kwargs):
 
 
 def open_cube(path):
+    """A sweep cube (rotorsweep run) as an xarray.Dataset in memory; CubeError for any other file.
+    `cube_path` here and below: a cube written by `run` (see its example), speeds 79 and 82 Hz at
+    7.6 um, with the attractor diagnostics.
+
+    >>> ds = rotorsweep.open_cube(cube_path)
+    >>> ds["stable"].values.ravel().tolist()      # stable at 79 Hz, period-doubled at 82 Hz
+    [1, 0]
+    """
     from pipeline import cube
 
     return cube.open_cube(path)
 
 
 def unstable_intervals(cube_or_path):
+    """The unstable runs of the continued axis (`rotorsweep query --unstable`), from a cube or
+    its path: see pipeline.query.unstable_intervals.
+
+    >>> (run,) = rotorsweep.unstable_intervals(cube_path)
+    >>> run["start"], run["type"], round(run["onset"], 2)
+    (82.0, 'period_doubling', 80.88)
+    """
     from pipeline import query
 
     return query.unstable_intervals(_dataset(cube_or_path))
@@ -67,7 +98,12 @@ def unstable_intervals(cube_or_path):
 
 def open_result(path):
     """(dataset, its result kind) of any result file: a sweep cube, a continuation or a backbone
-    result (pipeline.result_kinds), opened once into memory."""
+    result (pipeline.result_kinds), opened once into memory.
+
+    >>> ds, kind = rotorsweep.open_result(cube_path)
+    >>> kind.name
+    'sweep'
+    """
     from pipeline import result_kinds
 
     return result_kinds.open_result(path)
@@ -82,7 +118,13 @@ def make_report(cube_or_path, out_dir, points=None, overwrite=False, over=None, 
     next to it and then takes its place, so no file of the earlier report is left. over: for a
     backbone result, a continuation result (path) of a forced response to draw the backbones
     over. stream: where a sweep cube's report writes its phase lines (what it draws where, when
-    the HTML page and the PNGs are written; None: nowhere)."""
+    the HTML page and the PNGs are written; None: nowhere).
+
+    >>> import tempfile
+    >>> files = rotorsweep.make_report(cube_path, f"{tempfile.mkdtemp()}/report")
+    >>> files["html"].name
+    'report.html'
+    """
     from pipeline import fileio, result_kinds, sweep
 
     if _is_path(cube_or_path):
@@ -117,7 +159,12 @@ def point(speed=None, clearance=None, contact_angle=None, preload=None, config=N
     """Periodic orbit and Floquet multipliers at one point, as the cube variables of that point
     (a dict of numpy values). The point's axis values: the keywords (speed, clearance,
     contact_angle [deg], preload for jeffcott_clearance; any axis of the scene's model as
-    `**values`), else the scene's fixed values."""
+    `**values`), else the scene's fixed values.
+
+    >>> row = rotorsweep.point(speed=60.0, clearance=7.6e-6)     # the default scene (Bai 2006)
+    >>> int(row["orbit_status"]), int(row["stable"]), row["multiplier_real"].shape
+    (0, 1, (4,))
+    """
     from pipeline import compute
 
     cfg = as_config(config, whole_grid=False)

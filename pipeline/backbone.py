@@ -29,7 +29,7 @@ import numpy as np
 import xarray as xr
 from scipy.interpolate import CubicSpline
 
-from pipeline import cluster, compute, result_kinds, results
+from pipeline import cluster, compute, result_kinds, results, runlog
 from pipeline.config import ConfigError
 from rotorkernels import nnm
 from rotorkernels.continuation import backbone as cb
@@ -404,11 +404,12 @@ def open_result(path):
 def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr):
     """Compute the backbones a config asks for into a netCDF result at `output`; returns its path."""
     pl = plan(cfg.data)
-    with results.result_output(cfg, output, overwrite, scheduler) as output:
+    with results.result_output(cfg, output, overwrite, scheduler) as output, runlog.log_file(output, "backbone"):
         results.say(stream, f"backbones of {cfg.data['scene']['model']} on {len(pl.lines)} line(s)"
                             f"{'' if pl.continuation else ' (manifold only)'}")
         lines = results.run_lines(cfg, backbone_line, pl.lines, workers, scheduler, stream, _line_summary)
         provenance = cluster.provenance(cfg, result_kinds.BACKBONE)
+        results.say(stream, f"writing the result: {output}")
         return results.write(to_dataset(cfg.data, pl, lines, provenance), output)
 
 

@@ -82,43 +82,49 @@ def cmd_continue(args):
     return _run_result(args, continuation, "continuation", "continuation")
 
 
-def _attractor_row(args):
+def _attractor_row(args, cfg):
     """The point's cube variables with the attractor diagnostics (compute.point_detail; the
     trajectory it also returns is not needed here, so it is kept short)."""
     from pipeline import compute
 
-    cfg = pipeline.as_config(args.config, whole_grid=False)
-    pt = compute.point_values(cfg, _given(args))
+    pt = compute.point_values(cfg, _given(args, cfg))
     return compute.point_detail(cfg.data, pt, periods=16, steps_per_period=8)["row"]
 
 
-def _given(args):
-    """The point's axis values from --speed/--clearance/--contact-angle/--preload and --at."""
-    given = {"speed": args.speed, "clearance": args.clearance, "contact_angle": args.contact_angle,
-             "preload": args.preload}
-    return {**given, **_at(args.at)}
+def _given(args, cfg):
+    """The point's axis values from --speed/--clearance/--contact-angle/--preload and --at: SI
+    numbers, or unit strings in the axis's unit ("7.6 um", "600 rpm")."""
+    flags = {"speed": ("--speed", args.speed), "clearance": ("--clearance", args.clearance),
+             "contact_angle": ("--contact-angle", args.contact_angle), "preload": ("--preload", args.preload)}
+    return config_mod.flag_values({**flags, **_at(args.at)}, cfg.model)
 
 
 def _at(items):
-    """{axis: value} from --at AXIS=NUMBER options."""
+    """{axis: (flag, text)} from --at AXIS=VALUE options (VALUE: SI number or unit string)."""
     given = {}
     for item in items or []:
         name, sep, value = item.partition("=")
-        try:
-            given[name.strip()] = float(value)
-        except ValueError:
-            raise config_mod.ConfigError(f"--at {item}: expected AXIS=NUMBER, e.g. speed=100") from None
+        if not sep or not name.strip():
+            raise config_mod.ConfigError(f"--at {item}: expected AXIS=VALUE, e.g. speed=100 or speed=\"600 rpm\"")
+        given[name.strip()] = (f"--at {item}", value.strip().strip("'\""))
     return given
 
 
 def cmd_modes(args):
     from pipeline import modes
 
+    cfg = pipeline.as_config(args.config, whole_grid=False)
     speeds = None
     if args.campbell:
-        start, stop, num = args.campbell.split(":")
-        speeds = np.linspace(float(start), float(stop), int(num))
-    print(modes.command(pipeline.as_config(args.config, whole_grid=False), _at(args.at), speeds, args.output, args.json))
+        parts = args.campbell.split(":")
+        if len(parts) != 3 or not parts[2].strip().isdigit():
+            raise config_mod.ConfigError(f"--campbell {args.campbell}: expected START:STOP:NUM, e.g. 10:100:19 "
+                                         "or \"600 rpm:3000 rpm:9\"")
+        start, stop, num = parts
+        ends = config_mod.flag_values({"start": ("--campbell", start), "stop": ("--campbell", stop)},
+                                      cfg.model, unit_of={"start": "Hz", "stop": "Hz"})
+        speeds = np.linspace(ends["start"], ends["stop"], int(num))
+    print(modes.command(cfg, config_mod.flag_values(_at(args.at), cfg.model), speeds, args.output, args.json))
     return 0
 
 
@@ -139,10 +145,11 @@ def _attractor_result(row):
 
 
 def cmd_point(args):
+    cfg = pipeline.as_config(args.config, whole_grid=False)
     if args.attractor:
-        row = _attractor_row(args)
+        row = _attractor_row(args, cfg)
     else:
-        row = pipeline.point(config=args.config, **_given(args))
+        row = pipeline.point(config=cfg, **_given(args, cfg))
     status = schema.ORBIT_STATUS[row["orbit_status"]]
     lam = [[float(re), float(im)] for re, im in zip(row["multiplier_real"], row["multiplier_imag"])]
     bif = schema.BIFURCATION[row["bifurcation"]] if row["bifurcation"] >= 0 else "none"
@@ -312,12 +319,12 @@ def build_parser():
 
     p = sub.add_parser("point", help="periodic orbit and Floquet multipliers at one point")
     p.add_argument("--config", help="scene TOML (default: Bai 2006, 209 bearing, the paper's constant)")
-    p.add_argument("--speed", type=float, help="shaft speed [Hz]")
-    p.add_argument("--clearance", type=float, help="radial clearance [m] (default: the scene's)")
-    p.add_argument("--contact-angle", type=float, help="contact angle [deg] (default: from clearance)")
-    p.add_argument("--preload", type=float, help="axial preload [N] (default: the scene's, 0)")
+    p.add_argument("--speed", help="shaft speed [Hz, or with a unit: \"600 rpm\"]")
+    p.add_argument("--clearance", help="radial clearance [m, or with a unit: \"7.6 um\"] (default: the scene's)")
+    p.add_argument("--contact-angle", help="contact angle [deg, or with a unit: \"0.26 rad\"] (default: from clearance)")
+    p.add_argument("--preload", help="axial preload [N, or with a unit: \"0.4 kN\"] (default: the scene's, 0)")
     p.add_argument("--at", action="append", metavar="AXIS=VALUE",
-                   help="value of any axis of the scene's model, e.g. --at speed=100; repeatable")
+                   help="value of any axis of the scene's model, SI or with a unit, e.g. --at speed=100 or --at speed=\"600 rpm\"; repeatable")
     p.add_argument("--attractor", action="store_true",
                    help="also diagnose the attractor: class, period, largest Lyapunov exponent, multipliers")
     p.add_argument("--json", action="store_true", help="machine-readable output")
@@ -357,8 +364,8 @@ def build_parser():
     m = sub.add_parser("modes", help="static equilibrium, natural frequencies, damping, whirl, Campbell table "
                                      "(every model with a linearization)")
     m.add_argument("config", help="scene TOML of a model with a linearization")
-    m.add_argument("--at", action="append", metavar="AXIS=VALUE", help="axis value (default: the first grid value)")
-    m.add_argument("--campbell", metavar="START:STOP:NUM", help="shaft speeds [Hz] of the Campbell table")
+    m.add_argument("--at", action="append", metavar="AXIS=VALUE", help="axis value, SI or with a unit (default: the first grid value)")
+    m.add_argument("--campbell", metavar="START:STOP:NUM", help="shaft speeds [Hz, or with a unit: \"600 rpm:3000 rpm:5\"] of the Campbell table")
     m.add_argument("-o", "--output", help="Campbell table CSV (speed_hz, mode, frequency_hz, damping_ratio, whirl, label)")
     m.add_argument("--json", action="store_true", help="print the equilibrium and the modes as JSON")
     m.set_defaults(func=cmd_modes)

@@ -9,11 +9,12 @@ import json
 import math
 import os
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
+from pipeline import units
 from rotorkernels import attractor, models
 from rotorkernels.models.spec import Parameter as Key
 
@@ -51,25 +52,36 @@ FREQUENCY_UNITS = ("Hz", "omega_l")
 
 SCHEMA = {
     "scene": {
-        "name": Key("str", required=True, pattern=r"[A-Za-z0-9_.-]+"),
-        "model": Key("choice", required=True, choices=MODELS),
-        "description": Key("str", default=""),
+        "name": Key("str", required=True, pattern=r"[A-Za-z0-9_.-]+", help="name of the scene; default output out/<name>.nc"),
+        "model": Key("choice", required=True, choices=MODELS, help="the model (its sections and axes below)"),
+        "description": Key("str", default="", help="one line, stored in the cube"),
     },
     "analysis": {
         "floquet": Key("bool", default=True, help="periodic orbit by shooting, Floquet multipliers"),
         "attractor": Key("bool", default=False, help="Poincare section, period, attractor class, Lyapunov exponents"),
-        "derive_when_stable": Key("bool", default=True),
-        "sweep_direction": Key("choice", default="up", choices=("up", "down", "both")),
-        "transient_periods": _num(0, kind="int", default=200),
-        "poincare_samples": _num(8, 4096, kind="int", default=128),
-        "max_period": _num(1, 1024, kind="int", default=32),
-        "lyapunov_max_periods": _num(20, 1e6, kind="int", default=2000),
+        "derive_when_stable": Key("bool", default=True, help="where the transient reaches a stable period-k orbit, "
+                                  "take the exponents from its multipliers, ln|lambda| / (k T), not a Lyapunov run"),
+        "sweep_direction": Key("choice", default="up", choices=("up", "down", "both"),
+                               help="continue the attractor with increasing speed, down, or both (adds *_down "
+                                    "variables and hysteresis)"),
+        "transient_periods": _num(0, kind="int", default=200, help="forcing periods before the Poincare samples "
+                                                                   "(from the previous speed's end state)"),
+        "poincare_samples": _num(8, 4096, kind="int", default=128, help="stroboscopic samples per point (>= 4 x max_period)"),
+        "max_period": _num(1, 1024, kind="int", default=32, help="longest period k detected"),
+        "lyapunov_max_periods": _num(20, 1e6, kind="int", default=2000,
+                                     help="cap of a Lyapunov run (it stops earlier, after at least 300 periods, at "
+                                          "lyapunov_rtol)"),
         "lyapunov_rtol": _num(0, 1, lo_open=True, hi_open=True, default=0.02,
                               help="a Lyapunov run stops once the largest exponent's standard error is below this fraction of it"),
         "stop_when_settled": Key("bool", default=True,
-                                 help="end the transient once the samples repeat on a stable period-k orbit"),
+                                 help="end the transient once the samples repeat on a stable period-k orbit (tested every "
+                                      "8 periods), or once the state reaches the previous speed's period-k attractor "
+                                      "continued by shooting (a strongly stable orbit, max |lambda| <= 0.9, within 1e-3 "
+                                      "of its size); false: always transient_periods"),
         "lyapunov_converged_stop": Key("bool", default=True,
-                                       help="a Lyapunov run also stops once its weighted average has converged to 0 (tori)"),
+                                       help="a Lyapunov run also stops once its weighted average has converged to 0 (the "
+                                            "averages over N/2, 3N/4 and N periods within 1e-4 per period of 0, agreeing to "
+                                            "10 % of the standard error: a torus)"),
     },
     "continuation": {   # `rotorsweep continue`: pseudo-arclength branches, one per line of the other axes
         "parameter": Key("str", default="", help="the scene parameter continued (default: the model's continuation axis)"),
@@ -88,10 +100,10 @@ SCHEMA = {
     },
     "backbone": {   # `rotorsweep backbone`: nonlinear normal modes of a conservative model
         "modes": Key("str", default="all", help="mode numbers (1 = the lowest linear frequency), e.g. \"1, 3\"; or all"),
-        "amplitude_max": _num(0, lo_open=True, default=None,
+        "amplitude_max": _num(0, lo_open=True, default=None, unit="m",
                               help="largest master amplitude [m] (first harmonic; default: a quarter of the "
                                    "preload's axial approach z0; must stay below z0)"),
-        "amplitude_min": _num(0, lo_open=True, default=None, help="smallest master amplitude [m] (default: amplitude_max / 100)"),
+        "amplitude_min": _num(0, lo_open=True, default=None, unit="m", help="smallest master amplitude [m] (default: amplitude_max / 100)"),
         "amplitude_points": _num(3, 2000, kind="int", default=41, help="amplitudes of the grid (log-spaced)"),
         "continuation": Key("bool", default=True, help="also the reference backbone by continuation of the full model's orbits"),
         "ds": _num(0, lo_open=True, default=0.2, help="first arclength step (units of the largest amplitude)"),
@@ -107,16 +119,18 @@ SCHEMA = {
                                    "contact angle (Filipkovsky 2016's nondimensional frequency; rigid_preloaded)"),
     },
     "numerics": {
-        "integrator": Key("choice", default="dop853", choices=("dop853", "rk4")),
-        "rtol": _num(0, 1e-2, lo_open=True, default=1e-10),
-        "atol": _num(0, 1, lo_open=True, hi_open=True, default=1e-12),
-        "rk4_steps": _num(16, kind="int", default=512),
-        "newton_tol": _num(0, lo_open=True, default=1e-9),
-        "max_newton_iter": _num(1, 1000, kind="int", default=30),
-        "transient_periods": _num(0, kind="int", default=30),
-        "segment_length": _num(1, kind="int", default=32),
-        "amplitude_limit": _num(0, lo_open=True, default=1e-3),
-        "max_points": _num(1, kind="int", default=200_000),
+        "integrator": Key("choice", default="dop853", choices=("dop853", "rk4"), help="DOP853, or RK4 (rk4_steps per period)"),
+        "rtol": _num(0, 1e-2, lo_open=True, default=1e-10, help="DOP853 relative tolerance"),
+        "atol": _num(0, 1, lo_open=True, hi_open=True, default=1e-12, help="DOP853 absolute tolerance (scaled state, e.g. um)"),
+        "rk4_steps": _num(16, kind="int", default=512, help="RK4 steps per period"),
+        "newton_tol": _num(0, lo_open=True, default=1e-9, help="shooting residual (relative) at which Newton stops"),
+        "max_newton_iter": _num(1, 1000, kind="int", default=30, help="Newton iteration cap"),
+        "transient_periods": _num(0, kind="int", default=30, help="forcing periods integrated before a cold Newton start"),
+        "segment_length": _num(1, kind="int", default=32, help="speeds per continuation segment (fixed by the config: "
+                                                                "results never depend on scheduling)"),
+        "amplitude_limit": _num(0, lo_open=True, default=1e-3, unit="m",
+                                help="displacement beyond which a state counts as diverged"),
+        "max_points": _num(1, kind="int", default=200_000, help="larger grids need --yes"),
     },
 }
 REQUIRED_SECTIONS = ("scene", "sweep")
@@ -176,6 +190,9 @@ def _check_number(v, k):
 
 def _check_value(v, k):
     """(normalized value, error text or None) for a scalar key."""
+    v, problem = units.key_value(v, k)
+    if problem:
+        return v, problem
     if k.kind == "str":
         if not isinstance(v, str):
             return v, f"must be a string (got {_type_name(v)})"
@@ -190,9 +207,7 @@ def _check_value(v, k):
             return v, f"unknown value {json.dumps(v) if isinstance(v, (str, int, float)) else _type_name(v)}; allowed: {allowed}"
         return v, None
     if k.kind == "float_or" and isinstance(v, str):
-        if v in k.choices:
-            return v, None
-        return v, f"unknown value {json.dumps(v)}; allowed: {', '.join(json.dumps(c) for c in k.choices)} or a number"
+        return v, None    # one of the choices (units.key_value converted or refused any other string)
     if k.kind == "int":
         if not isinstance(v, int) or isinstance(v, bool):
             return v, f"must be an integer (got {_type_name(v)} {v!r})"
@@ -429,6 +444,17 @@ def _report_checks(spec, rep):
     return errors
 
 
+def _continuation_keys(raw, spec):
+    """The [continuation] keys, start and stop in the unit of the parameter continued."""
+    table = raw.get("continuation")
+    name = (table.get("parameter") if isinstance(table, dict) else None) or spec.continuation[0]
+    par = next((p for p in spec.parameters if p.name == name), None)
+    keys = SCHEMA["continuation"]
+    if par is None:    # an unknown parameter: the continuation checks name it
+        return keys
+    return {**keys, **{k: replace(keys[k], unit=par.unit) for k in ("start", "stop")}}
+
+
 def _scene_model(raw):
     """The ModelSpec the scene names, or None (its problem is reported by the scene section)."""
     scene = raw.get("scene")
@@ -468,7 +494,20 @@ def _check_grid_size(sweep, axis_names, data, allow_large, errors, label):
 def parse_config(text, path=None, allow_large=False, whole_grid=True):
     """Validate a TOML scene; returns a Config or raises ConfigError listing every problem.
     whole_grid: the command computes every grid point (`run`), so the grid's size is checked;
-    `point`, `continue`, `backbone` and `modes` do not, and a large grid is no reason to refuse them."""
+    `point`, `continue`, `backbone` and `modes` do not, and a large grid is no reason to refuse them.
+    Numbers are SI; a string with a unit is converted to the key's unit (pipeline.units).
+
+    >>> cfg = parse_config('''
+    ... [scene]
+    ... name = "rpm"
+    ... model = "jeffcott_clearance"
+    ... [sweep]
+    ... speed = {start = "600 rpm", stop = "3000 rpm", num = 5}
+    ... clearance = [7.6e-6, "19 um"]
+    ... ''')
+    >>> cfg.axes["speed"].tolist(), cfg.axes["clearance"].tolist(), cfg.n_points
+    ([10.0, 20.0, 30.0, 40.0, 50.0], [7.6e-06, 1.9e-05], 10)
+    """
     label = str(path) if path is not None else "<config>"
     try:
         raw = tomllib.loads(text)
@@ -477,7 +516,7 @@ def parse_config(text, path=None, allow_large=False, whole_grid=True):
     errors = []
     spec = _scene_model(raw)
     sections, axis_keys = model_schema(spec) if spec else ({}, {})
-    tables = {**SCHEMA, **sections}
+    tables = {**SCHEMA, "continuation": _continuation_keys(raw, spec), **sections} if spec else SCHEMA
     known = list(tables) + ["sweep"]
     for section in raw:
         if section not in known and spec is not None:
@@ -487,6 +526,8 @@ def parse_config(text, path=None, allow_large=False, whole_grid=True):
             errors.append(f"{section}: required section missing")
     data = {name: _validate_section(name, raw.get(name, {}), table, errors) for name, table in tables.items()}
     sweep = raw.get("sweep", {})
+    if isinstance(sweep, dict):
+        sweep = units.sweep_table(sweep, axis_keys, errors)
     if isinstance(sweep, dict) and whole_grid:
         _check_grid_size(sweep, axis_keys, data, allow_large, errors, label)
     axes = _sweep_axes(sweep, axis_keys, errors) if spec else {}
@@ -506,6 +547,13 @@ MAX_CONFIG_BYTES = 1 << 20
 
 
 def load_config(path, allow_large=False, whole_grid=True):
+    """parse_config of a TOML file (at most MAX_CONFIG_BYTES, UTF-8); ConfigError names the file.
+
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp(), "demo.toml"); _ = path.write_text(DEFAULT_CONFIG_TOML)
+    >>> load_config(path).n_points
+    202
+    """
     return parse_config(_config_text(path), path=path, allow_large=allow_large, whole_grid=whole_grid)
 
 
@@ -546,3 +594,12 @@ def check_point(point, data):
         errors = spec.check(data, {k: [float(v)] for k, v in point.items() if v is not None})
     if errors:
         raise ConfigError("\n".join(errors))
+
+
+def flag_values(flags, spec, unit_of=None):
+    """{axis: value} from CLI flags {axis: (flag, text)}: units.flag_values, its problems as a
+    ConfigError."""
+    try:
+        return units.flag_values(flags, spec, unit_of)
+    except units.UnitError as exc:
+        raise ConfigError(str(exc)) from None

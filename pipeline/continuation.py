@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from pipeline import cluster, compute, result_kinds, results, schema
+from pipeline import cluster, compute, result_kinds, results, runlog, schema
 from pipeline.config import ConfigError, continued_axis
 from rotorkernels.continuation import arclength as al, solve_orbit, twoparam
 
@@ -378,9 +378,10 @@ def open_result(path):
 def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr):
     """Run the continuation a config asks for into a netCDF result at `output`; returns its path."""
     pl = plan(cfg.data)
-    with results.result_output(cfg, output, overwrite, scheduler) as output:
+    with results.result_output(cfg, output, overwrite, scheduler) as output, runlog.log_file(output, "continue"):
         lines = _run_lines(cfg, pl, workers, scheduler, stream)
         ds = to_dataset(cfg.data, pl, lines, cluster.provenance(cfg, result_kinds.CONTINUATION))
+        results.say(stream, f"writing the result: {output}")
         return results.write(ds, output)
 
 

@@ -240,7 +240,12 @@ def attractor_intervals(ds, direction="up"):
     reads the down sweep (`*_down`) of a sweep_direction = "both" cube.
 
     Each entry: the other axes' values, `start`/`end`, `n_points`, `attractor` (see
-    attractor_label) and the run's largest exponent `max_lle` [1/s]."""
+    attractor_label) and the run's largest exponent `max_lle` [1/s].
+
+    >>> ds = rotorsweep.open_cube(cube_path)
+    >>> [(run["start"], run["attractor"]) for run in rotorsweep.attractor_intervals(ds)]
+    [(79.0, 'period-1'), (82.0, 'period-2')]
+    """
     suffix = schema.DOWN_SUFFIX if direction == "down" else ""
     if "attractor" + suffix not in ds:
         raise ValueError("the cube has no attractor diagnostics"

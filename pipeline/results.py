@@ -5,7 +5,7 @@ driver."""
 import contextlib
 import os
 
-from pipeline import cluster, cube, fileio, warmup
+from pipeline import cluster, cube, fileio, runlog, warmup
 
 
 def write(ds, path):
@@ -47,6 +47,8 @@ def run_lines(cfg, task, lines, workers, scheduler, stream, summary):
     done (`summary(result)`); the results in line order."""
     from dask.distributed import as_completed
 
+    say(stream, f"connecting to the Dask scheduler at {scheduler}" if scheduler else
+        f"starting {cluster.local_workers(workers)} local Dask worker(s) (127.0.0.1)")
     client, local = cluster.connect(workers, scheduler)
     try:
         with cluster.heap_frozen():     # the imports' and the cluster's objects (see cluster.heap_frozen)
@@ -54,18 +56,20 @@ def run_lines(cfg, task, lines, workers, scheduler, stream, summary):
             submit = cluster.submitter(client, task, cfg.data)
             futures = {submit(where): k for k, where in enumerate(lines)}
             results = [None] * len(lines)
+            bar = runlog.Progress(len(lines), stream=stream, unit="lines")
             for done, future in enumerate(as_completed(futures), 1):
                 k = futures[future]
                 results[k] = future.result()
                 say(stream, f"[{done}/{len(lines)}] {_line_label(lines[k])}: {summary(results[k])}")
+                bar.update(1)
     finally:
         cluster.close(client, local)
     return results
 
 
 def say(stream, text):
-    if stream:
-        print(text, file=stream, flush=True)
+    """A phase line on `stream` and in the log (pipeline.runlog)."""
+    runlog.phase_printer(stream)(text)
 
 
 def _line_label(where):

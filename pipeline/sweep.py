@@ -9,12 +9,12 @@ earlier parts and then each chunk as it arrives; the cube is written (atomically
 """
 import os
 import sys
-import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from pipeline import boundaries, cluster, compute, cube, fileio, result_kinds, warmup
+from pipeline.runlog import PHASE, Progress, log_file, phase_printer  # noqa: F401 (PHASE: the phase lines' mark)
 from pipeline.cluster import SweepError
 
 
@@ -164,45 +164,6 @@ def compute_chunk(data, axes, axis, chunk):
     return [seg.id for seg in chunk], index, results, boundaries.refine_within(data, axes, axis, index, results)
 
 
-class Progress:
-    """Units of work done (points, unless `unit` says otherwise), rate and ETA on stderr (one
-    updating line on a terminal, else a line per ~5% of the work)."""
-
-    def __init__(self, total, done=0, stream=None, unit="points"):
-        self.total, self.done, self.stream, self.unit = total, done, stream or sys.stderr, unit
-        self.tty = self.stream.isatty()
-        self.last_reported = -1
-        self.restart()
-
-    def restart(self):
-        """Measure the rate from now (after the cluster start and the compilation)."""
-        self.start_done, self.t0 = self.done, time.monotonic()
-
-    def update(self, n):
-        self.done += n
-        elapsed = time.monotonic() - self.t0
-        rate = (self.done - self.start_done) / elapsed if elapsed > 0 else 0.0
-        eta = (self.total - self.done) / rate if rate > 0 else float("nan")
-        frac = self.done / self.total if self.total else 1.0
-        bar = "#" * int(30 * frac) + "." * (30 - int(30 * frac))
-        line = (f"[{bar}] {self.done}/{self.total} {self.unit}  {rate:7.1f} {self.unit}/s  "
-                f"ETA {_fmt_seconds(eta)}")
-        step = int(frac * 20)
-        if self.tty:
-            self.stream.write("\r" + line + ("\n" if self.done >= self.total else ""))
-        elif step != self.last_reported or self.done >= self.total:
-            self.stream.write(line + "\n")
-        self.last_reported = step
-        self.stream.flush()
-
-
-def _fmt_seconds(s):
-    if not np.isfinite(s):
-        return "--"
-    s = int(round(s))
-    return f"{s // 3600}h{s // 60 % 60:02d}m" if s >= 3600 else f"{s // 60}m{s % 60:02d}s"
-
-
 def earlier_parts(parts_dir, config_hash):
     """(segment ids, {(line, i): refined boundary row}) that part files of the same config hold
     already; refuse parts of another config."""
@@ -250,7 +211,8 @@ def run(cfg, output, workers=None, scheduler=None, resume=False, overwrite=False
         progress=True, stream=None):
     """Run a sweep from a validated config into a netCDF cube at `output`; returns its path.
     The output is locked for the whole run, so two runs never share part files. Phase and
-    progress lines go to `stream` (default: sys.stderr at the time of the call)."""
+    progress lines go to `stream` (default: sys.stderr at the time of the call; progress=False:
+    none) and to the log file `<output>.log` (pipeline.runlog)."""
     compute.require_forced(cfg.data, "run")
     output = os.path.abspath(output)
     with fileio.output_lock(output, cfg.path or "<default scene>"), cluster.heap_frozen():
@@ -258,26 +220,14 @@ def run(cfg, output, workers=None, scheduler=None, resume=False, overwrite=False
             cluster.check_scheduler(scheduler)
         output, parts = _prepare_output(output, cfg, resume, overwrite)
         try:
-            return _run_locked(cfg, output, parts, workers, scheduler, chunk_points,
-                               (stream or sys.stderr) if progress else None)
+            with log_file(output, "run", append=resume):
+                return _run_locked(cfg, output, parts, workers, scheduler, chunk_points,
+                                   (stream or sys.stderr) if progress else None)
         except OSError as exc:
             raise SweepError(_write_failure(exc, output, parts)) from None
         finally:
             if os.path.isdir(parts) and not os.listdir(parts):
                 os.rmdir(parts)       # nothing finished: leave no empty parts directory behind
-
-
-PHASE = "== "     # the start of a phase line (a log reader can tell them from progress lines)
-
-
-def phase_printer(stream):
-    """say(text): one line per phase of a run on `stream` (None: silent), whole lines even where
-    the progress bar redraws one line, so a non-interactive log reads in order."""
-    def say(text):
-        if stream is not None:
-            stream.write(f"{PHASE}{text}\n")
-            stream.flush()
-    return say
 
 
 def _run_locked(cfg, output, parts, workers, scheduler, chunk_points, stream):
@@ -297,7 +247,7 @@ def _run_locked(cfg, output, parts, workers, scheduler, chunk_points, stream):
         if todo:
             client, local = _connect(cfg, workers, scheduler, say)
             total = sum(len(s) for s in segs)
-            bar = Progress(total, total - sum(len(s) for s in todo), stream) if stream else None
+            bar = Progress(total, total - sum(len(s) for s in todo), stream)
             refined.update(_run_chunks(client, cfg, todo, parts, assembly, chunk_points, bar, say))
         say("assembling the cube and its boundary table")
         ds = assembly.dataset(fixed_coords(cfg), provenance(cfg))
@@ -324,7 +274,7 @@ def _map_tasks_on(client, stream=None):
             return [boundaries.refine_brackets(data, axis, task) for task in tasks]
         refine = cluster.submitter(client, boundaries.refine_brackets, data, axis)
         futures = [refine(task) for task in tasks]
-        bar = Progress(len(tasks), stream=stream, unit="boundary lines") if stream and tasks else None
+        bar = Progress(len(tasks), stream=stream, unit="boundary lines") if tasks else None
         out = []
         for task, future in zip(tasks, futures):
             try:
@@ -390,8 +340,7 @@ def _run_chunks(client, cfg, todo, parts, assembly, chunk_points, bar, say):
     n_workers = max(1, len(client.scheduler_info()["workers"]))
     chunks = chunks_for(cfg, todo, n_workers, chunk_points)
     say(f"sweeping {_count(sum(len(s) for s in todo), 'point')} in {_count(len(chunks), 'chunk')}")
-    if bar:
-        bar.restart()
+    bar.restart()
     solve = cluster.submitter(client, compute_segments, cfg.data, cfg.axes, cfg.continued_axis)
 
     def submit(chunk):
@@ -426,8 +375,7 @@ def _run_chunks(client, cfg, todo, parts, assembly, chunk_points, bar, say):
             task = refine(found)
             refining[task] = found
             pending.add(task)
-        if bar:
-            bar.update(len(index))
+        bar.update(len(index))
         future.release()
     return refined
 

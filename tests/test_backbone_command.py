@@ -11,6 +11,7 @@ import pytest
 
 from pipeline import backbone, cli, compute, config, result_kinds
 from tests import cfcheck
+from tests.runlog_check import check_log
 
 AXIAL = "configs/filipkovsky2010_axial.toml"
 
@@ -33,6 +34,12 @@ def axial_result(tmp_path_factory):
     rc = cli.main(["backbone", str(path), "-o", str(nc), "--workers", "1", "--report", str(out / "report"), "-q"])
     assert rc == 0
     return nc, out / "report"
+
+
+def test_backbone_logs_its_phases_even_when_quiet(axial_result):
+    nc, _ = axial_result       # run with -q: nothing on stderr, the log file all the same
+    check_log(nc, "backbone", ["backbones of asymmetric5 on 1 line", "starting 1 local Dask worker",
+                               "compiling the kernels", "kernels ready", "[1/1]", "writing the result"], "lines")
 
 
 def test_manifold_and_continuation_agree_at_fourth_order(axial_result):

@@ -10,6 +10,7 @@ import pytest
 
 from pipeline import config, continuation
 from tests import cfcheck
+from tests.runlog_check import check_log
 from rotorkernels.continuation import arclength as al
 
 CLI = [str(Path(sys.executable).with_name("rotorsweep"))]
@@ -72,6 +73,14 @@ def duffing_result(tmp_path_factory):
     out = d / "duffing.nc"
     proc = rotorsweep("continue", cfg_path, "-o", out, "--workers", "2", "--report", d / "report")
     return out, d, proc
+
+
+def test_continue_logs_the_phases_progress_and_time_of_run(duffing_result):
+    out, d, proc = duffing_result
+    phases = ["continuing omega", "starting 2 local Dask worker", "compiling the kernels", "kernels ready", "[1/1]",
+              "writing the result"]
+    check_log(out, "continue", phases, "lines")
+    assert all(f"== {phase}" in proc.stderr for phase in phases)     # the same phase lines as `run` on stderr
 
 
 def test_continue_writes_branches_and_folds(duffing_result):

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from pipeline import cluster, config, cube, sweep
+from tests.runlog_check import check_log
 
 SMALL = """
 [scene]
@@ -51,6 +52,11 @@ def small_cube(small_config, tmp_path_factory):
     proc = rotorsweep("run", small_config, "-o", out, "--workers", "2")
     assert "points" in proc.stderr          # the progress bar
     return out
+
+
+def test_run_writes_its_phases_progress_and_time_into_a_log_file(small_cube):
+    check_log(small_cube, "run", ["starting 2 local Dask workers", "compiling the kernels", "kernels ready",
+                                  "sweeping 22 points", "assembling the cube", "writing the cube"], "points")
 
 
 def data_vars(path):

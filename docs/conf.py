@@ -1,0 +1,20 @@
+"""Sphinx configuration of the documentation site (`make docs`: warnings are errors).
+
+Pages are Markdown (myst-parser): the guides, the model pages, the generated config reference
+(`python -m pipeline.config_reference`), the gallery and the benchmark pages as the benchmarks write
+them; the API reference comes from the docstrings of `rotorsweep` (autodoc)."""
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))      # the checkout's code, also without an editable install
+
+project = "rotorsweep"
+author = "rotorsweep contributors"
+extensions = ["myst_parser", "sphinx.ext.autodoc"]
+source_suffix = {".md": "markdown"}
+exclude_patterns = ["_build"]
+myst_heading_anchors = 3           # links to a section: (page.md#section-title)
+html_theme = "alabaster"
+html_static_path = []
+autodoc_member_order = "bysource"
