@@ -401,15 +401,17 @@ def open_result(path):
 
 # --- running -------------------------------------------------------------------------------------
 
-def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr):
-    """Compute the backbones a config asks for into a netCDF result at `output`; returns its path."""
+def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr, resume=False):
+    """Compute the backbones a config asks for into a netCDF result at `output`; returns its path.
+    Each finished line is kept as a part file until the result is written (`resume`: computes
+    only the lines missing, see pipeline.results)."""
     pl = plan(cfg.data)
-    with results.result_output(cfg, output, overwrite, scheduler) as output:
+    with results.result_output(cfg, output, overwrite, scheduler, resume) as (output, parts):
         results.say(stream, f"backbones of {cfg.data['scene']['model']} on {len(pl.lines)} line(s)"
                             f"{'' if pl.continuation else ' (manifold only)'}")
-        lines = results.run_lines(cfg, backbone_line, pl.lines, workers, scheduler, stream, _line_summary)
+        lines = results.run_lines(cfg, backbone_line, pl.lines, workers, scheduler, stream, _line_summary, parts)
         provenance = cluster.provenance(cfg, result_kinds.BACKBONE)
-        return results.write(to_dataset(cfg.data, pl, lines, provenance), output)
+        return results.finish(to_dataset(cfg.data, pl, lines, provenance), output, parts)
 
 
 def _line_summary(line):

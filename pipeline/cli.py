@@ -62,7 +62,7 @@ def _run_result(args, module, suffix, label):
     cfg = pipeline.as_config(args.config, whole_grid=False)
     out = args.output or f"out/{cfg.data['scene']['name']}_{suffix}.nc"
     path = module.run(cfg, out, workers=args.workers, scheduler=args.scheduler, overwrite=args.overwrite,
-                      stream=None if args.quiet else sys.stderr)
+                      resume=args.resume, stream=None if args.quiet else sys.stderr)
     print(f"{label}: {path}")
     if args.report:
         files = pipeline.make_report(path, args.report, overwrite=args.overwrite)
@@ -305,6 +305,7 @@ def build_parser():
         c.add_argument("-o", "--output", help=f"result path (default out/<scene name>_{name.replace('continue', 'continuation')}.nc)")
         c.add_argument("--workers", type=_positive_int, help="local Dask worker processes (default: one per core, at least 2)")
         c.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
+        c.add_argument("--resume", action="store_true", help="finish an interrupted run from its finished lines")
         c.add_argument("--overwrite", action="store_true", help="replace an existing result (and --report DIR)")
         c.add_argument("--report", metavar="DIR", help="also write the report into DIR")
         c.add_argument("-q", "--quiet", action="store_true", help="no progress lines")

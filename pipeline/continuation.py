@@ -375,19 +375,16 @@ def open_result(path):
 
 # --- running -------------------------------------------------------------------------------------
 
-def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr):
-    """Run the continuation a config asks for into a netCDF result at `output`; returns its path."""
+def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr, resume=False):
+    """Run the continuation a config asks for into a netCDF result at `output`; returns its path.
+    Each finished line is kept as a part file until the result is written (`resume`: computes
+    only the lines missing, see pipeline.results)."""
     pl = plan(cfg.data)
-    with results.result_output(cfg, output, overwrite, scheduler) as output:
-        lines = _run_lines(cfg, pl, workers, scheduler, stream)
-        ds = to_dataset(cfg.data, pl, lines, cluster.provenance(cfg, result_kinds.CONTINUATION))
-        return results.write(ds, output)
-
-
-def _run_lines(cfg, pl, workers, scheduler, stream):
-    results.say(stream, f"continuing {pl.parameter} from {pl.start:g} to {pl.stop:g} on {len(pl.lines)} line(s)")
-    done = results.run_lines(cfg, continue_line, pl.lines, workers, scheduler, stream, _line_summary)
-    return list(zip(pl.lines, done))
+    with results.result_output(cfg, output, overwrite, scheduler, resume) as (output, parts):
+        results.say(stream, f"continuing {pl.parameter} from {pl.start:g} to {pl.stop:g} on {len(pl.lines)} line(s)")
+        done = results.run_lines(cfg, continue_line, pl.lines, workers, scheduler, stream, _line_summary, parts)
+        ds = to_dataset(cfg.data, pl, list(zip(pl.lines, done)), cluster.provenance(cfg, result_kinds.CONTINUATION))
+        return results.finish(ds, output, parts)
 
 
 def _line_summary(records):
