@@ -30,7 +30,7 @@ import xarray as xr
 from scipy.interpolate import CubicSpline
 
 from pipeline import cluster, compute, result_kinds, results
-from pipeline.config import ConfigError
+from pipeline.config import ConfigError, settings_problems
 from rotorkernels import nnm
 from rotorkernels.continuation import backbone as cb
 from rotorkernels.continuation.arclength import Settings
@@ -67,7 +67,7 @@ def plan(data, check_lines=True):
     modes = _modes(sec["modes"], errors)
     settings = Settings(ds=sec["ds"], ds_max=sec["ds_max"], max_steps=sec["max_steps"],
                         tol=data["numerics"]["newton_tol"])
-    errors += [f"backbone.{p}" for p in settings.problems()]
+    errors += settings_problems(settings.problems(), "backbone", sec)
     a_max, a_min = sec["amplitude_max"], sec["amplitude_min"]
     if a_max is None and not spec.amplitude_bound:
         errors.append(f"backbone.amplitude_max: required for model {spec.name} (it states no amplitude bound "

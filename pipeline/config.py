@@ -159,10 +159,17 @@ def _is_number(v):
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
-def _range_text(k):
+def range_text(k):
+    """'> 0 and <= 90' of a key or a model parameter (anything with lo, hi, lo_open, hi_open);
+    '' when unbounded."""
     lo = "" if k.lo == -math.inf else f"{'>' if k.lo_open else '>='} {k.lo:g}"
     hi = "" if k.hi == math.inf else f"{'<' if k.hi_open else '<='} {k.hi:g}"
     return " and ".join(x for x in (lo, hi) if x)
+
+
+def _help(k):
+    """' (what the key is)' where the key says, else nothing (never an empty '()')."""
+    return f" ({k.help})" if k.help else ""
 
 
 def _check_number(v, k):
@@ -171,7 +178,7 @@ def _check_number(v, k):
         return f"must be a finite number (got {v})"
     bad_lo = v < k.lo or (k.lo_open and v == k.lo)
     bad_hi = v > k.hi or (k.hi_open and v == k.hi)
-    return f"must be {_range_text(k)} (got {v:g})" if bad_lo or bad_hi else None
+    return f"must be {range_text(k)} (got {v:g})" if bad_lo or bad_hi else None
 
 
 def _check_value(v, k):
@@ -225,7 +232,7 @@ def _axis_values(v, rng, errors, where):
     for x in values:
         problem = _check_number(float(x), rng)
         if problem:
-            errors.append(f"{where}: every value {problem} ({rng.help})")
+            errors.append(f"{where}: every value {problem}{_help(rng)}")
             return None
     if np.any(np.diff(values) <= 0):
         errors.append(f"{where}: values must be strictly increasing, without duplicates")
@@ -351,6 +358,26 @@ class Config:
         """Identifies the scene (data, not formatting): changes with any value, not comments."""
         text = json.dumps(self.data, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()
+
+
+# Continuation settings (rotorkernels.continuation Settings fields) that a scene gives under
+# another key than [section].<field>; the others are fixed, not in the config.
+SETTINGS_KEYS = {"tol": "numerics.newton_tol"}
+
+
+def settings_problems(problems, section, keys):
+    """The problems of a continuation Settings (its `problems()`, which name its fields) as config
+    messages naming the scene's keys: a field the [section] has (`keys`) is `section.field`,
+    `tol` is numerics.newton_tol, any other field is a fixed setting (named as such)."""
+    out = []
+    for text in problems:
+        named = [f for f in re.findall(r"[a-z_]+", text.split(":")[0]) if f in keys or f in SETTINGS_KEYS]
+        where = ", ".join(SETTINGS_KEYS.get(f, f"{section}.{f}") for f in dict.fromkeys(named))
+        head = re.match(r"([a-z_]+) = ([^:]+): (.*)", text)
+        if head and len(named) == 1:
+            text = f"{head[3]} (got {head[2]})"
+        out.append(f"{where or section}: {text}" + ("" if named else " (a fixed setting of the section)"))
+    return out
 
 
 def continued_axis(spec, axes):
@@ -541,7 +568,7 @@ def check_point(point, data):
             continue
         problem = _check_number(float(v), key)
         if problem:
-            errors.append(f"{name}: {problem} ({key.help})")
+            errors.append(f"{name}: {problem}{_help(key)}")
     if not errors and spec.check:
         errors = spec.check(data, {k: [float(v)] for k, v in point.items() if v is not None})
     if errors:

@@ -19,7 +19,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline import cluster, compute, result_kinds, results, schema
-from pipeline.config import ConfigError, continued_axis
+from pipeline.config import ConfigError, continued_axis, range_text, settings_problems
 from rotorkernels.continuation import arclength as al, solve_orbit, twoparam
 
 # orbit samples per forcing period for the amplitudes (max |q| and half peak-to-peak)
@@ -69,10 +69,11 @@ def plan(data):
         errors.append(f"continuation.start and continuation.stop: both {start!r}; the range is empty")
     for key, value in (("start", start), ("stop", stop)):
         if not _within(value, par):
-            errors.append(f"continuation.{key}: {value!r} is outside the allowed values of {name} ({par.help or par.long_name})")
+            errors.append(f"continuation.{key}: {value!r} is outside the allowed values of {name}: "
+                          f"must be {range_text(par)}")
     settings = al.Settings(ds=sec["ds"], ds_min=sec["ds_min"], ds_max=sec["ds_max"], max_steps=sec["max_steps"],
                            max_angle=sec["max_angle"], tol=data["numerics"]["newton_tol"])
-    errors += [f"continuation.{p}" for p in settings.problems()]
+    errors += settings_problems(settings.problems(), "continuation", sec)
     if errors:
         raise ConfigError("\n".join(errors))
     second = sec["curves_in"]
