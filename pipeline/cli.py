@@ -114,11 +114,8 @@ def _at(items):
 def cmd_modes(args):
     from pipeline import modes
 
-    speeds = None
-    if args.campbell:
-        start, stop, num = args.campbell.split(":")
-        speeds = np.linspace(float(start), float(stop), int(num))
-    print(modes.command(pipeline.as_config(args.config, whole_grid=False), _at(args.at), speeds, args.output, args.json))
+    print(modes.command(pipeline.as_config(args.config, whole_grid=False), _at(args.at), args.campbell, args.output,
+                        args.json))
     return 0
 
 

@@ -172,8 +172,8 @@ def _help(k):
     return f" ({k.help})" if k.help else ""
 
 
-def _check_number(v, k):
-    """Error text for a number outside the key's range, or None."""
+def check_number(v, k):
+    """Error text for a number outside the key's (or model parameter's) range, or None."""
     if not math.isfinite(v):
         return f"must be a finite number (got {v})"
     bad_lo = v < k.lo or (k.lo_open and v == k.lo)
@@ -203,11 +203,11 @@ def _check_value(v, k):
     if k.kind == "int":
         if not isinstance(v, int) or isinstance(v, bool):
             return v, f"must be an integer (got {_type_name(v)} {v!r})"
-        return v, _check_number(v, k)
+        return v, check_number(v, k)
     if not _is_number(v):
         extra = f" or {', '.join(json.dumps(c) for c in k.choices)}" if k.kind == "float_or" else ""
         return v, f"must be a number{extra} (got {_type_name(v)})"
-    return float(v), _check_number(float(v), k)
+    return float(v), check_number(float(v), k)
 
 
 def _axis_values(v, rng, errors, where):
@@ -230,7 +230,7 @@ def _axis_values(v, rng, errors, where):
                       f"{{start, stop, num}} (got {_type_name(v)})")
         return None
     for x in values:
-        problem = _check_number(float(x), rng)
+        problem = check_number(float(x), rng)
         if problem:
             errors.append(f"{where}: every value {problem}{_help(rng)}")
             return None
@@ -566,7 +566,7 @@ def check_point(point, data):
         v = point.get(name)
         if v is None:
             continue
-        problem = _check_number(float(v), key)
+        problem = check_number(float(v), key)
         if problem:
             errors.append(f"{name}: {problem}{_help(key)}")
     if not errors and spec.check:
