@@ -167,6 +167,9 @@ def range_text(k):
     return " and ".join(x for x in (lo, hi) if x)
 
 
+NUMERIC_KINDS = ("float", "int", "float_or")      # whose limits a key's help explains
+
+
 def _help(k):
     """' (what the key is)' where the key says, else nothing (never an empty '()')."""
     return f" ({k.help})" if k.help else ""
@@ -410,7 +413,7 @@ def _validate_section(name, table, spec, errors):
             continue
         value, problem = _check_value(table[key], k)
         if problem:
-            errors.append(f"{where}: {problem}")
+            errors.append(f"{where}: {problem}{_help(k) if k.kind in NUMERIC_KINDS else ''}")
         out[key] = value
     return out
 
