@@ -30,7 +30,7 @@ import xarray as xr
 from scipy.interpolate import CubicSpline
 
 from pipeline import cluster, compute, result_kinds, results, runlog
-from pipeline.config import ConfigError
+from pipeline.config import ConfigError, settings_problems
 from rotorkernels import nnm
 from rotorkernels.continuation import backbone as cb
 from rotorkernels.continuation.arclength import Settings
@@ -67,7 +67,7 @@ def plan(data, check_lines=True):
     modes = _modes(sec["modes"], errors)
     settings = Settings(ds=sec["ds"], ds_max=sec["ds_max"], max_steps=sec["max_steps"],
                         tol=data["numerics"]["newton_tol"])
-    errors += [f"backbone.{p}" for p in settings.problems()]
+    errors += settings_problems(settings.problems(), "backbone", sec)
     a_max, a_min = sec["amplitude_max"], sec["amplitude_min"]
     if a_max is None and not spec.amplitude_bound:
         errors.append(f"backbone.amplitude_max: required for model {spec.name} (it states no amplitude bound "
@@ -401,16 +401,19 @@ def open_result(path):
 
 # --- running -------------------------------------------------------------------------------------
 
-def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr):
-    """Compute the backbones a config asks for into a netCDF result at `output`; returns its path."""
+def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr, resume=False):
+    """Compute the backbones a config asks for into a netCDF result at `output`; returns its path.
+    Each finished line is kept as a part file until the result is written (`resume`: computes
+    only the lines missing, see pipeline.results)."""
     pl = plan(cfg.data)
-    with results.result_output(cfg, output, overwrite, scheduler) as output, runlog.log_file(output, "backbone"):
+    with (results.result_output(cfg, output, overwrite, scheduler, resume) as (output, parts),
+          runlog.log_file(output, "backbone")):
         results.say(stream, f"backbones of {cfg.data['scene']['model']} on {len(pl.lines)} line(s)"
                             f"{'' if pl.continuation else ' (manifold only)'}")
-        lines = results.run_lines(cfg, backbone_line, pl.lines, workers, scheduler, stream, _line_summary)
+        lines = results.run_lines(cfg, backbone_line, pl.lines, workers, scheduler, stream, _line_summary, parts)
         provenance = cluster.provenance(cfg, result_kinds.BACKBONE)
         results.say(stream, f"writing the result: {output}")
-        return results.write(to_dataset(cfg.data, pl, lines, provenance), output)
+        return results.finish(to_dataset(cfg.data, pl, lines, provenance), output, parts)
 
 
 def _line_summary(line):

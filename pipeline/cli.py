@@ -62,7 +62,7 @@ def _run_result(args, module, suffix, label):
     cfg = pipeline.as_config(args.config, whole_grid=False)
     out = args.output or f"out/{cfg.data['scene']['name']}_{suffix}.nc"
     path = module.run(cfg, out, workers=args.workers, scheduler=args.scheduler, overwrite=args.overwrite,
-                      stream=None if args.quiet else sys.stderr)
+                      resume=args.resume, stream=None if args.quiet else sys.stderr)
     print(f"{label}: {path}")
     if args.report:
         files = pipeline.make_report(path, args.report, overwrite=args.overwrite)
@@ -114,17 +114,7 @@ def cmd_modes(args):
     from pipeline import modes
 
     cfg = pipeline.as_config(args.config, whole_grid=False)
-    speeds = None
-    if args.campbell:
-        parts = args.campbell.split(":")
-        if len(parts) != 3 or not parts[2].strip().isdigit():
-            raise config_mod.ConfigError(f"--campbell {args.campbell}: expected START:STOP:NUM, e.g. 10:100:19 "
-                                         "or \"600 rpm:3000 rpm:9\"")
-        start, stop, num = parts
-        ends = config_mod.flag_values({"start": ("--campbell", start), "stop": ("--campbell", stop)},
-                                      cfg.model, unit_of={"start": "Hz", "stop": "Hz"})
-        speeds = np.linspace(ends["start"], ends["stop"], int(num))
-    print(modes.command(cfg, config_mod.flag_values(_at(args.at), cfg.model), speeds, args.output, args.json))
+    print(modes.command(cfg, config_mod.flag_values(_at(args.at), cfg.model), args.campbell, args.output, args.json))
     return 0
 
 
@@ -312,6 +302,7 @@ def build_parser():
         c.add_argument("-o", "--output", help=f"result path (default out/<scene name>_{name.replace('continue', 'continuation')}.nc)")
         c.add_argument("--workers", type=_positive_int, help="local Dask worker processes (default: one per core, at least 2)")
         c.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
+        c.add_argument("--resume", action="store_true", help="finish an interrupted run from its finished lines")
         c.add_argument("--overwrite", action="store_true", help="replace an existing result (and --report DIR)")
         c.add_argument("--report", metavar="DIR", help="also write the report into DIR")
         c.add_argument("-q", "--quiet", action="store_true", help="no progress lines")

@@ -173,19 +173,29 @@ def _is_number(v):
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
-def _range_text(k):
+def range_text(k):
+    """'> 0 and <= 90' of a key or a model parameter (anything with lo, hi, lo_open, hi_open);
+    '' when unbounded."""
     lo = "" if k.lo == -math.inf else f"{'>' if k.lo_open else '>='} {k.lo:g}"
     hi = "" if k.hi == math.inf else f"{'<' if k.hi_open else '<='} {k.hi:g}"
     return " and ".join(x for x in (lo, hi) if x)
 
 
-def _check_number(v, k):
-    """Error text for a number outside the key's range, or None."""
+NUMERIC_KINDS = ("float", "int", "float_or")      # whose limits a key's help explains
+
+
+def _help(k):
+    """' (what the key is)' where the key says, else nothing (never an empty '()')."""
+    return f" ({k.help})" if k.help else ""
+
+
+def check_number(v, k):
+    """Error text for a number outside the key's (or model parameter's) range, or None."""
     if not math.isfinite(v):
         return f"must be a finite number (got {v})"
     bad_lo = v < k.lo or (k.lo_open and v == k.lo)
     bad_hi = v > k.hi or (k.hi_open and v == k.hi)
-    return f"must be {_range_text(k)} (got {v:g})" if bad_lo or bad_hi else None
+    return f"must be {range_text(k)} (got {v:g})" if bad_lo or bad_hi else None
 
 
 def _check_value(v, k):
@@ -211,11 +221,11 @@ def _check_value(v, k):
     if k.kind == "int":
         if not isinstance(v, int) or isinstance(v, bool):
             return v, f"must be an integer (got {_type_name(v)} {v!r})"
-        return v, _check_number(v, k)
+        return v, check_number(v, k)
     if not _is_number(v):
         extra = f" or {', '.join(json.dumps(c) for c in k.choices)}" if k.kind == "float_or" else ""
         return v, f"must be a number{extra} (got {_type_name(v)})"
-    return float(v), _check_number(float(v), k)
+    return float(v), check_number(float(v), k)
 
 
 def _axis_values(v, rng, errors, where):
@@ -238,9 +248,9 @@ def _axis_values(v, rng, errors, where):
                       f"{{start, stop, num}} (got {_type_name(v)})")
         return None
     for x in values:
-        problem = _check_number(float(x), rng)
+        problem = check_number(float(x), rng)
         if problem:
-            errors.append(f"{where}: every value {problem} ({rng.help})")
+            errors.append(f"{where}: every value {problem}{_help(rng)}")
             return None
     if np.any(np.diff(values) <= 0):
         errors.append(f"{where}: values must be strictly increasing, without duplicates")
@@ -368,6 +378,26 @@ class Config:
         return hashlib.sha256(text.encode()).hexdigest()
 
 
+# Continuation settings (rotorkernels.continuation Settings fields) that a scene gives under
+# another key than [section].<field>; the others are fixed, not in the config.
+SETTINGS_KEYS = {"tol": "numerics.newton_tol"}
+
+
+def settings_problems(problems, section, keys):
+    """The problems of a continuation Settings (its `problems()`, which name its fields) as config
+    messages naming the scene's keys: a field the [section] has (`keys`) is `section.field`,
+    `tol` is numerics.newton_tol, any other field is a fixed setting (named as such)."""
+    out = []
+    for text in problems:
+        named = [f for f in re.findall(r"[a-z_]+", text.split(":")[0]) if f in keys or f in SETTINGS_KEYS]
+        where = ", ".join(SETTINGS_KEYS.get(f, f"{section}.{f}") for f in dict.fromkeys(named))
+        head = re.match(r"([a-z_]+) = ([^:]+): (.*)", text)
+        if head and len(named) == 1:
+            text = f"{head[3]} (got {head[2]})"
+        out.append(f"{where or section}: {text}" + ("" if named else " (a fixed setting of the section)"))
+    return out
+
+
 def continued_axis(spec, axes):
     """The axis orbits are continued along: the model's first continuation parameter that the
     scene sweeps over several values, else its first."""
@@ -398,7 +428,7 @@ def _validate_section(name, table, spec, errors):
             continue
         value, problem = _check_value(table[key], k)
         if problem:
-            errors.append(f"{where}: {problem}")
+            errors.append(f"{where}: {problem}{_help(k) if k.kind in NUMERIC_KINDS else ''}")
         out[key] = value
     return out
 
@@ -587,9 +617,9 @@ def check_point(point, data):
         v = point.get(name)
         if v is None:
             continue
-        problem = _check_number(float(v), key)
+        problem = check_number(float(v), key)
         if problem:
-            errors.append(f"{name}: {problem} ({key.help})")
+            errors.append(f"{name}: {problem}{_help(key)}")
     if not errors and spec.check:
         errors = spec.check(data, {k: [float(v)] for k, v in point.items() if v is not None})
     if errors:

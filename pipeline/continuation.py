@@ -19,7 +19,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline import cluster, compute, result_kinds, results, runlog, schema
-from pipeline.config import ConfigError, continued_axis
+from pipeline.config import ConfigError, continued_axis, range_text, settings_problems
 from rotorkernels.continuation import arclength as al, solve_orbit, twoparam
 
 # orbit samples per forcing period for the amplitudes (max |q| and half peak-to-peak)
@@ -69,10 +69,11 @@ def plan(data):
         errors.append(f"continuation.start and continuation.stop: both {start!r}; the range is empty")
     for key, value in (("start", start), ("stop", stop)):
         if not _within(value, par):
-            errors.append(f"continuation.{key}: {value!r} is outside the allowed values of {name} ({par.help or par.long_name})")
+            errors.append(f"continuation.{key}: {value!r} is outside the allowed values of {name}: "
+                          f"must be {range_text(par)}")
     settings = al.Settings(ds=sec["ds"], ds_min=sec["ds_min"], ds_max=sec["ds_max"], max_steps=sec["max_steps"],
                            max_angle=sec["max_angle"], tol=data["numerics"]["newton_tol"])
-    errors += [f"continuation.{p}" for p in settings.problems()]
+    errors += settings_problems(settings.problems(), "continuation", sec)
     if errors:
         raise ConfigError("\n".join(errors))
     second = sec["curves_in"]
@@ -375,19 +376,22 @@ def open_result(path):
 
 # --- running -------------------------------------------------------------------------------------
 
-def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr):
-    """Run the continuation a config asks for into a netCDF result at `output`; returns its path."""
+def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr, resume=False):
+    """Run the continuation a config asks for into a netCDF result at `output`; returns its path.
+    Each finished line is kept as a part file until the result is written (`resume`: computes
+    only the lines missing, see pipeline.results)."""
     pl = plan(cfg.data)
-    with results.result_output(cfg, output, overwrite, scheduler) as output, runlog.log_file(output, "continue"):
-        lines = _run_lines(cfg, pl, workers, scheduler, stream)
+    with (results.result_output(cfg, output, overwrite, scheduler, resume) as (output, parts),
+          runlog.log_file(output, "continue")):
+        lines = _run_lines(cfg, pl, workers, scheduler, stream, parts)
         ds = to_dataset(cfg.data, pl, lines, cluster.provenance(cfg, result_kinds.CONTINUATION))
         results.say(stream, f"writing the result: {output}")
-        return results.write(ds, output)
+        return results.finish(ds, output, parts)
 
 
-def _run_lines(cfg, pl, workers, scheduler, stream):
+def _run_lines(cfg, pl, workers, scheduler, stream, parts):
     results.say(stream, f"continuing {pl.parameter} from {pl.start:g} to {pl.stop:g} on {len(pl.lines)} line(s)")
-    done = results.run_lines(cfg, continue_line, pl.lines, workers, scheduler, stream, _line_summary)
+    done = results.run_lines(cfg, continue_line, pl.lines, workers, scheduler, stream, _line_summary, parts)
     return list(zip(pl.lines, done))
 
 

@@ -10,10 +10,11 @@ once (w_d > 0), by increasing damped frequency; the logarithmic decrement is 2 p
 """
 import csv
 import json
+import os
 
 import numpy as np
 
-from pipeline import compute
+from pipeline import compute, config, fileio
 from pipeline.config import ConfigError
 from rotorkernels import modal
 
@@ -60,10 +61,74 @@ CAMPBELL_COLUMNS = ("speed_hz", "mode", "frequency_hz", "damping_ratio", "whirl"
 
 
 def write_campbell(rows, path):
-    with open(path, "w", newline="") as fh:
-        writer = csv.writer(fh)
-        writer.writerow(CAMPBELL_COLUMNS)
-        writer.writerows(rows)
+    """The Campbell table as CSV, atomically (a reader sees no file or the whole table); an OS
+    error (a full disk) is one line naming `path`."""
+    try:
+        with fileio.atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
+            writer = csv.writer(fh)
+            writer.writerow(CAMPBELL_COLUMNS)
+            writer.writerows(rows)
+    except OSError as exc:
+        raise fileio.FileIOError(f"modes -o {path}: {exc.strerror or exc}; the table was not written") from None
+
+
+# A Campbell table is held in memory as rows (a tuple of six Python objects per speed and mode,
+# ~400 bytes) while it is computed and written: at most the machine's memory over this many
+# bytes per row and CAMPBELL_COPIES, and at most numerics.max_points speeds (the sweep's guard
+# against a typo in a grid).
+CAMPBELL_BYTES_PER_ROW = 512
+CAMPBELL_COPIES = 2
+
+
+def campbell_speeds(text, spec, data):
+    """The shaft speeds [Hz] of `--campbell START:STOP:NUM`, checked as a config axis: numbers,
+    finite, within the speed parameter's limits, NUM >= 1 and within memory and max_points;
+    ConfigError naming the option otherwise."""
+    parts = text.split(":")
+    try:
+        if len(parts) != 3:
+            raise ValueError
+        num = int(parts[2])
+    except ValueError:
+        raise ConfigError(f"--campbell {text}: expected START:STOP:NUM (speeds in Hz or unit strings, NUM an "
+                          "integer), e.g. 0:200:101 or \"600 rpm:3000 rpm:9\"") from None
+    ends = config.flag_values({"start": ("--campbell START", parts[0].strip()),
+                               "stop": ("--campbell STOP", parts[1].strip())}, spec,
+                              unit_of={"start": "Hz", "stop": "Hz"})
+    start, stop = ends["start"], ends["stop"]
+    key = spec.parameter(spec.speed) if spec.speed else None
+    for name, value in (("START", start), ("STOP", stop)):
+        problem = config.check_number(value, key) if key else None
+        if problem:
+            raise ConfigError(f"--campbell {text}: {name} {problem} (the limits of {spec.speed})")
+    n_modes = spec.n_position or 1
+    cap = min(_memory_bytes() // (CAMPBELL_COPIES * CAMPBELL_BYTES_PER_ROW * n_modes), data["numerics"]["max_points"])
+    if not 1 <= num <= cap:
+        raise ConfigError(f"--campbell {text}: NUM must be 1 to {cap} (numerics.max_points, or what this "
+                          f"machine's memory holds at {n_modes} modes per speed); got {num}")
+    return np.linspace(start, stop, num)
+
+
+def _memory_bytes():
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+
+
+def at_point(cfg, at):
+    """The point of `modes --at` {axis: value}: the scene's first grid point with the given axis
+    values, each an axis of the model within its limits; ConfigError naming --at otherwise.
+    (The scene's own checks of forced orbits, such as a common forcing period, do not apply to
+    the linear modes.)"""
+    spec = compute.model_of(cfg.data)
+    for name, value in at.items():
+        if name not in spec.axes:
+            raise ConfigError(f"--at {name}: not an axis of model {spec.name} (axes: {', '.join(spec.axes)})")
+        par = spec.parameter(name)
+        problem = config.check_number(value, par)
+        if problem:
+            raise ConfigError(f"--at {name}={value:g}: {problem} (the limits of {name}"
+                              f"{f': {par.help}' if par.help else ''})")
+    first = {name: float(values[0]) for name, values in cfg.axes.items()}
+    return {**first, **at}
 
 
 def log_decrement(zeta):
@@ -105,18 +170,26 @@ def summary(spec, values):
     return "\n".join(lines)
 
 
-def command(cfg, at, campbell_speeds=None, output=None, as_json=False):
+def command(cfg, at, campbell_text=None, output=None, as_json=False):
     """`rotorsweep modes`: the summary at the scene's first grid point (axis values from `at`
-    {axis: value} where given) and, with `output`, the Campbell table over `campbell_speeds`
-    [Hz] (default: the scene's speed axis) as CSV. Returns the text to print."""
+    {axis: value} where given) and, with `output`, the Campbell table over `--campbell`
+    START:STOP:NUM [Hz] (default: the scene's speed axis) as CSV. Returns the text to print.
+    Every option is checked before any work; a linearization that fails at the point asked for
+    (a singular matrix, non-finite values) is one line naming --at."""
     spec = compute.model_of(cfg.data)
     require_linearization(spec)
-    first = {name: float(values[0]) for name, values in cfg.axes.items()}
-    values = scene_values(cfg.data, {**first, **at})
-    text = json.dumps(records(spec, values), indent=1) if as_json else summary(spec, values)
+    point = at_point(cfg, at)
+    speeds = _campbell_speeds(spec, cfg, campbell_text) if output is not None else None
+    values = scene_values(cfg.data, point)
+    try:
+        text = json.dumps(records(spec, values), indent=1) if as_json else summary(spec, values)
+        rows = campbell(spec, values, speeds) if output is not None else None
+    except (np.linalg.LinAlgError, ValueError, FloatingPointError) as exc:
+        where = ", ".join(f"{k}={v:g}" for k, v in point.items())
+        raise ConfigError(f"--at: no linearization at {where}"
+                          f"{' over the --campbell speeds' if speeds is not None else ''} ({exc})") from None
     if output is not None:
-        speeds = _campbell_speeds(spec, cfg, campbell_speeds)
-        write_campbell(campbell(spec, values, speeds), output)
+        write_campbell(rows, output)
         if not as_json:
             text += f"\nCampbell table ({len(speeds)} speeds): {output}"
     return text
@@ -126,7 +199,7 @@ def _campbell_speeds(spec, cfg, given):
     if not spec.speed:
         raise ConfigError(f"modes --output: model {spec.name} has no shaft speed, so no Campbell table")
     if given is not None:
-        return given
+        return campbell_speeds(given, spec, cfg.data)
     if spec.speed not in cfg.axes:
         raise ConfigError(f"modes --output: the scene does not sweep {spec.speed}; give --campbell START:STOP:NUM")
     return cfg.axes[spec.speed]

@@ -33,7 +33,9 @@ class ResultKind:
     command that writes it (its `history` names it); what: the kind in words ("a sweep cube");
     title: the start of its files' `title` attribute;
     variables: its schema, {name: (dims, attrs)} (None: the cube schema, pipeline.schema);
-    check(path, ds): CubeError unless ds is a readable file of this kind; describe(ds) -> text
+    check(path, ds): CubeError unless ds is a readable file of this kind (None: every schema
+    variable not in `optional`, every coordinate in `coords` and attribute in `attrs` present,
+    see missing()); describe(ds) -> text
     (`info`); query(ds, fmt, **options) -> text (`query`, options in query_options);
     report(ds, out_dir, points, forced, say) -> {"html": path, "png": [paths]} (`report`,
     options in report_options). The accessor's figures of each kind: pipeline.explore.FIGURES."""
@@ -42,15 +44,33 @@ class ResultKind:
     what: str
     title: str
     variables: dict | None
-    check: Callable
+    check: Callable | None
     describe: Callable
     query: Callable
     report: Callable
     query_options: tuple = ()
     report_options: tuple = ()
+    optional: tuple = ()        # schema variables a complete file may lack
+    coords: tuple = ()          # coordinates every file has
+    attrs: tuple = ()           # global attributes every file has
 
     def label(self):
         return f"{self.what} (rotorsweep {self.command})"
+
+    def missing(self, ds):
+        """What a file of this kind must hold and ds lacks, in words ([]: complete)."""
+        return ([f"variable {name}" for name in self.variables if name not in self.optional and name not in ds.data_vars]
+                + [f"coordinate {name}" for name in self.coords if name not in ds.coords]
+                + [f"attribute {name}" for name in self.attrs if name not in ds.attrs])
+
+    def check_file(self, path, ds):
+        """CubeError unless ds is a complete file of this kind, naming what is missing."""
+        if self.check is not None:
+            return self.check(path, ds)
+        missing = self.missing(ds)
+        if missing:
+            raise cube.CubeError(f"{path} is an incomplete {self.name} result: {', '.join(missing)} missing "
+                                 f"(rerun rotorsweep {self.command})")
 
 
 # --- the schemas ---------------------------------------------------------------------------------
@@ -102,6 +122,12 @@ CONTINUATION_VARIABLES = {
     "curve_detail": (("curve",), {"long_name": "how the curve ended, in words"}),
 }
 
+# variables only some continuation results have: with report.frequency_unit = "omega_l", with
+# continuation.curves_in
+CONTINUATION_OPTIONAL = ("parameter_over_omega_l", "event_parameter_over_omega_l", "curve_parameter", "curve_second",
+                         "curve_critical_real", "curve_critical_imag", "curve_type", "curve_points", "curve_end",
+                         "curve_detail")
+
 # CF has one unit per variable; the manifold's coefficients have one per element, stated as a rule.
 MIXED_UNITS = ("no units attribute: the units differ from element to element (SI); P is the unit of "
                "the mode's master coordinate, state_units[master]; ")
@@ -148,6 +174,10 @@ BACKBONE_VARIABLES = {
     "surface_info": ((), {"long_name": "surface figure: mode, master, slave, orbit amplitude [m]"}),
 }
 
+# the report's manifold surface: absent where surface_mode has no manifold on any line
+BACKBONE_OPTIONAL = ("surface_value", "surface_p_values", "surface_r_values", "orbit_p", "orbit_r", "orbit_slave",
+                     "orbit_on_surface", "orbit_time", "surface_info")
+
 
 def variables(kind, values, attrs=None, lines=()):
     """The data variables of a `kind` result for xarray.Dataset, in its schema's order: values
@@ -182,7 +212,7 @@ def open_result(path):
     CubeError for anything that is not a rotorsweep result."""
     ds = cube.read_netcdf(path)
     kind = kind_of(ds, path)
-    kind.check(path, ds)
+    kind.check_file(path, ds)
     return ds, kind
 
 
@@ -206,10 +236,6 @@ def refuse_options(kind, given, role):
 
 
 # --- what each kind does (imported when called) --------------------------------------------------
-
-def _check_nothing(path, ds):
-    """A continuation or backbone result: its result_kind attribute is the check."""
-
 
 def _describe_cube(ds):
     return cube.describe(ds)
@@ -263,8 +289,10 @@ def _report_backbone(ds, out_dir, points=None, forced=None, say=None):
 KINDS = {kind.name: kind for kind in (
     ResultKind(SWEEP, "run", "a sweep cube", "rotorsweep result cube", None, cube.check_cube, _describe_cube, _query_cube, _report_cube,
                query_options=("where", "var", "unstable", "attractors"), report_options=("point",)),
-    ResultKind(CONTINUATION, "continue", "a continuation result", "rotorsweep continuation", CONTINUATION_VARIABLES, _check_nothing,
-               _describe_continuation, _query_continuation, _report_continuation),
-    ResultKind(BACKBONE, "backbone", "a backbone result", "rotorsweep backbones", BACKBONE_VARIABLES, _check_nothing,
-               _describe_backbone, _query_backbone, _report_backbone, report_options=("over",)),
+    ResultKind(CONTINUATION, "continue", "a continuation result", "rotorsweep continuation", CONTINUATION_VARIABLES, None,
+               _describe_continuation, _query_continuation, _report_continuation,
+               optional=CONTINUATION_OPTIONAL, coords=("observable",), attrs=("parameter", "range")),
+    ResultKind(BACKBONE, "backbone", "a backbone result", "rotorsweep backbones", BACKBONE_VARIABLES, None,
+               _describe_backbone, _query_backbone, _report_backbone, report_options=("over",),
+               optional=BACKBONE_OPTIONAL, coords=("mode", "amplitude_grid", "monomial", "state", "state_units")),
 )}

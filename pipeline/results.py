@@ -1,9 +1,19 @@
 """What `rotorsweep continue` and `rotorsweep backbone` share: writing their result files (netCDF
 with a `result_kind` attribute, see pipeline.result_kinds) and running a task per line of the
 swept axes on a Dask cluster (pipeline.cluster), the scene's kernels compiled first in the
-driver."""
+driver.
+
+Like `run`'s chunks, every finished line is saved at once as a part file (pipeline.cube's
+write_part, in `<output>.parts/`): a run stopped by a full disk, a kill or Ctrl-C keeps its
+finished lines, and `--resume` computes only the lines no part holds. A line's result (nested
+dicts, lists and tuples of arrays, numbers and text) goes into a part as its arrays and a JSON
+skeleton (to_part / from_part), read back exactly: a resumed result is bitwise the
+uninterrupted one."""
 import contextlib
+import errno
 import os
+
+import numpy as np
 
 from pipeline import cluster, cube, fileio, runlog, warmup
 
@@ -20,7 +30,10 @@ def write(ds, path):
         else:
             enc[name] = {**cube.COMPRESSION, **({"_FillValue": None} if var.dtype.kind in "iu" else {})}
     with fileio.atomic_path(path) as tmp:
-        ds.to_netcdf(tmp, engine="netcdf4", encoding=enc)
+        try:
+            ds.to_netcdf(tmp, engine="netcdf4", encoding=enc)
+        except RuntimeError as exc:   # netCDF-C reports a full disk as "NetCDF: HDF error"
+            raise OSError(errno.EIO, f"netCDF write failed ({exc}; is the disk full?)", str(path)) from None
     return path
 
 
@@ -29,24 +42,72 @@ def _text(var):
 
 
 @contextlib.contextmanager
-def result_output(cfg, output, overwrite, scheduler):
-    """The absolute output path, locked for the run (refused if it exists without `overwrite`;
-    the scheduler checked first)."""
+def result_output(cfg, output, overwrite, scheduler, resume=False):
+    """(absolute output path, its parts directory), locked for the run: refused if the output
+    exists without `overwrite`, or parts of an interrupted run are there without `resume`
+    (`overwrite` alone discards them); the scheduler checked first. An OS error inside (a full
+    disk) becomes one CubeError naming the path and the finished lines kept."""
     output = os.path.abspath(output)
     if os.path.exists(output) and not overwrite:
         raise cube.CubeError(f"{output} exists; pass --overwrite to replace it")
     with fileio.output_lock(output, cfg.path or "<default scene>"):
         if scheduler:
             cluster.check_scheduler(scheduler)
-        yield output
+        parts = _prepare_parts(output, resume, overwrite)
+        try:
+            yield output, parts
+        except OSError as exc:
+            raise cube.CubeError(_write_failure(exc, output, parts)) from None
+        finally:
+            if parts.is_dir() and not any(parts.iterdir()):
+                parts.rmdir()       # nothing finished: leave no empty parts directory behind
 
 
-def run_lines(cfg, task, lines, workers, scheduler, stream, summary):
+def _prepare_parts(output, resume, overwrite):
+    parts = cube.parts_dir(output)
+    if parts.is_dir() and any(parts.iterdir()) and not resume:
+        if not overwrite:
+            raise cube.CubeError(f"{parts} holds the finished lines of an interrupted run; pass --resume to "
+                                 "finish it or --overwrite to start again")
+        remove_parts(parts)
+    parts.mkdir(parents=True, exist_ok=True)
+    return parts
+
+
+def remove_parts(parts):
+    for path in parts.iterdir():
+        path.unlink()
+    parts.rmdir()
+
+
+def _write_failure(exc, output, parts):
+    n = len(list(parts.glob("*.npz"))) if parts.is_dir() else 0
+    kept = (f"the {n} finished line(s) are kept in {parts}; fix the cause and rerun with --resume"
+            if n else "no finished line was kept")
+    return f"the run into {output} stopped: {fileio.os_error_text(exc)}; {kept}"
+
+
+def finish(ds, output, parts):
+    """Write the result, then drop the parts it was assembled from."""
+    write(ds, output)
+    remove_parts(parts)
+    return output
+
+
+def run_lines(cfg, task, lines, workers, scheduler, stream, summary, parts):
     """task(cfg.data, where) for every line {axis: value} as Dask tasks, after compiling the
-    scene's kernels in the driver (workers load them from the cache); a progress line per line
-    done (`summary(result)`); the results in line order."""
+    scene's kernels in the driver (workers load them from the cache); the lines that part files
+    in `parts` hold already are read, not computed; each line done is saved as a part and gets
+    a progress line (`summary(result)`). The results in line order."""
     from dask.distributed import as_completed
 
+    config_hash = cfg.hash()
+    results = earlier_lines(parts, config_hash, len(lines))
+    todo = [k for k, r in enumerate(results) if r is None]
+    if len(todo) < len(lines):
+        say(stream, f"{len(lines) - len(todo)} of {len(lines)} line(s) read from {parts}")
+    if not todo:
+        return results
     say(stream, f"connecting to the Dask scheduler at {scheduler}" if scheduler else
         f"starting {cluster.local_workers(workers)} local Dask worker(s) (127.0.0.1)")
     client, local = cluster.connect(workers, scheduler)
@@ -54,17 +115,69 @@ def run_lines(cfg, task, lines, workers, scheduler, stream, summary):
         with cluster.heap_frozen():     # the imports' and the cluster's objects (see cluster.heap_frozen)
             warmup.compile_scene(cfg.data, lambda text: say(stream, text))
             submit = cluster.submitter(client, task, cfg.data)
-            futures = {submit(where): k for k, where in enumerate(lines)}
-            results = [None] * len(lines)
-            bar = runlog.Progress(len(lines), stream=stream, unit="lines")
-            for done, future in enumerate(as_completed(futures), 1):
+            futures = {submit(lines[k]): k for k in todo}
+            bar = runlog.Progress(len(todo), stream=stream, unit="lines")
+            for done, future in enumerate(as_completed(futures), len(lines) - len(todo) + 1):
                 k = futures[future]
                 results[k] = future.result()
+                save_line(parts, config_hash, k, results[k])
                 say(stream, f"[{done}/{len(lines)}] {_line_label(lines[k])}: {summary(results[k])}")
                 bar.update(1)
     finally:
         cluster.close(client, local)
     return results
+
+
+# --- a line's result as a part file -----------------------------------------------------------
+
+def save_line(parts, config_hash, k, result):
+    arrays, skeleton = to_part(result)
+    cube.write_part(parts, f"line{k:06d}", [k], arrays, {"config_hash": config_hash, "line": k, "result": skeleton})
+
+
+def earlier_lines(parts, config_hash, n_lines):
+    """[result or None] per line: the lines part files of this config hold; parts of another
+    config are refused."""
+    out = [None] * n_lines
+    for _, _, arrays, meta in cube.iter_parts(parts):
+        if meta.get("config_hash") != config_hash or not 0 <= meta.get("line", -1) < n_lines:
+            raise cube.CubeError(f"{parts} holds lines of a different config (hash {str(meta.get('config_hash'))[:12]}, "
+                                 f"this config {config_hash[:12]}); use another output path or pass --overwrite "
+                                 "to discard them")
+        out[meta["line"]] = from_part(meta["result"], arrays)
+    return out
+
+
+def to_part(value):
+    """(arrays {"k": array}, JSON skeleton) of a nested value: dicts with text keys, lists, tuples,
+    text, ints, bools and None in the skeleton; floats, complex numbers, numpy scalars and arrays
+    as arrays (exact, unlike decimal text). from_part(skeleton, arrays) gives the value back."""
+    arrays = {}
+
+    def walk(v):
+        if isinstance(v, dict):
+            return {"d": {str(k): walk(x) for k, x in v.items()}}
+        if isinstance(v, (list, tuple)):
+            return {"l" if isinstance(v, list) else "t": [walk(x) for x in v]}
+        if v is None or isinstance(v, (str, bool, int)) and not isinstance(v, np.generic):
+            return {"v": v}
+        tag = "a" if isinstance(v, np.ndarray) else "g" if isinstance(v, np.generic) else "p"
+        arrays[str(len(arrays))] = np.asarray(v)
+        return {tag: len(arrays) - 1}
+    return arrays, walk(value)
+
+
+def from_part(node, arrays):
+    (tag, v), = node.items()
+    if tag == "d":
+        return {k: from_part(x, arrays) for k, x in v.items()}
+    if tag in "lt":
+        items = [from_part(x, arrays) for x in v]
+        return items if tag == "l" else tuple(items)
+    if tag == "v":
+        return v
+    a = arrays[str(v)]
+    return a if tag == "a" else a[()] if tag == "g" else a[()].item()
 
 
 def say(stream, text):
@@ -74,5 +187,3 @@ def say(stream, text):
 
 def _line_label(where):
     return ", ".join(f"{k}={v:g}" for k, v in where.items()) or "the scene"
-
-

@@ -131,7 +131,13 @@ def _forced_response(path, unit="Hz"):
                      "amplitude_half_pp": (("branch", "point", "observable"), amp, {"units": "m"}),
                      "stable": (("branch", "point"), stable)},
                     coords={"observable": ["x_A", "y_A", "x_B", "y_B", "z"]},
-                    attrs={"result_kind": "continuation", "parameter": "support_frequency"})
+                    attrs={"result_kind": "continuation", "parameter": "support_frequency",
+                           "range": "[380.0, 410.0]"})
+    sizes = {"branch": 1, "point": f.size, "observable": 5, "state": 10, "multiplier": 10, "event": 0}
+    kind = result_kinds.KINDS[result_kinds.CONTINUATION]
+    for name, (dims, _) in kind.variables.items():     # the rest of a complete file: zeros
+        if name not in ds and name not in kind.optional:
+            ds[name] = (dims, np.zeros([sizes[d] for d in dims]))
     ds.to_netcdf(path)
     return path
 

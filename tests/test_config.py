@@ -228,3 +228,24 @@ def test_analysis_keys_are_the_attractor_settings_fields():
     settings = compute.attractor_settings(data)
     assert {k: getattr(settings, k) for k in keys} == {k: data["analysis"][k] for k in keys}
     assert settings.lyapunov_min_periods == min(compute.LYAPUNOV_MIN_PERIODS, data["analysis"]["lyapunov_max_periods"])
+
+
+def test_continuation_messages_name_existing_keys_and_state_the_limits():
+    """Issue 36 item 13: the step-order problem names the three config keys (not
+    `continuation.steps`), the Newton tolerance is numerics.newton_tol, and a start outside the
+    parameter's values states its limits (no empty "()" list)."""
+    from pipeline import continuation
+    from tests.test_continue_command import DUFFING
+
+    def message(extra):
+        with pytest.raises(config.ConfigError) as err:
+            continuation.plan(config.parse_config(DUFFING.replace("ds = 0.02", extra)).data)
+        return str(err.value)
+
+    steps = message("ds = 0.5\nds_max = 0.25")
+    assert steps.startswith("continuation.ds_min, continuation.ds, continuation.ds_max: steps must satisfy")
+    assert "continuation.steps" not in steps
+    start = message("ds = 0.02\nstart = -1.0\nstop = 2.0")
+    assert "continuation.start: -1.0 is outside the allowed values of omega: must be > 0" in start and "()" not in start
+    assert config.settings_problems(["tol = 0.0: must be > 0"], "continuation", {}) == [
+        "numerics.newton_tol: must be > 0 (got 0.0)"]

@@ -313,3 +313,28 @@ def test_a_model_module_that_cannot_load_is_one_line_and_version_still_works(tmp
     assert info.returncode == 2 and "Traceback" not in info.stderr
     [line] = info.stderr.strip().splitlines()
     assert line.startswith(f"rotorsweep info: error: $ROTORSWEEP_MODELS: model module {plugins!r}: {why}: ")
+
+
+@pytest.mark.parametrize("path, edit, message", [
+    ("configs/filipkovsky2016_quick.toml", "[rotor]\ndisk_position = 0.8\n",
+     "rotor.disk_position: 0.8 m is beyond the shaft: the disk sits between the bearings, at most rotor.length = 0.5 m"),
+    ("configs/filipkovsky2016_quick.toml", "[rotor]\nlength = 1e6\n", "rotor.length: must be > 0 and <= 10 (got 1e+06)"),
+    ("configs/filipkovsky2016_quick.toml", "[bearing]\ncontact_angle = 1e-9\n",
+     "bearing.contact_angle: must be >= 1 and <= 60 (got 1e-09) (contact angle [deg] imposed in the force law"),
+    ("configs/filipkovsky2010_symmetric.toml", "[bearing]\ncontact_angle = 1e-9\n",
+     "P0 = Z Q sin(alpha) needs unbounded ball loads"),
+    ("configs/filipkovsky2010_symmetric.toml", "", "rotor.length: must be > 0 and <= 10 (got 1e+06)")])
+def test_physically_impossible_geometry_is_refused_naming_the_key(path, edit, message):
+    """Issue 36 item 11: the disk on the shaft, a shaft of at most 10 m (modelled rigid), an
+    imposed contact angle of an angular-contact bearing (1 to 60 deg), each with its reason."""
+    from pipeline import config
+
+    text = (ROOT / path).read_text()
+    section = edit.split("\n")[0]
+    text = text.replace(section + "\n", edit) if edit and section in text else text + "\n" + edit
+    if not edit:
+        text = text.replace("length = 0.5", "length = 1e6")
+    with pytest.raises(config.ConfigError) as err:
+        config.parse_config(text)
+    assert message in str(err.value)
+    assert config.parse_config(text.replace("0.8", "0.4").replace("1e6", "0.5").replace("1e-9", "15.0"))

@@ -91,3 +91,60 @@ def test_declared_linearization_equals_the_kernels_jacobian_at_the_equilibrium(n
     found = modes.modes(spec, values)
     s_spec = np.array([complex(-m.damping_ratio * m.undamped_frequency, m.frequency) for m in found]) * 2 * np.pi
     np.testing.assert_allclose(s_kernel, s_spec, rtol=1e-9, atol=1e-9 * np.abs(s_spec).max())
+
+
+SYMMETRIC = str(ROOT_CONFIGS / "filipkovsky2010_symmetric.toml")
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--at", "speed=-5"], "--at speed=-5: must be >= 0 and <= 100000 (got -5) (the limits of speed"),
+    (["--at", "speed=nan"], "--at speed=nan: must be a finite number"),
+    (["--at", "nosuch=1"], "--at nosuch: not an axis of model symmetric4 (axes: speed, nominal_angle, contact_angle"),
+    (["--at", "speed"], "--at speed: expected AXIS=NUMBER"),
+    (["--campbell", "0:1000:100000000", "-o", "c.csv"], "--campbell 0:1000:100000000: NUM must be 1 to 200000"),
+    (["--campbell", "0:1000", "-o", "c.csv"], "--campbell 0:1000: expected START:STOP:NUM"),
+    (["--campbell", "0:1000:ten", "-o", "c.csv"], "--campbell 0:1000:ten: expected START:STOP:NUM"),
+    (["--campbell", "0:inf:10", "-o", "c.csv"], "--campbell 0:inf:10: STOP must be a finite number"),
+    (["--campbell=-10:100:10", "-o", "c.csv"], "--campbell -10:100:10: START must be >= 0")])
+def test_bad_at_and_campbell_values_are_one_line_naming_the_option(args, message, tmp_path, monkeypatch, capsys):
+    """Issue 36 items 4 and 8: checked like config axes (names, limits, finite, size) before any work."""
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["modes", SYMMETRIC, *args]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "c.csv").exists()
+
+
+def test_a_failing_linearization_names_the_option_not_the_solver(monkeypatch, capsys):
+    def singular(*_):
+        raise np.linalg.LinAlgError("Singular matrix")
+
+    monkeypatch.setattr(modal, "modes_of", singular)
+    assert cli.main(["modes", SYMMETRIC, "--at", "speed=50"]) == 2
+    err = capsys.readouterr().err
+    assert "--at: no linearization at speed=50" in err and len(err.strip().splitlines()) == 1
+
+
+def test_the_campbell_csv_is_written_atomically_and_a_full_disk_names_the_path(tmp_path, monkeypatch, capsys):
+    out = tmp_path / "campbell.csv"
+    out.write_text("the previous table\n")
+    real = modes.csv.writer
+
+    class FullDisk:
+        def __init__(self, fh):
+            self.w = real(fh)
+
+        def writerow(self, row):
+            self.w.writerow(row)
+
+        def writerows(self, rows):
+            raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(modes.csv, "writer", FullDisk)
+    assert cli.main(["modes", SYMMETRIC, "--campbell", "0:100:5", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"modes -o {out}: No space left on device" in err and len(err.strip().splitlines()) == 1
+    assert out.read_text() == "the previous table\n" and list(tmp_path.iterdir()) == [out]
+    monkeypatch.undo()
+    assert cli.main(["modes", SYMMETRIC, "--campbell", "0:100:5", "-o", str(out)]) == 0
+    assert len(out.read_text().splitlines()) == 1 + 5 * 4

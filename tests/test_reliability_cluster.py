@@ -160,3 +160,31 @@ def test_chaos_workers_killed_every_few_chunks_and_the_driver_once(tmp_path):
           f"{parts_at_driver_kill} parts), {chaos_s:.0f} s; undisturbed local run {undisturbed_s:.0f} s")
     assert killer.kills >= 3
     assert_same_cube(reference, out)
+
+
+@pytest.mark.slow
+def test_chaos_continue_a_line_worker_killed_and_the_driver_once(tmp_path):
+    """`continue` on twelve lines while a worker dies every 3 finished lines and the driver once,
+    then --resume: the result is bitwise the undisturbed local one."""
+    from tests.test_reliability_results import LINES, assert_same_result
+
+    cfg = tmp_path / "lines.toml"
+    cfg.write_text(LINES.replace("clearance = [7.6e-6, 11.4e-6, 19.0e-6]",
+                                 f"clearance = [{', '.join(f'{c:.2e}' for c in np.linspace(6e-6, 19e-6, 12))}]"))
+    reference = tmp_path / "reference.nc"
+    rotorsweep("continue", cfg, "-o", reference, "--workers", "2", "-q")
+    out = tmp_path / "chaos.nc"
+    run = CLI + ["continue", str(cfg), "-o", str(out), "-q"]
+    with dask_cluster(tmp_path, n_workers=2, nanny=True) as (address, client), Killer(client, cube.parts_dir(out), every=3) as killer:
+        driver = subprocess.Popen(run + ["--scheduler", address], stderr=subprocess.PIPE, text=True)
+        try:
+            wait_for_parts(cube.parts_dir(out), driver, minimum=7, timeout=600)
+        except AssertionError:
+            raise AssertionError(driver.communicate()[1]) from None
+        driver.kill()                                                # the driver, once
+        driver.wait()
+        resumed = subprocess.run(run + ["--scheduler", address, "--resume"], capture_output=True, text=True,
+                                 timeout=1200)
+        assert resumed.returncode == 0, resumed.stderr
+    assert killer.kills >= 2
+    assert_same_result(reference, out)

@@ -123,3 +123,32 @@ def test_branch_diagram_draws_stable_solid_unstable_dashed_and_backbones_both_me
     continued, manifold = bb.rotorsweep.backbones().get(0), bb.rotorsweep.backbones().get(1)
     np.testing.assert_array_equal(continued.last.dimension_values(1), bb["frequency_continuation"].values.ravel())
     np.testing.assert_array_equal(manifold.last.dimension_values(1), bb["frequency_manifold"].values.ravel())
+
+
+def _without(path, tmp_path, name):
+    """A copy of a result file with the variable (or attribute) `name` dropped."""
+    ds = xr.load_dataset(path)
+    ds = ds.drop_vars(name) if name in ds.variables else ds.assign_attrs({name: None})
+    ds.attrs = {k: v for k, v in ds.attrs.items() if v is not None}
+    out = tmp_path / f"without_{name}.nc"
+    ds.to_netcdf(out)
+    return out
+
+
+@pytest.mark.parametrize("kind, name, what", [
+    (result_kinds.CONTINUATION, "branch_end", "variable branch_end"),
+    (result_kinds.CONTINUATION, "range", "attribute range"),
+    (result_kinds.CONTINUATION, "observable", "coordinate observable"),
+    (result_kinds.BACKBONE, "master", "variable master"),
+    (result_kinds.BACKBONE, "linear_frequency", "variable linear_frequency")])
+def test_an_incomplete_result_is_one_line_naming_what_is_missing(paths, kind, name, what, tmp_path, capsys):
+    """info, query, report and report --over (issue 36 item 6): no KeyError traceback."""
+    bad = _without(paths[kind], tmp_path, name)
+    line = f"{bad} is an incomplete {kind} result: {what} missing"
+    commands = [["info", bad], ["query", bad], ["report", bad, "-o", tmp_path / "r", "-q"]]
+    if kind == result_kinds.CONTINUATION:
+        commands.append(["report", paths[result_kinds.BACKBONE], "-o", tmp_path / "o", "--over", bad, "-q"])
+    for args in commands:
+        assert cli.main([str(a) for a in args]) == cli.EXIT_USAGE
+        err = capsys.readouterr().err
+        assert line in err and "Traceback" not in err and len(err.strip().splitlines()) == 1, err

@@ -396,7 +396,7 @@ def _ratio_problems(data, axes):
 def check(data, axes):
     """Config rules across keys: the bearing table and geometry, a support frequency for a
     support vibration, and shootable frequency ratios."""
-    errors = bearing_problems(data, axes)
+    errors = bearing_problems(data, axes) + rotor_problems(data)
     freqs = _grid(data, axes, "forcing", "support_frequency")
     if max(_grid(data, axes, "forcing", "support_acceleration")) > 0 and min(freqs) <= 0:
         errors.append("forcing.support_frequency: must be > 0 when forcing.support_acceleration > 0")
@@ -454,9 +454,39 @@ def omega_l(v):
     return modal.modes_of(system.M, system.C, system.G, system.K, modal.kinds_from_names(COORDINATES))[0].frequency
 
 
-def _angle(name, long_name, help, unset=None):
-    return Parameter(name=name, section="bearing", unit="degree", long_name=long_name, axis=True,
-                     lo=0, hi=90, lo_open=True, hi_open=True, unset=unset, help=help)
+# Physical limits of the rotor's geometry (ModelSpec parameter limits and check(), so a config
+# names the key). The shaft between the bearings is modelled rigid: a 25 mm steel shaft of 10 m
+# bends at ~0.5 Hz, so a longer one is a slip of units (mm given as m), not a rotor.
+MAX_SHAFT_LENGTH = 10.0
+# An imposed contact angle [deg] of the angular-contact pair (catalogues: 10 to 45 deg): below
+# 1 deg the preload P0 = Z Q sin(alpha) needs ball loads Q above 57 P0 / Z (1e-9 deg: 6e10 P0 / Z);
+# above 60 deg the pair is a thrust bearing, not the radial support the rotor models assume.
+CONTACT_ANGLE_LIMITS = (1.0, 60.0)
+
+
+def shaft_length(default, help="shaft length l between the bearings"):
+    """The `rotor.length` key of the rotor models, bounded by MAX_SHAFT_LENGTH."""
+    return Parameter(default=default, name="length", section="rotor", lo=0, lo_open=True, hi=MAX_SHAFT_LENGTH,
+                     unit="m", help=f"{help} (at most {MAX_SHAFT_LENGTH:g} m: the shaft is modelled rigid)")
+
+
+def rotor_problems(data):
+    """The disk sits on the shaft between the bearings: 0 <= rotor.disk_position <= rotor.length."""
+    rotor = data["rotor"]
+    position, length = rotor.get("disk_position"), rotor.get("length")
+    if isinstance(position, (int, float)) and isinstance(length, (int, float)) and position > length:
+        return [f"rotor.disk_position: {position:g} m is beyond the shaft: the disk sits between the bearings, "
+                f"at most rotor.length = {length:g} m from bearing A"]
+    return []
+
+
+def _contact_angle():
+    lo, hi = CONTACT_ANGLE_LIMITS
+    return Parameter(name="contact_angle", section="bearing", unit="degree", long_name="imposed contact angle",
+                     axis=True, lo=lo, hi=hi,
+                     help=f"contact angle [deg] imposed in the force law; unset: the loaded angle from the preload "
+                          f"solve ({lo:g} to {hi:g} deg: below, the preload P0 = Z Q sin(alpha) needs unbounded ball "
+                          "loads Q; above, the pair is a thrust bearing)")
 
 
 def _rotor(name, default, unit, help):
@@ -479,8 +509,7 @@ SPEC = ModelSpec(
                   axis=True, lo=0, hi=90, lo_open=True, hi_open=True, unset=DEFAULT_NOMINAL_ANGLE,
                   help="row of the bearing table (a label): 12, 15, 26, 36 or 40 deg in the 2016 table; "
                        "the 2010 table has one unlabelled row (leave unset)"),
-        _angle("contact_angle", "imposed contact angle",
-               "contact angle [deg] imposed in the force law; unset: the loaded angle from the preload solve"),
+        _contact_angle(),
         Parameter(name="preload", section="bearing", unit="N", long_name="axial preload", axis=True,
                   lo=0, hi=1e5, lo_open=True, unset=300.0,
                   help="axial preload P0 [N] (not in the 2016 paper; default 300 N as in the 2010 papers)"),
@@ -501,7 +530,7 @@ SPEC = ModelSpec(
         # Filipkovsky 2016, "Результаты численных исследований": l = 0,5 м; xi_D = 0,125 м;
         # m_B = 1,963 кг; I_C1 = 0,04098 кг м2; I_C0 = 0,00015 кг м2; m_0 = 10 кг; I_1 = 0,1 кг м2;
         # I_0 = 0,2 кг м2 (and f_Omega = 250 Гц for Figs. 2b-6, the speed's help).
-        _rotor("length", 0.5, "m", "shaft length l between the bearings"),
+        shaft_length(0.5),
         Parameter(default=0.125, name="disk_position", section="rotor", lo=0, unit="m",
                   help="disk position xi_D from bearing A"),
         _rotor("shaft_mass", 1.963, "kg", "shaft mass m_B"),

@@ -208,8 +208,8 @@ def build_for(n, disk_position):
 # --- spec pieces -------------------------------------------------------------------------------
 
 def check(data, axes):
-    """The bearing pair's rules (as rigid_preloaded)."""
-    return rp.bearing_problems(data, axes)
+    """The bearing pair's rules and the disk on the shaft (as rigid_preloaded)."""
+    return rp.bearing_problems(data, axes) + rp.rotor_problems(data)
 
 
 def _rotor(name, default, unit, help):
@@ -223,7 +223,7 @@ ROTOR_PARAMETERS = (
               unset=628.3 / (2 * math.pi), help="shaft speed [Hz] (papers: 628.3 rad/s = 100.0 Hz); a sweep axis"),
     # Both 2010 papers, section 2 ("Численный анализ колебаний"): l = 0,5 м, d = 0,025 м,
     # m_0 = 10 кг, I_1 = 0,1 кг м2, I_0 = 0,2 кг м2, omega = 628,3 рад/с (the speed above).
-    _rotor("length", 0.5, "m", "shaft length l between the bearings"),
+    rp.shaft_length(0.5),
     _rotor("shaft_diameter", SHAFT_DIAMETER, "m", "shaft diameter d (distributed mass)"),
     _rotor("shaft_density", STEEL_DENSITY, "kg m-3", "shaft density (steel; not in the papers)"),
     _rotor("disk_mass", 10.0, "kg", "disk mass m_0"),
