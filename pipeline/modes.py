@@ -179,6 +179,8 @@ def command(cfg, at, campbell_text=None, output=None, as_json=False):
     spec = compute.model_of(cfg.data)
     require_linearization(spec)
     point = at_point(cfg, at)
+    if campbell_text is not None and output is None:
+        raise ConfigError(f"--campbell {campbell_text}: give -o FILE.csv too (the Campbell table is written as CSV)")
     speeds = _campbell_speeds(spec, cfg, campbell_text) if output is not None else None
     values = scene_values(cfg.data, point)
     try:

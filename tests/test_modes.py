@@ -100,7 +100,7 @@ SYMMETRIC = str(ROOT_CONFIGS / "filipkovsky2010_symmetric.toml")
     (["--at", "speed=-5"], "--at speed=-5: must be >= 0 and <= 100000 (got -5) (the limits of speed"),
     (["--at", "speed=nan"], "--at speed=nan: must be a finite number"),
     (["--at", "nosuch=1"], "--at nosuch: not an axis of model symmetric4 (axes: speed, nominal_angle, contact_angle"),
-    (["--at", "speed"], "--at speed: expected AXIS=NUMBER"),
+    (["--at", "speed"], "--at speed: expected AXIS=VALUE"),
     (["--campbell", "0:1000:100000000", "-o", "c.csv"], "--campbell 0:1000:100000000: NUM must be 1 to 200000"),
     (["--campbell", "0:1000", "-o", "c.csv"], "--campbell 0:1000: expected START:STOP:NUM"),
     (["--campbell", "0:1000:ten", "-o", "c.csv"], "--campbell 0:1000:ten: expected START:STOP:NUM"),
@@ -148,3 +148,9 @@ def test_the_campbell_csv_is_written_atomically_and_a_full_disk_names_the_path(t
     monkeypatch.undo()
     assert cli.main(["modes", SYMMETRIC, "--campbell", "0:100:5", "-o", str(out)]) == 0
     assert len(out.read_text().splitlines()) == 1 + 5 * 4
+
+
+def test_campbell_without_an_output_file_is_refused(capsys):
+    """--campbell without -o computed nothing and said nothing."""
+    assert cli.main(["modes", SYMMETRIC, "--campbell", "0:100:3"]) == 2
+    assert "give -o FILE.csv" in capsys.readouterr().err

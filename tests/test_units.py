@@ -156,20 +156,21 @@ def test_point_flags_with_wrong_dimensions_exit_2(point_kwargs, capsys, flags, f
 def test_modes_at_and_campbell_take_unit_strings(monkeypatch, capsys):
     seen = {}
 
-    def fake_command(cfg, at, speeds, output, as_json):
-        seen.update(at=at, speeds=speeds)
+    def fake_command(cfg, at, campbell_text, output, as_json):
+        seen.update(at=at, speeds=modes.campbell_speeds(campbell_text, cfg.model, cfg.data))
         return ""
 
     monkeypatch.setattr(modes, "command", fake_command)
     assert cli.main(["modes", "configs/filipkovsky2010_symmetric.toml", "--at", "speed=600 rpm",
-                     "--campbell", "600 rpm:1.2 kHz:3"]) == 0
+                     "--campbell", "600 rpm:1.2 kHz:3", "-o", "c.csv"]) == 0
     assert seen["at"] == {"speed": pytest.approx(10.0)}
     np.testing.assert_allclose(seen["speeds"], [10.0, 605.0, 1200.0], rtol=1e-14)
 
 
 @pytest.mark.parametrize("value, fragment", [("600 rpm:3000 rpm", "START:STOP:NUM"), ("1:2:x", "START:STOP:NUM"),
                                              ("600 rpm:3 um:5", "unit Hz")])
-def test_a_malformed_campbell_range_exits_2(capsys, value, fragment):
-    assert cli.main(["modes", "configs/filipkovsky2010_symmetric.toml", "--campbell", value]) == 2
+def test_a_malformed_campbell_range_exits_2(capsys, value, fragment, tmp_path):
+    assert cli.main(["modes", "configs/filipkovsky2010_symmetric.toml", "--campbell", value,
+                     "-o", str(tmp_path / "c.csv")]) == 2
     err = capsys.readouterr().err
     assert "--campbell" in err and fragment in err and "Traceback" not in err
