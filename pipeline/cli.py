@@ -501,8 +501,8 @@ def error_text(exc):
     if isinstance(exc, OSError):
         return fileio.os_error_text(exc)
     if type(exc).__name__ == "KilledWorker":
-        return (f"Dask gave up on a task: every worker that ran it died ({str(exc).splitlines()[0]}); "
-                "is the machine short of memory?")
+        return (f"Dask gave up on a task: {str(exc).split('. ')[0]}; is the machine short of memory? "
+                "(the workers' logs say more)")
     if isinstance(exc, RuntimeError) and ("NetCDF" in str(exc) or "HDF" in str(exc)):
         return f"netCDF/HDF error: {exc}"
     return None

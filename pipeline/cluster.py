@@ -115,7 +115,8 @@ class Scheduler:
     those of the Dask config, `distributed.comm.tls.*`) and the seconds it has to answer."""
 
     def __init__(self, address, tls_ca_file=None, tls_cert=None, tls_key=None, timeout=SCHEDULER_TIMEOUT_S):
-        self.tls = {"tls_ca_file": tls_ca_file, "tls_client_cert": tls_cert, "tls_client_key": tls_key}
+        self.tls = {key: str(path) if path else None for key, path in
+                    (("tls_ca_file", tls_ca_file), ("tls_client_cert", tls_cert), ("tls_client_key", tls_key))}
         if any(self.tls.values()) and "://" not in address:
             address = f"tls://{address}"
         self.address, self.timeout = address, timeout
