@@ -1,5 +1,6 @@
 """The Dask runtime of every command that runs on a cluster (run, continue, backbone): the local
-cluster and its workers' setup, connecting to a scheduler given by address (checked first),
+cluster (TLS with a per-run certificate) and its workers' setup, connecting to a scheduler
+given by address (its Dask handshake checked first, under a timeout; TLS files),
 closing quietly, submitting tasks, the driver's frozen heap, and the provenance every result
 file records (the version, the command, the model, the config).
 
@@ -61,13 +62,13 @@ def local_workers(workers):
     return workers or max(2, os.cpu_count() or 2)
 
 
-def local_cluster(n_workers, security=None):
+def local_cluster(n_workers):
     """A LocalCluster of n_workers single-threaded worker processes on 127.0.0.1 (dashboard on a
     free port), as every command starts it; pipeline.workerinit sets each worker up. Its
     scheduler, nannies and workers speak TLS with a certificate made for this cluster alone
-    (`security`, default a new Security.temporary()): a process that does not hold it (another
+    (Security.temporary(), both ends present it): a process that does not hold it (another
     local user's) cannot connect, so cannot run code in the workers (plain TCP let any local
-    process call client.run on them)."""
+    process call client.run on them). Starting it costs no measurable time (README, Security)."""
     import dask
     from dask.distributed import LocalCluster
     from distributed.security import Security
@@ -76,7 +77,7 @@ def local_cluster(n_workers, security=None):
     with dask.config.set(LOCAL_CLUSTER_CONFIG):
         return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, host="127.0.0.1",
                             dashboard_address="127.0.0.1:0", env=dict(WORKER_ENV),
-                            preload=["pipeline.workerinit"], security=security or Security.temporary(),
+                            preload=["pipeline.workerinit"], security=Security.temporary(),
                             protocol="tls://")
 
 

@@ -5,6 +5,7 @@ and lock before any work; errors map to one line naming the real path; Ctrl-C sa
 command kept."""
 import contextlib
 import http.server
+import json
 import os
 import signal
 import socket
@@ -169,12 +170,7 @@ def test_another_process_cannot_connect_to_the_local_cluster(local_sweep_cluster
 
 def test_a_scheduler_given_with_tls_files_answers_and_without_them_is_one_line(local_sweep_cluster, tmp_path):
     _, local = local_sweep_cluster
-    security = local.security                  # PEM texts of the cluster's temporary certificate
-    files = {}
-    for name, pem in (("ca", security.tls_ca_file), ("cert", security.tls_client_cert),
-                      ("key", security.tls_client_key)):
-        files[name] = tmp_path / f"{name}.pem"
-        files[name].write_text(pem)
+    files = pem_files(local.security, tmp_path)
     address = local.scheduler_address
     cluster.check_scheduler(cluster.Scheduler(address, files["ca"], files["cert"], files["key"]))
     with pytest.raises(cluster.SweepError, match="TLS setting"):
@@ -353,3 +349,59 @@ def test_ctrl_c_in_continue_says_what_it_kept(tmp_path, monkeypatch, capsys):
     args = cli.build_parser().parse_args(["continue"])
     assert cli.main(["continue", "-o", str(tmp_path / "c.nc")]) == 130
     assert capsys.readouterr().err == f"rotorsweep: {cli.interrupted_text(args)}\n"
+
+
+def pem_files(security, tmp_path):
+    """The CA, certificate and key of a Security.temporary() (PEM texts; one self-signed
+    certificate for all three) written to files: what a site's CA would issue to the scheduler,
+    the workers and the client."""
+    files = {}
+    for name, pem in (("ca", security.tls_ca_file), ("cert", security.tls_client_cert),
+                      ("key", security.tls_client_key)):
+        files[name] = tmp_path / f"{name}.pem"
+        files[name].write_text(pem)
+    return files
+
+
+def test_a_secure_dask_cli_cluster_as_the_readme_starts_it(tmp_path):
+    """The README's multi-node recipe on 127.0.0.1: `dask scheduler` and `dask worker` with TLS
+    files; rotorsweep connects with --tls-* and computes, a client without them is refused."""
+    import subprocess
+    import sys
+
+    from tests.test_reliability_cluster import DASK
+
+    from distributed.security import Security
+
+    files = pem_files(Security.temporary(), tmp_path)
+    tls = ["--tls-ca-file", str(files["ca"]), "--tls-cert", str(files["cert"]), "--tls-key", str(files["key"])]
+    sched_file = tmp_path / "scheduler.json"
+    procs = [subprocess.Popen([DASK, "scheduler", "--host", "tls://127.0.0.1", "--port", "0", *tls,
+                               "--dashboard-address", "127.0.0.1:0", "--scheduler-file", str(sched_file)],
+                              stderr=subprocess.DEVNULL)]
+    try:
+        deadline = time.monotonic() + 60
+        while not sched_file.exists() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        address = json.loads(sched_file.read_text())["address"]
+        assert address.startswith("tls://127.0.0.1:")
+        procs.append(subprocess.Popen([DASK, "worker", address, "--nthreads", "1", "--no-nanny", *tls],
+                                      stderr=subprocess.DEVNULL))
+        target = cluster.Scheduler(address, files["ca"], files["cert"], files["key"])
+        cluster.check_scheduler(target)
+        client, _ = cluster.connect(None, target)
+        try:
+            client.wait_for_workers(1, timeout=60)
+            assert client.submit(lambda: 6 * 7).result() == 42
+        finally:
+            client.close()
+        with pytest.raises(cluster.SweepError, match="TLS setting"):
+            cluster.check_scheduler(cluster.Scheduler(address, timeout=2))
+    finally:
+        for proc in procs:
+            proc.terminate()
+        for proc in procs:
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
