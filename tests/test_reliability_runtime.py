@@ -168,6 +168,62 @@ def test_another_process_cannot_connect_to_the_local_cluster(local_sweep_cluster
     assert client.submit(lambda: 41 + 1).result() == 42           # the driver still can
 
 
+def dask_answers(address, security):
+    """Whether a Dask server at `address` answers an identity request from a client with
+    `security` (a connection a client could then run code over), within 1 s (a Dask server on
+    127.0.0.1 answers in ms; an HTTP dashboard says nothing)."""
+    import asyncio
+
+    from distributed.comm import connect as dask_connect
+
+    async def ask():
+        comm = await dask_connect(address, timeout=1, **security.get_connection_args("client"))
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    try:
+        asyncio.run(asyncio.wait_for(ask(), 1))
+        return True
+    except Exception:
+        return False
+
+
+def test_no_port_of_a_running_sweep_answers_another_process(tmp_path):
+    """Every port the processes of a running `rotorsweep run` listen on (scheduler, nannies,
+    workers, dashboards) refuses this test process: without a certificate, over TCP or TLS, and
+    with a certificate of its own."""
+    import subprocess
+
+    import psutil
+    from distributed.security import Security
+
+    from tests.test_pipeline import CLI
+    from tests.test_reliability import LONG, wait_for_parts
+
+    cfg = tmp_path / "long.toml"
+    cfg.write_text(LONG)
+    out = tmp_path / "long.nc"
+    proc = subprocess.Popen(CLI + ["run", str(cfg), "-o", str(out), "--workers", "2", "--chunk-points", "16", "-q"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    try:
+        wait_for_parts(cube.parts_dir(out), proc)
+        driver = psutil.Process(proc.pid)
+        ports = {c.laddr.port for p in [driver, *driver.children(recursive=True)]
+                 for c in p.net_connections(kind="inet") if c.status == psutil.CONN_LISTEN}
+        assert len(ports) >= 3, ports               # the scheduler and two workers at least
+        assert proc.poll() is None                  # probed while the sweep runs
+        foreign = Security.temporary()
+        for port in sorted(ports):
+            assert not dask_answers(f"tcp://127.0.0.1:{port}", Security()), port
+            assert not dask_answers(f"tls://127.0.0.1:{port}", foreign), port
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+
+
 def test_a_scheduler_given_with_tls_files_answers_and_without_them_is_one_line(local_sweep_cluster, tmp_path):
     _, local = local_sweep_cluster
     files = pem_files(local.security, tmp_path)
