@@ -419,9 +419,11 @@ def pem_files(security, tmp_path):
     return files
 
 
-def test_a_secure_dask_cli_cluster_as_the_readme_starts_it(tmp_path):
+@pytest.mark.slow    # ~50 s on 2 busy cores (the worker loads the scene's kernels): make test-slow
+def test_a_secure_dask_cli_cluster_as_the_readme_starts_it(small_config, tmp_path, capsys):
     """The README's multi-node recipe on 127.0.0.1: `dask scheduler` and `dask worker` with TLS
-    files; rotorsweep connects with --tls-* and computes, a client without them is refused."""
+    files; `rotorsweep run --scheduler tls://... --tls-*` sweeps on it, a client without the
+    files is one line."""
     import subprocess
     import sys
 
@@ -443,16 +445,13 @@ def test_a_secure_dask_cli_cluster_as_the_readme_starts_it(tmp_path):
         assert address.startswith("tls://127.0.0.1:")
         procs.append(subprocess.Popen([DASK, "worker", address, "--nthreads", "1", "--no-nanny", *tls],
                                       stderr=subprocess.DEVNULL))
-        target = cluster.Scheduler(address, files["ca"], files["cert"], files["key"])
-        cluster.check_scheduler(target)
-        client, _ = cluster.connect(None, target)
-        try:
-            client.wait_for_workers(1, timeout=60)
-            assert client.submit(lambda: 6 * 7).result() == 42
-        finally:
-            client.close()
-        with pytest.raises(cluster.SweepError, match="TLS setting"):
-            cluster.check_scheduler(cluster.Scheduler(address, timeout=2))
+        out = tmp_path / "tls.nc"
+        rc, err = run_cli(capsys, "run", small_config, "-o", out, "-q", "--scheduler", address, *tls)
+        assert rc == 0, err
+        assert cube.open_cube(out)["orbit_status"].size == 22
+        rc, err = run_cli(capsys, "run", small_config, "-o", tmp_path / "no.nc", "--scheduler", address,
+                          "--scheduler-timeout", "2")
+        assert rc == 2 and "TLS setting" in err, err
     finally:
         for proc in procs:
             proc.terminate()
