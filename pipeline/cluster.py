@@ -113,14 +113,16 @@ def close(client, cluster):
 
 class Scheduler:
     """A scheduler given by address (--scheduler), with the TLS files a client of it needs (none:
-    those of the Dask config, `distributed.comm.tls.*`) and the seconds it has to answer."""
+    those of the Dask config, `distributed.comm.tls.*`) or a ready Security (`known`: a running
+    cluster's own), and the seconds it has to answer."""
 
-    def __init__(self, address, tls_ca_file=None, tls_cert=None, tls_key=None, timeout=SCHEDULER_TIMEOUT_S):
+    def __init__(self, address, tls_ca_file=None, tls_cert=None, tls_key=None, timeout=SCHEDULER_TIMEOUT_S,
+                 known=None):
         self.tls = {key: str(path) if path else None for key, path in
                     (("tls_ca_file", tls_ca_file), ("tls_client_cert", tls_cert), ("tls_client_key", tls_key))}
         if any(self.tls.values()) and "://" not in address:
             address = f"tls://{address}"
-        self.address, self.timeout = address, timeout
+        self.address, self.timeout, self.known = address, timeout, known
 
     def __str__(self):
         return self.address
@@ -130,6 +132,8 @@ class Scheduler:
         ends), else the Dask config's."""
         from distributed.security import Security
 
+        if self.known is not None:
+            return self.known
         if not any(self.tls.values()):
             return Security()
         missing = [TLS_OPTIONS[k] for k, v in self.tls.items() if not v]
@@ -146,8 +150,13 @@ TLS_OPTIONS = {"tls_ca_file": "--tls-ca-file", "tls_client_cert": "--tls-cert", 
 
 
 def scheduler_of(scheduler):
-    """A Scheduler from a Scheduler or an address (the Python API takes either)."""
-    return scheduler if isinstance(scheduler, Scheduler) else Scheduler(str(scheduler))
+    """A Scheduler from what the Python API takes: a Scheduler, an address, or a running cluster
+    (a local_cluster: its address and its own certificate)."""
+    if isinstance(scheduler, Scheduler):
+        return scheduler
+    if hasattr(scheduler, "scheduler_address"):
+        return Scheduler(scheduler.scheduler_address, known=scheduler.security)
+    return Scheduler(str(scheduler))
 
 
 def check_scheduler(scheduler):

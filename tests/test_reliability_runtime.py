@@ -229,6 +229,7 @@ def test_a_scheduler_given_with_tls_files_answers_and_without_them_is_one_line(l
     files = pem_files(local.security, tmp_path)
     address = local.scheduler_address
     cluster.check_scheduler(cluster.Scheduler(address, files["ca"], files["cert"], files["key"]))
+    cluster.check_scheduler(local)          # the Python API takes the running cluster, with its certificate
     with pytest.raises(cluster.SweepError, match="TLS setting"):
         cluster.check_scheduler(cluster.Scheduler(address, timeout=2))
     with pytest.raises(cluster.SweepError, match="--tls-key missing"):
