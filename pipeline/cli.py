@@ -14,7 +14,7 @@ import numpy as np
 
 import pipeline
 from pipeline import config as config_mod
-from pipeline import cluster, fileio, schema
+from pipeline import cluster, fileio, preflight, schema
 
 EXIT_USAGE = 2
 
@@ -42,10 +42,36 @@ def _confirm_large(args):
         return True
 
 
+def _scheduler(args):
+    """--scheduler with its TLS files and timeout as a cluster.Scheduler, or None (a local cluster,
+    which makes its own certificate)."""
+    tls = (args.tls_ca_file, args.tls_cert, args.tls_key)
+    if not args.scheduler:
+        if any(tls):
+            raise cluster.SweepError("--tls-ca-file, --tls-cert and --tls-key go with --scheduler "
+                                     "(the local cluster makes a certificate of its own)")
+        return None
+    return cluster.Scheduler(args.scheduler, *tls, timeout=args.scheduler_timeout)
+
+
+def _preflight(args, cfg, out, need_bytes):
+    """The checks before any work of a command writing `out` from cfg (pipeline.preflight), and
+    the scheduler's answer."""
+    identity = fileio.result_identity(out, cfg.hash())
+    preflight.check(out, need_bytes, lock=True, report=args.report, report_identity=identity,
+                    overwrite=args.overwrite)
+    scheduler = _scheduler(args)
+    if scheduler:
+        cluster.check_scheduler(scheduler)
+    return scheduler
+
+
 def cmd_run(args):
-    path = pipeline.run(args.config, args.output, allow_large=_confirm_large(args), workers=args.workers,
-                        scheduler=args.scheduler, resume=args.resume, overwrite=args.overwrite,
-                        chunk_points=args.chunk_points, progress=not args.quiet)
+    cfg = pipeline.as_config(args.config, allow_large=_confirm_large(args))
+    out = args.output or f"out/{cfg.data['scene']['name']}.nc"
+    scheduler = _preflight(args, cfg, out, preflight.sweep_bytes(cfg))
+    path = pipeline.run(cfg, out, workers=args.workers, scheduler=scheduler, resume=args.resume,
+                        overwrite=args.overwrite, chunk_points=args.chunk_points, progress=not args.quiet)
     print(f"cube: {path}")
     if args.report:
         from pipeline import sweep
@@ -61,7 +87,8 @@ def _run_result(args, module, suffix, label):
     the report when asked."""
     cfg = pipeline.as_config(args.config, whole_grid=False)
     out = args.output or f"out/{cfg.data['scene']['name']}_{suffix}.nc"
-    path = module.run(cfg, out, workers=args.workers, scheduler=args.scheduler, overwrite=args.overwrite,
+    scheduler = _preflight(args, cfg, out, preflight.MIN_FREE_BYTES)
+    path = module.run(cfg, out, workers=args.workers, scheduler=scheduler, overwrite=args.overwrite,
                       resume=args.resume, stream=None if args.quiet else sys.stderr)
     print(f"{label}: {path}")
     if args.report:
@@ -114,6 +141,8 @@ def cmd_modes(args):
     from pipeline import modes
 
     cfg = pipeline.as_config(args.config, whole_grid=False)
+    if args.output:
+        preflight.check(args.output)
     print(modes.command(cfg, config_mod.flag_values(_at(args.at), cfg.model), args.campbell, args.output, args.json))
     return 0
 
@@ -235,6 +264,7 @@ def cmd_report(args):
 
     out = args.output or str(args.cube).rsplit(".", 1)[0] + "_report"
     points = [report_mod.parse_point(items) for items in args.point or []]
+    preflight.check_report(out)
     files = pipeline.make_report(args.cube, out, points=points or None, overwrite=args.overwrite, over=args.over,
                                  stream=None if args.quiet else sys.stderr)
     print(f"report: {files['html']}")
@@ -272,6 +302,31 @@ def cmd_warmup(args):
     return 0
 
 
+def _positive_float(text):
+    """argparse type: a number > 0 (seconds)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number > 0 (got {text!r})") from None
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0 (got {text})")
+    return value
+
+
+def _cluster_options(parser):
+    """The Dask options of run, continue and backbone."""
+    parser.add_argument("--workers", type=_positive_int,
+                        help="local Dask worker processes (default: one per core, at least 2)")
+    parser.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786 "
+                                            "(tls://... with the --tls-* files)")
+    parser.add_argument("--scheduler-timeout", type=_positive_float, default=cluster.SCHEDULER_TIMEOUT_S,
+                        metavar="SECONDS", help="seconds the scheduler has to answer before the command "
+                                                f"stops (default {cluster.SCHEDULER_TIMEOUT_S})")
+    parser.add_argument("--tls-ca-file", metavar="PEM", help="CA certificate of a TLS cluster (with --scheduler)")
+    parser.add_argument("--tls-cert", metavar="PEM", help="this client's certificate (with --scheduler)")
+    parser.add_argument("--tls-key", metavar="PEM", help="this client's private key (with --scheduler)")
+
+
 def build_parser():
     ap = argparse.ArgumentParser(prog="rotorsweep", description=__doc__.splitlines()[0])
     ap.add_argument("--version", action="version", version=f"rotorsweep {cluster.VERSION}")
@@ -280,8 +335,7 @@ def build_parser():
     r = sub.add_parser("run", help="run a sweep from a config into a netCDF cube")
     r.add_argument("config", nargs="?", help="scene TOML (default: the embedded demo scene)")
     r.add_argument("-o", "--output", help="cube path (default out/<scene name>.nc)")
-    r.add_argument("--workers", type=_positive_int, help="local Dask worker processes (default: one per core, at least 2)")
-    r.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
+    _cluster_options(r)
     r.add_argument("--chunk-points", type=_positive_int, help="points per Dask task (default: automatic)")
     r.add_argument("--resume", action="store_true", help="finish an interrupted run from its part files")
     r.add_argument("--overwrite", action="store_true", help="replace an existing cube (and --report DIR)")
@@ -300,8 +354,7 @@ def build_parser():
         c = sub.add_parser(name, help=help_text)
         c.add_argument("config", nargs="?" if name == "continue" else None, help=config_help)
         c.add_argument("-o", "--output", help=f"result path (default out/<scene name>_{name.replace('continue', 'continuation')}.nc)")
-        c.add_argument("--workers", type=_positive_int, help="local Dask worker processes (default: one per core, at least 2)")
-        c.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
+        _cluster_options(c)
         c.add_argument("--resume", action="store_true", help="finish an interrupted run from its finished lines")
         c.add_argument("--overwrite", action="store_true", help="replace an existing result (and --report DIR)")
         c.add_argument("--report", metavar="DIR", help="also write the report into DIR")
@@ -424,22 +477,60 @@ def _dispatch(args, interrupts):
         return args.func(args)
     except Exception as exc:
         if interrupts:
-            return _interrupted()
-        if isinstance(exc, user_errors()):
-            return _error(args, exc)
+            return _interrupted(args)
         if isinstance(exc, BrokenPipeError):      # output piped into head & co.
             sys.stdout = open(os.devnull, "w")
             return 0
-        if isinstance(exc, OSError):       # read-only directory, disk full, a file where a directory goes
-            return _error(args, fileio.os_error_text(exc))
-        raise
+        message = error_text(exc)
+        if message is None:
+            raise
+        return _error(args, message)
     except KeyboardInterrupt:
-        return _interrupted()
+        return _interrupted(args)
 
 
-def _interrupted():
-    print("rotorsweep: interrupted; finished chunks are kept, rerun with --resume", file=sys.stderr)
+def error_text(exc):
+    """The one line for an error the user can act on, or None for a bug (a traceback): the
+    modules' user errors; OS errors (read-only directory, disk full, a file where a directory
+    goes, a lost scheduler connection) and netCDF/HDF write errors name the path (pipeline.fileio
+    names the output, never its temp file); Dask giving up on a task whose workers kept dying."""
+    if isinstance(exc, user_errors()):
+        return str(exc)
+    if isinstance(exc, OSError):
+        return fileio.os_error_text(exc)
+    if type(exc).__name__ == "KilledWorker":
+        return (f"Dask gave up on a task: {str(exc).split('. ')[0]}; is the machine short of memory? "
+                "(the workers' logs say more)")
+    if isinstance(exc, RuntimeError) and ("NetCDF" in str(exc) or "HDF" in str(exc)):
+        return f"netCDF/HDF error: {exc}"
+    return None
+
+
+# What each command keeps when Ctrl-C stops it: (what its finished work is written as, where it
+# can resume with --resume; what is left as it was otherwise). Every output is written atomically,
+# so none is ever partial. A command with a --resume option keeps its finished work.
+INTERRUPTED = {
+    "run": ("chunks", "the output"),
+    "continue": ("lines", "the output"),
+    "backbone": ("lines", "the output"),
+    "report": (None, "the report directory"),
+    "modes": (None, "the Campbell table file"),
+}
+
+
+def _interrupted(args):
+    print(f"rotorsweep: {interrupted_text(args)}", file=sys.stderr)
     return 130
+
+
+def interrupted_text(args):
+    """The truth about what an interrupted command kept (INTERRUPTED)."""
+    parts, unchanged = INTERRUPTED.get(args.command, (None, None))
+    if parts and getattr(args, "resume", None) is not None:
+        return f"interrupted; finished {parts} are kept, rerun with --resume"
+    if unchanged:
+        return f"interrupted; nothing was written, {unchanged} is as it was"
+    return "interrupted"
 
 
 def _error(args, message):

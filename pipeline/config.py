@@ -285,7 +285,7 @@ ORBIT_BYTES_PER_POINT = 512    # ~20 orbit and Floquet variables, mostly float64
 ATTRACTOR_BYTES_PER_POINT = 512
 
 
-def _bytes_per_point(data):
+def bytes_per_point(data):
     """Rough size of one grid point in the cube: the Poincare samples dominate with attractors."""
     ana = data["analysis"]
     if ana["attractor"] is not True:
@@ -303,7 +303,7 @@ def _grid_size_problem(n, data, allow_large):
     """(message, may_confirm) when the grid is too large, else None. numerics.max_points is a
     guard against typos that --yes lifts; the memory cap is not, since such a run could only
     fail at its end, when the cube is assembled."""
-    per_point = _bytes_per_point(data)
+    per_point = bytes_per_point(data)
     cap = _memory_bytes() // (CUBE_COPIES_IN_MEMORY * per_point)
     if n > cap:
         return (f"sweep: the grid has {n} points; at most {cap} fit in this machine's memory "

@@ -1,6 +1,7 @@
 """File-system plumbing shared by sweeps, cubes and reports: atomic writes that respect the umask,
 an exclusive lock on a sweep's output, and OS errors turned into one line for the user."""
 import contextlib
+import errno
 import fcntl
 import json
 import os
@@ -54,11 +55,25 @@ def atomic_path(path):
         os.chmod(tmp, 0o666 & ~_umask())
         fsync_path(tmp)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         if os.path.exists(tmp):
             os.remove(tmp)
-        raise
+        failure = _named_failure(exc, tmp, path)
+        if failure is None:
+            raise
+        raise failure from None
     fsync_path(path.parent)
+
+
+def _named_failure(exc, tmp, path):
+    """An OSError naming `path` for a write into `tmp` that failed (the user never sees the temp
+    file's name): an OSError of the temp file, or netCDF-C's RuntimeError (a full disk is "NetCDF:
+    HDF error"). None for anything else."""
+    if isinstance(exc, OSError) and str(exc.filename) == str(tmp):
+        return OSError(exc.errno, exc.strerror or str(exc), str(path))
+    if isinstance(exc, RuntimeError) and ("NetCDF" in str(exc) or "HDF" in str(exc)):
+        return OSError(errno.EIO, f"netCDF write failed ({exc}; is the disk full?)", str(path))
+    return None
 
 
 # --- the output lock --------------------------------------------------------------------------
@@ -92,6 +107,29 @@ def _lock_fd(path):
         os.close(fd)
 
 
+def _locked_text(output, holder):
+    return (f"{output} is being written by another rotorsweep run ({_holder_text(holder)}); wait for it "
+            "to finish or use another output path")
+
+
+def check_unlocked(output):
+    """Refuse at once (before any work) while a live run holds `output`'s lock; creates nothing
+    (the run takes the lock itself later)."""
+    path = lock_path(output)
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except FileNotFoundError:
+        return
+    except OSError as exc:
+        raise FileIOError(f"cannot write the output: {os_error_text(exc, path)}") from None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except BlockingIOError:
+        raise FileIOError(_locked_text(output, _read_json(path) or {})) from None
+    finally:
+        os.close(fd)
+
+
 @contextlib.contextmanager
 def output_lock(output, config_label):
     """Hold `<output>.lock` for the duration of a run; refuse while another live run holds it.
@@ -101,9 +139,7 @@ def output_lock(output, config_label):
         path.parent.mkdir(parents=True, exist_ok=True)
         fd = _lock_fd(path)
         if fd is None:
-            raise FileIOError(f"{output} is being written by another rotorsweep run "
-                              f"({_holder_text(_read_json(path) or {})}); wait for it to finish or use "
-                              "another output path")
+            raise FileIOError(_locked_text(output, _read_json(path) or {}))
         holder = {"pid": os.getpid(), "host": socket.gethostname(), "config": str(config_label),
                   "started": datetime.now(timezone.utc).isoformat(timespec="seconds")}
         os.ftruncate(fd, 0)
@@ -125,8 +161,12 @@ REPORT_MARKER = "report.json"      # which cube a report directory was made from
 
 def report_identity(ds, cube_path=None):
     """What makes two reports 'of the same cube': the cube file and its config hash."""
-    return {"cube": str(Path(cube_path).absolute()) if cube_path is not None else None,
-            "config_hash": ds.attrs.get("config_hash")}
+    return result_identity(cube_path, ds.attrs.get("config_hash"))
+
+
+def result_identity(path, config_hash):
+    """report_identity of the result a run will write to `path` from a config of `config_hash`."""
+    return {"cube": str(Path(path).absolute()) if path is not None else None, "config_hash": config_hash}
 
 
 def check_report_dir(out, identity, overwrite):

@@ -127,10 +127,10 @@ def test_existing_cube_is_not_overwritten_without_flag(tmp_path):
 def test_local_cluster_binds_to_localhost_and_its_workers_keep_their_imports_out_of_gc():
     client, cluster = connect(2, None)
     try:
-        assert client.scheduler.address.startswith("tcp://127.0.0.1:")
+        assert client.scheduler.address.startswith("tls://127.0.0.1:")
         assert "127.0.0.1" in client.dashboard_link
         for addr in client.scheduler_info()["workers"]:
-            assert addr.startswith("tcp://127.0.0.1:")
+            assert addr.startswith("tls://127.0.0.1:")
         # the preload froze what the imports left (a fresh process: nothing frozen otherwise)
         assert all(n > 10_000 for n in client.run(gc.get_freeze_count).values())
         # the relaxed housekeeping reached the worker processes (they get the nannies' settings)

@@ -84,7 +84,7 @@ def run_atlas(cfg, work_dir, n_workers=2):
         cube.write_part = counting
         with phase_timers() as phases, get_task_stream(client) as stream:
             t0 = time.perf_counter()
-            pipeline.run(cfg, str(out), scheduler=cluster.scheduler_address, overwrite=True, progress=False)
+            pipeline.run(cfg, str(out), scheduler=cluster, overwrite=True, progress=False)
             wall = time.perf_counter() - t0
         cube.write_part = write_part
         driver_cpu = time.process_time() - driver_cpu

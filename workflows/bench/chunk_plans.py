@@ -40,7 +40,7 @@ def swept_costs(cfg, work_dir):
     cluster, client = start_cluster(2)
     try:
         client.run(worker_calls()[0], cfg.data, first_point(cfg))
-        path = pipeline.run(cfg, str(Path(work_dir) / "costs.nc"), scheduler=cluster.scheduler_address,
+        path = pipeline.run(cfg, str(Path(work_dir) / "costs.nc"), scheduler=cluster,
                             overwrite=True, progress=False)
     finally:
         client.close()

@@ -11,7 +11,7 @@ machine, tables, what limits the speed-up, verdict against the target) and scali
 time against chunk size and the task timeline of the two-worker run).
 
 What is measured, every run through the public API `pipeline.run(cfg, output,
-scheduler=<address>, chunk_points=..., overwrite=True)` on a fresh local cluster of k
+scheduler=<the cluster>, chunk_points=..., overwrite=True)` on a fresh local cluster of k
 single-threaded worker processes, the one `rotorsweep run` starts (`pipeline.cluster.local_cluster`,
 with its relaxed housekeeping settings; `scaling_runs`):
 

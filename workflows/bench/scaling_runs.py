@@ -155,7 +155,7 @@ def measure_run(cfg, n_workers, chunk_points, work_dir, label, repeat=0):
         with phase_timers() as phases, get_task_stream(client) as stream:
             steal = steal_seconds()
             t0 = time.perf_counter()
-            path = pipeline.run(cfg, str(out), scheduler=cluster.scheduler_address,
+            path = pipeline.run(cfg, str(out), scheduler=cluster,
                                 chunk_points=chunk_points, overwrite=True, progress=False)
             wall = time.perf_counter() - t0
             steal = since(steal, steal_seconds())
@@ -204,7 +204,7 @@ def warm_up(work_dir):
     t0 = time.perf_counter()
     cluster, client = start_cluster(1)
     try:
-        path = pipeline.run(cfg, str(Path(work_dir) / "warmup.nc"), scheduler=cluster.scheduler_address,
+        path = pipeline.run(cfg, str(Path(work_dir) / "warmup.nc"), scheduler=cluster,
                             overwrite=True, progress=False)
     finally:
         client.close()
