@@ -99,7 +99,7 @@ def test_info_query_and_report_of_a_backbone_result(axial_result, capsys):
     ({"modes": "one"}, "backbone.modes: 'one' is neither"),
     ({"modes": "9"}, "backbone.modes: mode 9 does not exist; the model has 5 modes"),
     ({"surface_mode": 7}, "backbone.surface_mode: mode 7 does not exist"),
-    ({"amplitude_max": 2e-5}, "backbone.amplitude_max: 2e-05 m reaches the preload's axial approach z0"),
+    ({"amplitude_max": 2e-5}, "backbone.amplitude_max: 2e-05 m reaches the axial approach z0"),
     ({"amplitude_max": 1e-6, "amplitude_min": 2e-6}, "backbone.amplitude_min: 2e-06 m must be below"),
     ({"ds": 0.0}, "backbone.ds"),
 ])
