@@ -20,10 +20,8 @@ import xarray as xr
 
 from pipeline import cluster, compute, result_kinds, results, schema
 from pipeline.config import ConfigError, continued_axis
+from rotorkernels import extrema
 from rotorkernels.continuation import arclength as al, solve_orbit, twoparam
-
-# orbit samples per forcing period for the amplitudes (max |q| and half peak-to-peak)
-AMPLITUDE_SAMPLES = 64
 
 
 @dataclass(frozen=True)
@@ -222,10 +220,10 @@ def branch_record(family, built, branch, parent):
 
 
 def _amplitudes(family, built, point):
-    """(max |o|, half peak-to-peak of o) over the orbit for each observable o, in SI."""
-    u = al.orbit_samples(family, point, AMPLITUDE_SAMPLES)
-    o = family.model.observe(u, built(point.lam).period)
-    return np.abs(o).max(axis=0), 0.5 * (o.max(axis=0) - o.min(axis=0))
+    """(max |o|, half peak-to-peak of o) over the orbit for each observable o, in SI, exact
+    (rotorkernels.extrema)."""
+    return extrema.amplitudes(family.model, point.state, family.params(point.lam), family.periods, family.opts,
+                              built(point.lam).period)
 
 
 # --- the result file -----------------------------------------------------------------------------
