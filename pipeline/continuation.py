@@ -126,9 +126,19 @@ def line_family(data, pl, where):
 
     def built(lam):
         return build({**values, pl.parameter: lam})
-    family = al.Family(compute.model_of(data), lambda lam: built(lam).p, compute.integrator_settings(data),
-                       scale=pl.range[1] - pl.range[0], periods=float(pl.periods))
+    model = compute.model_of(data)
+    # the observables read positions, so their weights do not depend on the forcing period
+    weights = extrema.observable_weights(model, built(pl.start).period)
+    family = al.Family(model, lambda lam: built(lam).p, compute.integrator_settings(data),
+                       scale=pl.range[1] - pl.range[0], periods=float(pl.periods), weights=weights,
+                       peak=_plotted(model, data))
     return family, built
+
+
+def _plotted(model, data):
+    """The index of the observable the report plots (its half peak-to-peak peaks are events)."""
+    names = [o.name for o in model.observables]
+    return names.index(data["report"]["observable"]) if data["report"]["observable"] in names else 0
 
 
 def continue_line(data, where):
@@ -221,7 +231,9 @@ def branch_record(family, built, branch, parent):
 
 def _amplitudes(family, built, point):
     """(max |o|, half peak-to-peak of o) over the orbit for each observable o, in SI, exact
-    (rotorkernels.extrema)."""
+    (rotorkernels.extrema): those the point recorded (what its events read) where it did."""
+    if point.amplitudes is not None:
+        return point.amplitudes
     return extrema.amplitudes(family.model, point.state, family.params(point.lam), family.periods, family.opts,
                               built(point.lam).period)
 
@@ -451,8 +463,9 @@ def stable_runs(ds, b):
     n = int(ds["branch_points"].values[b])
     lam = ds["parameter"].values[b, :n]
     stable = ds["stable"].values[b, :n] == 1
-    located = {int(p): float(v) for br, p, v in zip(ds["event_branch"].values, ds["event_point"].values,
-                                                    ds["event_parameter"].values) if br == b}
+    located = {int(p): float(v) for br, p, v, k in zip(ds["event_branch"].values, ds["event_point"].values,
+                                                       ds["event_parameter"].values, ds["event_type"].values)
+               if br == b and k != al.PEAK}     # a peak changes no stability
     runs, start = [], None
     for i in range(n):
         if stable[i] and start is None:

@@ -161,3 +161,61 @@ def test_bai_half_peak_to_peak_from_point_and_sweep_match_scipy(bai_segment):
         weights = extrema.observable_weights(model, built.period)
         hi, lo = scipy_extremes(fun, state, 1.0, weights)
         np.testing.assert_allclose([row["amplitude_x"][0], row["amplitude_y"][0]], 0.5 * (hi - lo), rtol=1e-7)
+
+
+def duffing_first_branch(gamma, force, hi):
+    cfg = config.parse_config(DUFFING_SCENE.format(gamma=gamma, force=force, lo=0.5, hi=hi))
+    (where,) = continuation.plan(cfg.data).lines
+    return continuation.continue_line(cfg.data, where)[0]
+
+
+def test_linear_oscillator_peak_is_the_closed_form():
+    """gamma = 0: the resonance peak of |X| = F / |1 - w^2 + 2 i zeta w| is at w = sqrt(1 - 2 zeta^2)
+    with |X| = F / (2 zeta sqrt(1 - zeta^2)), one `peak` event, stable. The peak's slope is a
+    central difference (noise rtol / fd_step = 1e-7 of the slope, truncation fd_step^2 = 1e-10)
+    whose zero Brent locates to 1e-11 in arclength: the frequency to ~1e-10, the amplitude
+    (quadratic in the frequency's error) to the integration's 1e-12; 1e-9 holds."""
+    zeta, force = 0.05, 0.3
+    first = duffing_first_branch(0.0, force, 2.0)
+    (k,) = np.flatnonzero(first["event_type"] == al.PEAK)
+    assert first["event_type"].tolist() == [al.PEAK]
+    np.testing.assert_allclose(first["event_parameter"][k], np.sqrt(1 - 2 * zeta ** 2), rtol=1e-9)
+    exact = force / (2 * zeta * np.sqrt(1 - zeta ** 2))
+    np.testing.assert_allclose(first["event_amplitude_max"][k, 0], exact, rtol=1e-9)
+    assert np.abs(first["event_multipliers"][k]).max() < 1.0
+
+
+def scipy_duffing_peak(gamma, force, guess_state, w0, width=1e-3):
+    """(w, max |x|) of the resonance peak near w0 by scipy alone: the orbit at each w by Newton
+    shooting (scipy's fsolve on DOP853 at rtol 1e-13, started from guess_state), its max |x| by
+    scipy_extremes, the zero of d max|x| / dw (central difference, step 1e-5: truncation 1e-10,
+    noise 1e-13 / 1e-5 = 1e-8 of the slope) by brentq within w0 +- width."""
+    from scipy.optimize import brentq, fsolve
+
+    def orbit(w):
+        fun = duffing_rhs(w, 0.05, gamma, force)
+
+        def residual(s):
+            return solve_ivp(fun, (0.0, 1.0), s, method="DOP853", rtol=1e-13, atol=1e-16).y[:, -1] - s
+        return fun, fsolve(residual, guess_state, xtol=1e-13)
+
+    def amplitude(w):
+        fun, s = orbit(w)
+        hi, lo = scipy_extremes(fun, s, 1.0, np.array([[1.0]]))
+        return max(hi[0], -lo[0])
+
+    h = 1e-5
+    w = brentq(lambda w: amplitude(w + h) - amplitude(w - h), w0 - width, w0 + width, xtol=1e-13)
+    return w, amplitude(w)
+
+
+@pytest.mark.parametrize("gamma, force, hi", [(1.0, 0.3, 5.0), (-0.05, 0.1, 2.0)])
+def test_duffing_peak_matches_scipy(gamma, force, hi):
+    """The hardening and softening resonance peaks (one `peak` event each): frequency and max |x|
+    against scipy_duffing_peak. Its frequency is good to ~1e-8 / (d2 max|x| / dw2) ~ 1e-9, ours
+    to ~1e-10 (test_linear_oscillator_peak_is_the_closed_form): 1e-7 relative."""
+    first = duffing_first_branch(gamma, force, hi)
+    (k,) = np.flatnonzero(first["event_type"] == al.PEAK)
+    w, amp = scipy_duffing_peak(gamma, force, first["event_state"][k], first["event_parameter"][k])
+    np.testing.assert_allclose(first["event_parameter"][k], w, rtol=1e-7)
+    np.testing.assert_allclose(first["event_amplitude_max"][k, 0], amp, rtol=1e-7)
