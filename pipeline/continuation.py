@@ -425,11 +425,25 @@ def describe(ds):
                      f"{f' from branch {int(ds.branch_parent.values[b])}' if ds.branch_parent.values[b] >= 0 else ''}"
                      f"{f' ({where})' if where else ''}, {int(ds['branch_points'].values[b])} points, "
                      f"ended {al.END_REASONS[int(ds['branch_end'].values[b])]}: {ds['branch_detail'].values[b]}")
+    lines += _peak_lines(ds, par, unit)
     for iv in bistable_intervals(ds):
         where = ", ".join(f"{k}={v:g}" for k, v in iv.items() if k not in ("lo", "hi", "branches"))
         lines.append(f"  two stable orbits coexist: {par} {iv['lo']:.10g} to {iv['hi']:.10g} {unit}"
                      f"{f' ({where})' if where else ''}, branches {iv['branches']}")
     return "\n".join(lines)
+
+
+def _peak_lines(ds, par, unit):
+    """`info`'s lines of the located peaks: where, the plotted observable's half peak-to-peak
+    there, stability."""
+    obs = list(ds["observable"].values)
+    j = obs.index(ds.attrs["report_observable"]) if ds.attrs.get("report_observable") in obs else 0
+    units = ds["event_amplitude_half_pp"].attrs.get("units", "")
+    mult = ds["event_multiplier_real"].values + 1j * ds["event_multiplier_imag"].values
+    return [f"  peak on branch {int(ds['event_branch'].values[k])}: {par} {ds['event_parameter'].values[k]:.10g} {unit}, "
+            f"half peak-to-peak {obs[j]} {ds['event_amplitude_half_pp'].values[k, j]:.10g} {units}, "
+            f"{'stable' if np.abs(mult[k]).max() < 1.0 else 'unstable'}"
+            for k in np.flatnonzero(ds["event_type"].values == al.PEAK)]
 
 
 def events_table(ds):
@@ -449,8 +463,10 @@ def events_table(ds):
     for c in ds.coords:
         if ds[c].dims == ("branch",):
             cols[c] = ds[c].values[branch].tolist() if len(branch) else []
+    cols["stable"] = [int(np.abs(m).max() < 1.0) for m in mult]
     for j, name in enumerate(ds["observable"].values):
         cols[f"amplitude_max_{name}"] = ds["event_amplitude_max"].values[:, j].tolist()
+        cols[f"amplitude_half_pp_{name}"] = ds["event_amplitude_half_pp"].values[:, j].tolist()
     return cols
 
 

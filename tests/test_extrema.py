@@ -219,3 +219,23 @@ def test_duffing_peak_matches_scipy(gamma, force, hi):
     w, amp = scipy_duffing_peak(gamma, force, first["event_state"][k], first["event_parameter"][k])
     np.testing.assert_allclose(first["event_parameter"][k], w, rtol=1e-7)
     np.testing.assert_allclose(first["event_amplitude_max"][k, 0], amp, rtol=1e-7)
+
+
+def test_peak_in_info_events_table_and_csv():
+    """The linear oscillator's peak in `info`, the events table (the report's and the CSV's):
+    parameter, amplitudes (as the event recorded them), stability."""
+    from pipeline import query
+
+    cfg = config.parse_config(DUFFING_SCENE.format(gamma=0.0, force=0.3, lo=0.5, hi=2.0))
+    pl = continuation.plan(cfg.data)
+    lines = [(where, continuation.continue_line(cfg.data, where)) for where in pl.lines]
+    ds = continuation.to_dataset(cfg.data, pl, lines, {})
+    info = continuation.describe(ds)
+    w = float(ds["event_parameter"].values[0])
+    assert f"peak on branch 0: omega {w:.10g}" in info and "half peak-to-peak x 3.00375" in info and "stable" in info
+    cols = continuation.events_table(ds)
+    assert cols["type"] == ["PK"] and cols["stable"] == [1] and cols["omega"] == [w]
+    assert cols["amplitude_max_x"] == ds["event_amplitude_max"].values[:, 0].tolist()
+    assert cols["amplitude_half_pp_x"] == ds["event_amplitude_half_pp"].values[:, 0].tolist()
+    np.testing.assert_allclose(cols["amplitude_half_pp_x"], cols["amplitude_max_x"], rtol=1e-12)   # a symmetric orbit
+    assert "PK" in query.render(cols, "csv")
