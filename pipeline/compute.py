@@ -12,7 +12,7 @@ from dataclasses import replace
 import numpy as np
 
 from pipeline import schema
-from rotorkernels import attractor, continuation, integrators, models, shooting
+from rotorkernels import attractor, continuation, extrema, integrators, models, shooting
 
 
 def model_of(data):
@@ -97,7 +97,11 @@ def solve_segment(data, points):
         sols = _orbit_chain(model, params, opts, data["numerics"], seconds)
     else:
         sols = [_no_orbit(model, "not_requested")] * len(points)
-    rows = [point_variables(model, sol, par, 0.0) for sol, par in zip(sols, params)]
+    rows = []
+    for i, (sol, par) in enumerate(zip(sols, params)):
+        start = time.perf_counter()
+        rows.append(point_variables(model, sol, par, 0.0, opts))
+        seconds[i] += time.perf_counter() - start
     if ana["attractor"]:
         settings = attractor_settings(data)
         for direction, suffix in _directions(ana["sweep_direction"]):
@@ -195,8 +199,9 @@ def _attractor_chain(model, params, sols, opts, settings, order, seconds):
         yield i, att
 
 
-def point_variables(model, sol, params, seconds):
-    """Cube variables (schema.VARIABLES) of one solved point, SI units."""
+def point_variables(model, sol, params, seconds, opts=None):
+    """Cube variables (schema.VARIABLES) of one solved point, SI units (opts: the integrator
+    settings the orbit was solved with, default integrators.settings())."""
     lam = np.asarray(sol.multipliers, complex)
     out = {
         "orbit_status": sol.status,
@@ -213,18 +218,18 @@ def point_variables(model, sol, params, seconds):
         "orbit_state": sol.state if sol.status == shooting.CONVERGED else np.full(len(lam), np.nan),
         "compute_time": seconds,
     }
-    out.update(_orbit_extent(model, sol.samples, params.period))
+    out.update(_orbit_extent(model, sol, params, integrators.settings() if opts is None else opts))
     return out
 
 
-def _orbit_extent(model, samples, period):
-    """Mean and half peak-to-peak of each observable over the orbit (SI)."""
+def _orbit_extent(model, sol, params, opts):
+    """Mean (of the orbit samples) and half peak-to-peak (exact: rotorkernels.extrema) of each
+    observable over the orbit (SI)."""
     names = [o.name for o in model.observables]
-    if samples is None:
+    if sol.samples is None:
         return {k: np.nan for name in names for k in (f"{name}_mean", f"amplitude_{name}")}
-    values = model.observe(samples, period)
-    half = 0.5 * (values.max(axis=0) - values.min(axis=0))
-    mean = values.mean(axis=0)
+    mean = model.observe(sol.samples, params.period).mean(axis=0)
+    _, half = extrema.amplitudes(model, sol.state, params.p, 1.0, opts, params.period)
     out = {}
     for k, name in enumerate(names):
         out[f"{name}_mean"] = mean[k]

@@ -20,10 +20,8 @@ import xarray as xr
 
 from pipeline import cluster, compute, result_kinds, results, runlog, schema
 from pipeline.config import ConfigError, continued_axis, range_text, settings_problems
+from rotorkernels import extrema
 from rotorkernels.continuation import arclength as al, solve_orbit, twoparam
-
-# orbit samples per forcing period for the amplitudes (max |q| and half peak-to-peak)
-AMPLITUDE_SAMPLES = 64
 
 
 @dataclass(frozen=True)
@@ -129,9 +127,19 @@ def line_family(data, pl, where):
 
     def built(lam):
         return build({**values, pl.parameter: lam})
-    family = al.Family(compute.model_of(data), lambda lam: built(lam).p, compute.integrator_settings(data),
-                       scale=pl.range[1] - pl.range[0], periods=float(pl.periods))
+    model = compute.model_of(data)
+    # the observables read positions, so their weights do not depend on the forcing period
+    weights = extrema.observable_weights(model, built(pl.start).period)
+    family = al.Family(model, lambda lam: built(lam).p, compute.integrator_settings(data),
+                       scale=pl.range[1] - pl.range[0], periods=float(pl.periods), weights=weights,
+                       peak=_plotted(model, data))
     return family, built
+
+
+def _plotted(model, data):
+    """The index of the observable the report plots (its half peak-to-peak peaks are events)."""
+    names = [o.name for o in model.observables]
+    return names.index(data["report"]["observable"]) if data["report"]["observable"] in names else 0
 
 
 def continue_line(data, where):
@@ -223,10 +231,12 @@ def branch_record(family, built, branch, parent):
 
 
 def _amplitudes(family, built, point):
-    """(max |o|, half peak-to-peak of o) over the orbit for each observable o, in SI."""
-    u = al.orbit_samples(family, point, AMPLITUDE_SAMPLES)
-    o = family.model.observe(u, built(point.lam).period)
-    return np.abs(o).max(axis=0), 0.5 * (o.max(axis=0) - o.min(axis=0))
+    """(max |o|, half peak-to-peak of o) over the orbit for each observable o, in SI, exact
+    (rotorkernels.extrema): those the point recorded (what its events read) where it did."""
+    if point.amplitudes is not None:
+        return point.amplitudes
+    return extrema.amplitudes(family.model, point.state, family.params(point.lam), family.periods, family.opts,
+                              built(point.lam).period)
 
 
 # --- the result file -----------------------------------------------------------------------------
@@ -420,11 +430,25 @@ def describe(ds):
                      f"{f' from branch {int(ds.branch_parent.values[b])}' if ds.branch_parent.values[b] >= 0 else ''}"
                      f"{f' ({where})' if where else ''}, {int(ds['branch_points'].values[b])} points, "
                      f"ended {al.END_REASONS[int(ds['branch_end'].values[b])]}: {ds['branch_detail'].values[b]}")
+    lines += _peak_lines(ds, par, unit)
     for iv in bistable_intervals(ds):
         where = ", ".join(f"{k}={v:g}" for k, v in iv.items() if k not in ("lo", "hi", "branches"))
         lines.append(f"  two stable orbits coexist: {par} {iv['lo']:.10g} to {iv['hi']:.10g} {unit}"
                      f"{f' ({where})' if where else ''}, branches {iv['branches']}")
     return "\n".join(lines)
+
+
+def _peak_lines(ds, par, unit):
+    """`info`'s lines of the located peaks: where, the plotted observable's half peak-to-peak
+    there, stability."""
+    obs = list(ds["observable"].values)
+    j = obs.index(ds.attrs["report_observable"]) if ds.attrs.get("report_observable") in obs else 0
+    units = ds["event_amplitude_half_pp"].attrs.get("units", "")
+    mult = ds["event_multiplier_real"].values + 1j * ds["event_multiplier_imag"].values
+    return [f"  peak on branch {int(ds['event_branch'].values[k])}: {par} {ds['event_parameter'].values[k]:.10g} {unit}, "
+            f"half peak-to-peak {obs[j]} {ds['event_amplitude_half_pp'].values[k, j]:.10g} {units}, "
+            f"{'stable' if np.abs(mult[k]).max() < 1.0 else 'unstable'}"
+            for k in np.flatnonzero(ds["event_type"].values == al.PEAK)]
 
 
 def events_table(ds):
@@ -444,8 +468,10 @@ def events_table(ds):
     for c in ds.coords:
         if ds[c].dims == ("branch",):
             cols[c] = ds[c].values[branch].tolist() if len(branch) else []
+    cols["stable"] = [int(np.abs(m).max() < 1.0) for m in mult]
     for j, name in enumerate(ds["observable"].values):
         cols[f"amplitude_max_{name}"] = ds["event_amplitude_max"].values[:, j].tolist()
+        cols[f"amplitude_half_pp_{name}"] = ds["event_amplitude_half_pp"].values[:, j].tolist()
     return cols
 
 
@@ -458,8 +484,9 @@ def stable_runs(ds, b):
     n = int(ds["branch_points"].values[b])
     lam = ds["parameter"].values[b, :n]
     stable = ds["stable"].values[b, :n] == 1
-    located = {int(p): float(v) for br, p, v in zip(ds["event_branch"].values, ds["event_point"].values,
-                                                    ds["event_parameter"].values) if br == b}
+    located = {int(p): float(v) for br, p, v, k in zip(ds["event_branch"].values, ds["event_point"].values,
+                                                       ds["event_parameter"].values, ds["event_type"].values)
+               if br == b and k != al.PEAK}     # a peak changes no stability
     runs, start = [], None
     for i in range(n):
         if stable[i] and start is None:

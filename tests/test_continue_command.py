@@ -89,7 +89,9 @@ def test_continue_writes_branches_and_folds(duffing_result):
     ds = continuation.open_result(out)
     assert ds.attrs["parameter"] == "omega" and ds.sizes["branch"] == 1
     assert ds["branch_end"].values.tolist() == [al.LEFT_RANGE]
-    assert ds["event_type"].values.tolist() == [al.FOLD, al.FOLD]
+    kinds = ds["event_type"].values
+    assert kinds[kinds != al.PEAK].tolist() == [al.FOLD, al.FOLD] and (kinds == al.PEAK).sum() == 1
+    folds = np.flatnonzero(kinds == al.FOLD)
     # the same folds as the kernels' continuation in this process (the file carries them intact)
     cfg = config.parse_config(DUFFING)
     pl = continuation.plan(cfg.data)
@@ -104,12 +106,12 @@ def test_continue_writes_branches_and_folds(duffing_result):
     # the amplitude at the upper fold: the resonance peak, x ~ F / (2 zeta) = 1 scaled by the
     # cubic stiffness; the half peak-to-peak of a symmetric orbit equals its max |x| (to the
     # sampling, 64 per period: cos(pi / 64) ~ 1 - 1.2e-3)
-    amp = ds["event_amplitude_max"].values[0, 0]
-    half = ds["amplitude_half_pp"].values[0, int(ds["event_point"].values[0])]
-    assert 0.5 < amp < 2.0 and half == pytest.approx(ds["amplitude_max"].values[0, int(ds["event_point"].values[0]), 0], rel=2e-3)
+    amp = ds["event_amplitude_max"].values[folds[0], 0]
+    half = ds["amplitude_half_pp"].values[0, int(ds["event_point"].values[folds[0]])]
+    assert 0.5 < amp < 2.0 and half == pytest.approx(ds["amplitude_max"].values[0, int(ds["event_point"].values[folds[0]]), 0], rel=2e-3)
     # the hardening resonance is bistable exactly between its folds (the outer branches stable)
     (iv,) = continuation.bistable_intervals(ds)
-    assert (iv["lo"], iv["hi"]) == tuple(sorted(ds["event_parameter"].values))
+    assert (iv["lo"], iv["hi"]) == tuple(sorted(ds["event_parameter"].values[folds]))
     # plain xarray keeps the flags integer
     import xarray as xr
     with xr.open_dataset(out) as raw:
@@ -121,8 +123,8 @@ def test_info_query_report_on_a_continuation_result(duffing_result):
     info = rotorsweep("info", out).stdout
     assert "parameter omega" in info and "ended left_range" in info and "two stable orbits coexist" in info
     rows = json.loads(rotorsweep("query", out, "--format", "json").stdout)
-    assert [r["type"] for r in rows] == ["LP", "LP"]
-    assert all(abs(r["multiplier_real"] - 1.0) < 1e-6 for r in rows)
+    assert sorted(r["type"] for r in rows) == ["LP", "LP", "PK"]
+    assert all(abs(r["multiplier_real"] - 1.0) < 1e-6 for r in rows if r["type"] == "LP")
     html = (d / "report" / "report.html").read_text()
     assert "Branch diagram" in html and "Located points" in html and "bistable" in html
     assert (d / "report" / "branch_x.png").stat().st_size > 10_000
@@ -174,7 +176,7 @@ def test_boundary_curves_through_the_pipeline_match_the_sweep_boundaries():
     ds = continuation.to_dataset(cfg.data, pl, lines, {})
     pds = ds["curve_type"].values == al.PERIOD_DOUBLING
     assert pds.any()
-    events_76 = sorted(ds["event_parameter"].values[ds["event_branch"].values == 1])
+    events_76 = sorted(ds["event_parameter"].values[(ds["event_branch"].values == 1) & (ds["event_type"].values != al.PEAK)])
     for target in events_76:
         c, p = np.nonzero(np.isclose(ds["curve_second"].values, 7.6e-6, rtol=1e-12, atol=0))
         crossings = ds["curve_parameter"].values[c, p]

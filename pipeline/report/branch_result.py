@@ -187,7 +187,7 @@ def _bistable_html(ds):
 def _events_html(ds):
     cols = continuation.events_table(ds)
     if not cols["type"]:
-        return "<h2>Located points</h2><p>no fold, period doubling or Neimark-Sacker point on the branches</p>"
+        return "<h2>Located points</h2><p>no fold, period doubling, Neimark-Sacker point or peak on the branches</p>"
     return page.columns_html("Located points", cols)
 
 

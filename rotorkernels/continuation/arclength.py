@@ -29,13 +29,13 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from rotorkernels import floquet, integrators as ig
+from rotorkernels import extrema, floquet, integrators as ig
 from rotorkernels.continuation import engine, events as ev
 from rotorkernels.continuation.engine import (  # noqa: F401 (the names this module has always offered)
     CLOSED_LOOP, END_REASONS, INTEGRATION_FAILED, LEFT_RANGE, NEWTON_FAILED, REJOINED, START_FAILED, START_NEWTON,
     STEP_BUDGET, Counter, Settings)
 from rotorkernels.continuation.events import (  # noqa: F401
-    BRANCH_POINT, EVENT_LABELS, EVENT_TYPES, FOLD, NEIMARK_SACKER, PERIOD_DOUBLING)
+    BRANCH_POINT, EVENT_LABELS, EVENT_TYPES, FOLD, NEIMARK_SACKER, PEAK, PERIOD_DOUBLING)
 from rotorkernels.orbits import ForcedOrbitProblem
 from rotorkernels.roots import brent_root
 
@@ -62,6 +62,8 @@ class Point(NamedTuple):
     dphi: np.ndarray        # dphi/dmu at X
     iterations: int
     residual: float
+    amplitudes: np.ndarray = None   # (max |o|, half peak-to-peak of o) per observable (Family.weights)
+    slope: float = np.nan           # d(half peak-to-peak of the peak observable) / d(arclength)
 
     @property
     def state(self):
@@ -70,12 +72,20 @@ class Point(NamedTuple):
 
 class Family(NamedTuple):
     """The forced-orbit problems of `model` along lambda: params(lambda) -> kernel vector p. An
-    engine problem (engine's contract): unknowns X = (s, mu), bordered Newton corrector."""
+    engine problem (engine's contract): unknowns X = (s, mu), bordered Newton corrector.
+
+    weights: observables o = weights @ u[:m] whose exact extrema every point records
+    (`Point.amplitudes`, rotorkernels.extrema); peak: the row of weights whose half peak-to-peak
+    amplitude's local maxima are `events.Peak` events (-1: none), its slope along the tangent a
+    central difference of step fd_step (truncation O(fd_step^2), integration noise rtol / fd_step
+    relative: a peak located to ~1e-7 of the step's length at rtol 1e-12)."""
     model: object
     params: Callable
     opts: np.ndarray
     scale: float = 1.0
     periods: float = 1.0
+    weights: np.ndarray = None
+    peak: int = -1
 
     @property
     def parameters(self):
@@ -142,7 +152,27 @@ class Family(NamedTuple):
             t = engine.tangent(_bordered(sol.monodromy, dphi, at.tangent))
         except np.linalg.LinAlgError:
             return None
-        return Point(sol.X, self.lam(sol.X), sol.monodromy, sol.multipliers, t, dphi, sol.iterations, sol.residual)
+        amplitudes, slope = self.measures(sol.X, t, settings)
+        return Point(sol.X, self.lam(sol.X), sol.monodromy, sol.multipliers, t, dphi, sol.iterations, sol.residual,
+                     amplitudes, slope)
+
+    def extremes(self, X, rows):
+        """(highest, lowest) of the observables weights[rows] over the orbit from X's state."""
+        hi, lo, _ = extrema.orbit_extrema(self.model.kernel, X[:-1], self.params(self.lam(X)), float(self.periods),
+                                          np.ascontiguousarray(self.weights[rows]), self.opts)
+        return hi, lo
+
+    def measures(self, X, t, settings):
+        """(amplitudes, slope) of a point at X with tangent t (None, NaN without weights)."""
+        if self.weights is None:
+            return None, np.nan
+        hi, lo = self.extremes(X, slice(None))
+        amplitudes = np.array([np.maximum(hi, -lo), 0.5 * (hi - lo)])
+        if self.peak < 0:
+            return amplitudes, np.nan
+        h, row = settings.fd_step, slice(self.peak, self.peak + 1)
+        (hi_p, lo_p), (hi_m, lo_m) = (self.extremes(X + sign * h * t, row) for sign in (1.0, -1.0))
+        return amplitudes, float(((hi_p - lo_p) - (hi_m - lo_m))[0] / (4.0 * h))
 
     def where(self, point):
         return f"lambda = {point.lam!r}"
@@ -210,6 +240,7 @@ def follow_branch(family, first, lam_range, settings=Settings(), stop_at_branch_
     counter = counter or Counter()
     # located with this module's root finder, looked up at each call (it can be replaced)
     events = ev.orbit_events(brent_root, Rejoin if stop_at_branch_point else ev.BranchPoint)
+    events += (ev.Peak(brent_root),) if family.peak >= 0 else ()
     run = engine.follow(family, first, [lam_range], settings, events, counter)
     located = [Event(f.event.code, f.point, f.index, f.evaluations) for f in run.found]
     return Branch(run.points, located, run.end, run.detail, family.periods, counter.n)
@@ -251,7 +282,8 @@ def switch_period_doubling(family, event, lam_range, settings=Settings()):
         if failure is None and _is_new_orbit(family, sol.X, settings):
             first = doubled.point(sol, engine.Seed(d), settings, counter)
             if first is not None:
-                first = first._replace(tangent=_away(first.tangent, sol.X - pd.X))
+                turn = 1.0 if first.tangent @ (sol.X - pd.X) >= 0 else -1.0
+                first = first._replace(tangent=turn * first.tangent, slope=turn * first.slope)
                 return follow_branch(doubled, first, lam_range, settings, True, counter)
         ds /= 2.0
     return Branch([], [], START_FAILED, f"no period-{2 * family.periods:g} orbit found next to the period "
@@ -262,11 +294,6 @@ def _is_new_orbit(family, X, settings):
     """The corrected orbit is not the period-k orbit traversed twice: phi_k(s) != s."""
     r, _, status, _ = family.return_map(X[:-1], family.lam(X), False)
     return status == ig.STATUS_OK and np.abs(r).max() > 1e3 * settings.tol * max(1.0, np.abs(X[:-1]).max())
-
-
-def _away(t, direction):
-    """The tangent t oriented along `direction`."""
-    return t if t @ direction >= 0 else -t
 
 
 def orbit_samples(family, point, n_per_period=64):

@@ -14,7 +14,9 @@ circle), with overflow-safe signs of the products. A sign change of prod(mu_i - 
 parameter (the tangent's parameter component changes sign) is a fold, without one a branch point.
 `Level` events are the points where a continued parameter takes a given value (solved exactly
 there); `Flag` events are detected between two points and not located (codimension-2 flags).
-A user event (a response peak, ...) is one subclass of `Zero` with `detect` and `value`.
+A user event is one subclass of `Zero` with `detect` and `value`: `Peak`, a local maximum of a
+point's plotted amplitude along the branch (its `slope`, the amplitude's derivative along the
+unit tangent, turns from positive to negative), located like a fold.
 """
 from collections import namedtuple
 
@@ -25,9 +27,9 @@ from rotorkernels.continuation import engine
 from rotorkernels.roots import NotConverged, brent_root
 
 # The bifurcations of orbits located on a branch (the codes a branch's events record).
-EVENT_TYPES = ("fold", "period_doubling", "neimark_sacker", "branch_point")
-FOLD, PERIOD_DOUBLING, NEIMARK_SACKER, BRANCH_POINT = range(4)
-EVENT_LABELS = ("LP", "PD", "NS", "BP")
+EVENT_TYPES = ("fold", "period_doubling", "neimark_sacker", "branch_point", "peak")
+FOLD, PERIOD_DOUBLING, NEIMARK_SACKER, BRANCH_POINT, PEAK = range(5)
+EVENT_LABELS = ("LP", "PD", "NS", "BP", "PK")
 
 Boundary = namedtuple("Boundary", "value solution evaluations")
 
@@ -211,6 +213,28 @@ def orbit_events(root=brent_root, branch_point=BranchPoint):
     branch there)."""
     recent = RecentSigns()
     return tuple(kind(root, recent) for kind in (Fold, branch_point, PeriodDoubling, NeimarkSacker))
+
+
+class Peak(Zero):
+    """A local maximum of the plotted amplitude along the branch: points carry `.slope`, the
+    amplitude's derivative along their unit tangent (oriented along the travel), which turns from
+    positive to negative. Located by Brent's method on the arclength like a fold, each corrector's
+    solution made a point (its tangent and slope) by the problem."""
+    label, code = EVENT_LABELS[PEAK], PEAK
+
+    def value(self, point):
+        return point.slope
+
+    def detect(self, problem, a, b):
+        return a.slope > 0.0 and b.slope <= 0.0
+
+    def locate(self, problem, a, b, settings, counter):
+        def slope(solution):
+            point = solution if hasattr(solution, "slope") else problem.point(solution, a, settings, counter)
+            if point is None:
+                raise ValueError("no tangent at a corrector's solution")
+            return point.slope
+        return engine.locate_zero(problem, a, b, slope, settings, counter, self.root)
 
 
 def same_value(level, value):

@@ -1,0 +1,244 @@
+"""Exact extrema of linear observables along an orbit, located on the integrator's steps.
+
+An observable o = w . u[:m] (w: one row of `weights`, in the units the caller wants) has the
+time derivative g = w . (du/dt)[:m]: for velocity-form models whose observables read positions
+only this is w . (velocity part of u), with no right-hand side evaluated; otherwise one
+right-hand side per step end. The orbit is integrated step by step (each segment is the step
+the integrator proposes, so it is one accepted step of the same method and tolerance); o is
+recorded at every step end; where g changes sign within a step, the cubic Hermite interpolant
+of (o, g) at the step's ends estimates the extremum, and those estimates that can be the highest
+or lowest value (CANDIDATE_MARGIN) are refined: the zero of g on a re-integration from the step's
+start (one step of the same method, shorter than an accepted one, so as accurate), by Newton with
+g' = w . (the acceleration part of du/dt) in velocity form, else by regula falsi. The zero is
+located to XTOL of the step; an error d in its time moves o by o'' d^2 / 2 only, so the extrema
+are exact to the integrator's tolerance. Poincare samples and orbit samples are not this
+module's business.
+"""
+import numpy as np
+from numba import njit
+
+from rotorkernels import integrators as ig
+
+XTOL = 1e-9                 # zero of g: relative to the step (o's error o'' (XTOL h)^2 / 2 ~ 1e-20 o)
+MAX_REFINE = 60             # iterations per bracket (Newton: 2-4, Illinois: ~6-10)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _values(weights, z, out):
+    for k in range(weights.shape[0]):
+        acc = 0.0
+        for i in range(weights.shape[1]):
+            acc += weights[k, i] * z[i]
+        out[k] = acc
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _accelerated(kernel, weights):
+    """The observables read positions of a velocity-form model: g = w . (velocity part of u) and
+    g' = w . (acceleration part of du/dt)."""
+    return kernel.velocity_form and weights.shape[1] <= kernel.n_position
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _rates(kernel, t, z, p, weights, f, jbuf, out, slopes, with_slopes):
+    """g_k = w_k . (du/dt)[:m] at (t, z) into `out`; where `_accelerated`, g_k from the state and,
+    if with_slopes, g_k' into `slopes` (one right-hand side), else g_k from the right-hand side."""
+    m = weights.shape[1]
+    accelerated = _accelerated(kernel, weights)
+    if with_slopes or not accelerated:
+        ig.derivative(kernel, t, z, p, False, f, jbuf)
+    if accelerated:
+        for k in range(weights.shape[0]):
+            acc = 0.0
+            slope = 0.0
+            for i in range(m):
+                acc += weights[k, i] * z[kernel.n_position + i]
+                if with_slopes:
+                    slope += weights[k, i] * f[kernel.n_position + i]
+            out[k] = acc
+            slopes[k] = slope
+    else:
+        _values(weights, f, out)
+
+
+@njit(cache=True, nogil=True)
+def _refine(kernel, t, span, c, z, p, weights, k, ga, gb, opts):
+    """o_k at the zero of g_k within the step [t, t + span] from state z (g_k(t) = ga and
+    g_k(t + span) = gb of opposite signs), from the estimate t + c, on a re-integration from t:
+    Newton on g_k with g_k' where `_accelerated` (a step leaving the bracket replaced by regula
+    falsi), else the Illinois variant of regula falsi; NaN when the re-integration fails."""
+    newton = _accelerated(kernel, weights)
+    n, n_obs = kernel.n_state, weights.shape[0]
+    f, jbuf, rates, slopes, values = np.empty(n), np.empty((n, n)), np.empty(n_obs), np.empty(n_obs), np.empty(n_obs)
+    a, b, fa, fb = 0.0, span, ga, gb
+    best = np.nan
+    for _ in range(MAX_REFINE):
+        zc, status, _, _ = ig.flow(kernel, t, t + c, z, p, False, opts, c)
+        if status != ig.STATUS_OK:
+            return np.nan
+        _rates(kernel, t + c, zc, p, weights, f, jbuf, rates, slopes, newton)
+        _values(weights, zc, values)
+        best = values[k]
+        fc = rates[k]
+        if fc == 0.0:
+            break
+        if newton:
+            if (fc < 0.0) == (fa < 0.0):
+                a, fa = c, fc
+            else:
+                b, fb = c, fc
+            step = -fc / slopes[k] if slopes[k] != 0.0 else np.inf
+            # |step| <= XTOL span: c is the zero to within it, o_k(c) exact to o'' step^2 / 2
+            if abs(step) <= XTOL * span:
+                break
+            c = c + step if a < c + step < b else (a * fb - b * fa) / (fb - fa)
+            continue
+        if (fc < 0.0) == (fb < 0.0):
+            fa *= 0.5          # Illinois: the retained end's value halved, so it moves too
+        else:
+            a, fa = b, fb
+        b, fb = c, fc
+        if abs(b - a) <= XTOL * span:
+            break
+        c = (a * fb - b * fa) / (fb - fa)
+    return best
+
+
+@njit(cache=True, nogil=True)
+def _hermite(oa, ob, ga, gb, h):
+    """(time, value) of the extremum within a step of the cubic Hermite interpolant of o (values
+    oa, ob and rates ga, gb of opposite signs at its ends): g is then the quadratic
+    ga + alpha s + beta s^2 with g(h) = gb and integral ob - oa, whose one zero in (0, h) is
+    bisected. Its error, O(h^4 o^(4)), is what CANDIDATE_MARGIN covers."""
+    beta = 3.0 * (h * (ga + gb) - 2.0 * (ob - oa)) / h ** 3
+    alpha = (gb - ga - beta * h * h) / h
+    a, b = 0.0, h
+    for _ in range(60):
+        s = 0.5 * (a + b)
+        if ((ga + alpha * s + beta * s * s) < 0.0) == (ga < 0.0):
+            a = s
+        else:
+            b = s
+    s = 0.5 * (a + b)
+    return s, oa + ga * s + alpha * s * s / 2.0 + beta * s ** 3 / 3.0
+
+
+# A local extremum is refined only when its Hermite estimate lies within this fraction of the
+# observable's range of the estimated global one (the estimates' error is ~(h omega)^4 / 384 of
+# the range, below 1e-5 for steps up to a tenth of a period): ripples far below are skipped.
+CANDIDATE_MARGIN = 1e-3
+CANDIDATES = 256            # brackets held for refinement after the integration (more: refined at once)
+
+
+@njit(cache=True, nogil=True)
+def orbit_extrema(kernel, u0, p, span, weights, opts):
+    """(highest, lowest, status) of each observable o_k = weights[k] . u[:m] over the orbit from
+    u0 on [0, span] (scaled time); status an integrators.STATUS_* code (not OK: NaN values).
+    The step ends give o, the brackets of a sign change of g their Hermite estimates; the
+    brackets whose estimate can be the highest or lowest are refined afterwards."""
+    n, n_obs = kernel.n_state, weights.shape[0]
+    hi, lo, ga, gb, oa, ob = (np.empty(n_obs), np.empty(n_obs), np.empty(n_obs), np.empty(n_obs),
+                              np.empty(n_obs), np.empty(n_obs))
+    slopes, f, jbuf = np.empty(n_obs), np.empty(n), np.empty((n, n))
+    est_hi, est_lo = np.empty(n_obs), np.empty(n_obs)     # hi and lo with the brackets' estimates
+    held = np.empty((CANDIDATES, 7))        # t, h, s, estimate, k, ga, gb of a bracket
+    held_z = np.empty((CANDIDATES, n))      # its starting state
+    count = 0
+    z = u0.copy()
+    _values(weights, z, oa)
+    for k in range(n_obs):
+        hi[k] = lo[k] = est_hi[k] = est_lo[k] = oa[k]
+    _rates(kernel, 0.0, z, p, weights, f, jbuf, ga, slopes, False)
+    t, h = 0.0, 0.01 * span
+    status = ig.STATUS_STEP_UNDERFLOW       # unless the end is reached within max_steps
+    for _ in range(int(opts[ig.S_MAX_STEPS])):
+        if t >= span:
+            status = ig.STATUS_OK
+            break
+        t1 = min(t + h, span)
+        zb, status, _, h_next = ig.flow(kernel, t, t1, z, p, False, opts, h)
+        if status != ig.STATUS_OK:
+            break
+        _rates(kernel, t1, zb, p, weights, f, jbuf, gb, slopes, False)
+        _values(weights, zb, ob)
+        for k in range(n_obs):
+            hi[k] = max(hi[k], ob[k])
+            lo[k] = min(lo[k], ob[k])
+            est_hi[k] = max(est_hi[k], ob[k])
+            est_lo[k] = min(est_lo[k], ob[k])
+            if (ga[k] < 0.0) != (gb[k] < 0.0) and ga[k] != 0.0 and gb[k] != 0.0:
+                s, est = _hermite(oa[k], ob[k], ga[k], gb[k], t1 - t)
+                if count == CANDIDATES:     # no room: refined at once
+                    est = _refine(kernel, t, t1 - t, s, z, p, weights, k, ga[k], gb[k], opts)
+                    if not np.isfinite(est):
+                        status = ig.STATUS_NAN
+                    hi[k] = max(hi[k], est)
+                    lo[k] = min(lo[k], est)
+                else:
+                    _hold(held, held_z, count, (t, t1 - t, s, est, float(k), ga[k], gb[k]), z)
+                    count += 1
+                est_hi[k] = max(est_hi[k], est)
+                est_lo[k] = min(est_lo[k], est)
+        if status != ig.STATUS_OK:
+            break
+        for k in range(n_obs):
+            ga[k], oa[k] = gb[k], ob[k]
+        z, t, h = zb, t1, h_next
+    if status == ig.STATUS_OK:
+        status = _refine_held(kernel, p, weights, opts, hi, lo, est_hi, est_lo, held[:count], held_z)
+    if status != ig.STATUS_OK:
+        hi[:] = np.nan
+        lo[:] = np.nan
+    return hi, lo, status
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _hold(held, held_z, i, row, z):
+    """Row i of the held brackets (element loops: no slice assignment's shape check)."""
+    for j in range(7):
+        held[i, j] = row[j]
+    for j in range(z.size):
+        held_z[i, j] = z[j]
+
+
+@njit(cache=True, nogil=True)
+def _refine_held(kernel, p, weights, opts, hi, lo, est_hi, est_lo, held, held_z):
+    """Refine the held brackets whose estimate is within CANDIDATE_MARGIN of the estimated
+    highest (est_hi; a maximum: g from + to -) or lowest value (est_lo), updating hi and lo (the
+    values at the step ends and the refined ones): a status."""
+    for i in range(held.shape[0]):
+        t, h, s, est, k, ga, gb = held[i, 0], held[i, 1], held[i, 2], held[i, 3], int(held[i, 4]), held[i, 5], held[i, 6]
+        margin = CANDIDATE_MARGIN * (est_hi[k] - est_lo[k])
+        maximum = ga > 0.0
+        if (maximum and est < est_hi[k] - margin) or (not maximum and est > est_lo[k] + margin):
+            continue
+        v = _refine(kernel, t, h, s, held_z[i], p, weights, k, ga, gb, opts)
+        if not np.isfinite(v):
+            return ig.STATUS_NAN
+        if maximum:
+            hi[k] = max(hi[k], v)
+        else:
+            lo[k] = min(lo[k], v)
+    return ig.STATUS_OK
+
+
+def observable_weights(model, period):
+    """The observables' weights on the scaled state, so that weights @ u[:m] is in SI (m: the
+    components the observables read; period: the forcing period [s], for velocity components)."""
+    w = np.array([o.weights for o in model.observables], float).reshape(len(model.observables), -1)
+    scale = model.to_physical(np.ones(model.n_state), period)[:w.shape[1]]
+    return np.ascontiguousarray(w * scale)
+
+
+def extremes(model, state, p, span, opts, period):
+    """(highest, lowest) of each observable over the orbit through `state` lasting `span` (scaled
+    time: forcing periods), SI; NaN where the orbit could not be integrated."""
+    hi, lo, _ = orbit_extrema(model.kernel, np.asarray(state, float), p, float(span),
+                              observable_weights(model, period), opts)
+    return hi, lo
+
+
+def amplitudes(model, state, p, span, opts, period):
+    """(max |o|, half peak-to-peak of o) for each observable o over the orbit, SI."""
+    hi, lo = extremes(model, state, p, span, opts, period)
+    return np.maximum(hi, -lo), 0.5 * (hi - lo)
