@@ -407,7 +407,8 @@ def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.s
     with results.result_output(cfg, output, overwrite, scheduler) as output:
         results.say(stream, f"backbones of {cfg.data['scene']['model']} on {len(pl.lines)} line(s)"
                             f"{'' if pl.continuation else ' (manifold only)'}")
-        lines = results.run_lines(cfg, backbone_line, pl.lines, workers, scheduler, stream, _line_summary)
+        lines = results.run_lines(cfg, backbone_line, pl.lines, workers, scheduler, stream, _line_summary,
+                                  unit="backbone_line")
         provenance = cluster.provenance(cfg, result_kinds.BACKBONE)
         return results.write(to_dataset(cfg.data, pl, lines, provenance), output)
 

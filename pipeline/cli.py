@@ -265,6 +265,25 @@ def _positive_int(text):
     return value
 
 
+def _worker_count(text):
+    """argparse type: an integer >= 0 (0: in this process, no cluster)."""
+    return 0 if text.strip() == "0" else _positive_int(text)
+
+
+def _runtime_args(parser):
+    """Where a command runs: in this process for small work (estimated below
+    $ROTORSWEEP_IN_PROCESS_BELOW_S, default 3 s of CPU), else on a local Dask cluster; the flags
+    choose."""
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=_worker_count,
+                       help="local Dask worker processes (default: one per core, at least 2, or none for small "
+                            "work); 0: in this process")
+    where.add_argument("--in-process", dest="workers", action="store_const", const=0,
+                       help="run in this process, no cluster (as --workers 0)")
+    parser.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786 "
+                                            "(always used when given)")
+
+
 def cmd_warmup(args):
     import numba
 
@@ -283,8 +302,7 @@ def build_parser():
     r = sub.add_parser("run", help="run a sweep from a config into a netCDF cube")
     r.add_argument("config", nargs="?", help="scene TOML (default: the embedded demo scene)")
     r.add_argument("-o", "--output", help="cube path (default out/<scene name>.nc)")
-    r.add_argument("--workers", type=_positive_int, help="local Dask worker processes (default: one per core, at least 2)")
-    r.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
+    _runtime_args(r)
     r.add_argument("--chunk-points", type=_positive_int, help="points per Dask task (default: automatic)")
     r.add_argument("--resume", action="store_true", help="finish an interrupted run from its part files")
     r.add_argument("--overwrite", action="store_true", help="replace an existing cube (and --report DIR)")
@@ -303,8 +321,7 @@ def build_parser():
         c = sub.add_parser(name, help=help_text)
         c.add_argument("config", nargs="?" if name == "continue" else None, help=config_help)
         c.add_argument("-o", "--output", help=f"result path (default out/<scene name>_{name.replace('continue', 'continuation')}.nc)")
-        c.add_argument("--workers", type=_positive_int, help="local Dask worker processes (default: one per core, at least 2)")
-        c.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
+        _runtime_args(c)
         c.add_argument("--overwrite", action="store_true", help="replace an existing result (and --report DIR)")
         c.add_argument("--report", metavar="DIR", help="also write the report into DIR")
         c.add_argument("-q", "--quiet", action="store_true", help="no progress lines")

@@ -1,11 +1,11 @@
 """What `rotorsweep continue` and `rotorsweep backbone` share: writing their result files (netCDF
 with a `result_kind` attribute, see pipeline.result_kinds) and running a task per line of the
-swept axes on a Dask cluster (pipeline.cluster), the scene's kernels compiled first in the
-driver."""
+swept axes on a Dask cluster or, for small work, in this process (pipeline.cluster), the
+scene's kernels compiled first in the driver."""
 import contextlib
 import os
 
-from pipeline import cluster, cube, fileio, warmup
+from pipeline import cluster, compute, cube, fileio, warmup, workload
 
 
 def write(ds, path):
@@ -34,32 +34,41 @@ def result_output(cfg, output, overwrite, scheduler):
     the scheduler checked first)."""
     output = os.path.abspath(output)
     if os.path.exists(output) and not overwrite:
-        raise cube.CubeError(f"{output} exists; pass --overwrite to replace it")
+        raise cube.CubeError(f"{output} exists; pass --overwrite (overwrite=True from Python) to replace it")
     with fileio.output_lock(output, cfg.path or "<default scene>"):
         if scheduler:
             cluster.check_scheduler(scheduler)
         yield output
 
 
-def run_lines(cfg, task, lines, workers, scheduler, stream, summary):
-    """task(cfg.data, where) for every line {axis: value} as Dask tasks, after compiling the
-    scene's kernels in the driver (workers load them from the cache); a progress line per line
-    done (`summary(result)`); the results in line order."""
-    from dask.distributed import as_completed
-
-    client, local = cluster.connect(workers, scheduler)
+def run_lines(cfg, task, lines, workers, scheduler, stream, summary, unit="continuation_line"):
+    """task(cfg.data, where) for every line {axis: value}, after compiling the scene's kernels in
+    the driver (workers load them from the cache): in this process when the lines' estimated
+    work (pipeline.workload, `unit`) is small or workers == 0, else as Dask tasks; a progress
+    line per line done (`summary(result)`); the results in line order."""
+    model = compute.model_of(cfg.data).name
+    in_process = cluster.runs_in_process(workers, scheduler, workload.estimate(unit, model, len(lines)))
+    executor = cluster.executor(0 if in_process else workers, scheduler)
     try:
         with cluster.heap_frozen():     # the imports' and the cluster's objects (see cluster.heap_frozen)
             warmup.compile_scene(cfg.data, lambda text: say(stream, text))
-            submit = cluster.submitter(client, task, cfg.data)
-            futures = {submit(where): k for k, where in enumerate(lines)}
-            results = [None] * len(lines)
-            for done, future in enumerate(as_completed(futures), 1):
-                k = futures[future]
-                results[k] = future.result()
-                say(stream, f"[{done}/{len(lines)}] {_line_label(lines[k])}: {summary(results[k])}")
+            with workload.Meter() as meter:
+                results = _run_tasks(executor, cfg, task, lines, stream, summary)
     finally:
-        cluster.close(client, local)
+        executor.close()
+    if in_process:
+        workload.record(unit, model, len(lines), meter.seconds)
+    return results
+
+
+def _run_tasks(executor, cfg, task, lines, stream, summary):
+    submit = executor.submitter(task, cfg.data)
+    futures = {submit(where): k for k, where in enumerate(lines)}
+    results = [None] * len(lines)
+    for done, future in enumerate(executor.as_completed(futures), 1):
+        k = futures[future]
+        results[k] = future.result()
+        say(stream, f"[{done}/{len(lines)}] {_line_label(lines[k])}: {summary(results[k])}")
     return results
 
 
