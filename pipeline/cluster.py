@@ -214,9 +214,9 @@ def in_process_below_s():
 
 
 def runs_in_process(workers, scheduler, estimate_s):
-    """Whether a command runs in this process: never with a scheduler, always with workers=0,
-    else when its estimated work is below in_process_below_s()."""
-    if scheduler:
+    """Whether a command runs in this process: never with a scheduler or a worker count given,
+    always with workers=0, else when its estimated work is below in_process_below_s()."""
+    if scheduler or workers:
         return False
     return workers == 0 or estimate_s < in_process_below_s()
 
