@@ -267,7 +267,13 @@ def _positive_int(text):
 
 def _worker_count(text):
     """argparse type: an integer >= 0 (0: in this process, no cluster)."""
-    return 0 if text.strip() == "0" else _positive_int(text)
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 0 (0: in this process; got {text!r})")
+    return value
 
 
 def _runtime_args(parser):

@@ -29,6 +29,12 @@ BAI_76 = BUILD / "bai2006_fold_7.6um.toml"
 # (name, argv after `rotorsweep` or a python -c program, the target of issue 35 in s or None)
 COMMANDS = (
     ("import rotorsweep", ["-c", "import rotorsweep"], 0.5),
+    # the parts every command pays: the interpreter, numba (the kernels), xarray (the result files) and
+    # scipy.linalg, which numba imports on its first compiled call (BLAS check; the kernels call LAPACK)
+    ("python -c pass", ["-c", "pass"], None),
+    ("import numba", ["-c", "import numba"], None),
+    ("import numba, scipy.linalg", ["-c", "import numba, scipy.linalg.cython_blas"], None),
+    ("import xarray", ["-c", "import xarray"], None),
     ("info", ["info", DEMO], 0.6),
     ("query --unstable", ["query", DEMO, "--unstable"], 0.6),
     ("query --attractors", ["query", DEMO, "--attractors"], 0.6),
