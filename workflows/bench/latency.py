@@ -33,7 +33,7 @@ COMMANDS = (
     # scipy.linalg, which numba imports on its first compiled call (BLAS check; the kernels call LAPACK)
     ("python -c pass", ["-c", "pass"], None),
     ("import numba", ["-c", "import numba"], None),
-    ("import numba, scipy.linalg", ["-c", "import numba, scipy.linalg.cython_blas"], None),
+    ("import numba + scipy.linalg", ["-c", "import numba, scipy.linalg.cython_blas"], None),
     ("import xarray", ["-c", "import xarray"], None),
     ("info", ["info", DEMO], 0.6),
     ("query --unstable", ["query", DEMO, "--unstable"], 0.6),
@@ -121,21 +121,23 @@ def write(result, out):
         med = {t: {k: statistics.median(v) for k, v in r.items()} for t, r in runs.items()}
         b, a = med["before"], med["after"]
         target = targets.get(name)
-        rows.append(f"| `{name}` | {b['wall']:.2f} | {b['cpu']:.2f} | {a['wall']:.2f} | {a['cpu']:.2f} | "
+        rows.append(f"| `{name}` | {len(runs['after']['wall'])} | {b['wall']:.2f} | {b['cpu']:.2f} | {a['wall']:.2f} | {a['cpu']:.2f} | "
                     f"{b['wall'] / a['wall']:.1f}x | {'' if target is None else f'{target:g}'} | "
                     f"{min(min(r['load1']) for r in runs.values()):.1f}-{max(max(r['load1']) for r in runs.values()):.1f} |")
     text = f"""# Latency of small commands (issue 35)
 
 Each command of the README's 5-minute tour and `continue` on `configs/duffing_resonance.toml` and
 on the Bai fold scene's 7.6 um line, end to end (process start to exit), warm Numba cache, median
-of {result['repeats']} runs per tree, the trees alternating. Before: `{result['base']}`
+of the runs per tree (column "runs"), the trees alternating. Before: `{result['base']}`
 ({result['base_label']}); after: the working tree of `{result['head']}`. CPU: user + system of the
 command and the processes it waited for (a local cluster's workers). Load: the 1-minute load
 average after each run; the machine is shared, and a loaded machine stretches wall time.
 
-| command | before wall [s] | before CPU [s] | after wall [s] | after CPU [s] | wall speed-up | target [s] | load (1 min) |
-| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |
+| command | runs | before wall [s] | before CPU [s] | after wall [s] | after CPU [s] | wall speed-up | target [s] | load (1 min) |
+| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |
 {chr(10).join(rows)}
+
+{floor_text(result["runs"])}
 
 Machine: {result['machine']['cpu']}, {result['machine']['usable_cores']} usable cores; load
 {result['load']}; {result['date']}. Reproduce: `make bench-latency` (`{result['command']}`).
@@ -144,12 +146,31 @@ Machine: {result['machine']['cpu']}, {result['machine']['usable_cores']} usable 
     (out / "latency.json").write_text(json.dumps(result, indent=1) + "\n")
 
 
+def floor_text(runs):
+    """What every command pays before its own work, from the start-up rows (after, median CPU)."""
+    cpu = {name: statistics.median(r["after"]["cpu"]) for name, r in runs.items()}
+    parts = ("python -c pass", "import numba", "import numba + scipy.linalg", "import xarray")
+    if not all(p in cpu for p in parts):
+        return ""
+    return (f"Where the time goes (after, median CPU): the interpreter {cpu['python -c pass']:.2f} s; numba "
+            f"{cpu['import numba']:.2f} s, which every command imports (the model registry defines its kernels "
+            f"with it); scipy.linalg {cpu['import numba + scipy.linalg'] - cpu['import numba']:.2f} s more, which "
+            "numba imports at its first compiled call (its BLAS check; the kernels call LAPACK through scipy's "
+            f"cython_lapack, so it cannot be skipped where a kernel runs); xarray (with pandas) "
+            f"{cpu['import xarray']:.2f} s, which `import rotorsweep` (its accessor), `info`, `query` and every "
+            "command writing a result import. Plotting, Dask and distributed are not imported by "
+            "`import rotorsweep` and `info` (tests/test_latency.py checks both) nor by a small `continue` run "
+            "in the process.")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--base", default="74f5cb3", help="the revision before (default: before issue 35)")
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--only", help="comma-separated command names to run (default: all)")
     ap.add_argument("--out", type=Path, default=DOCS)
+    ap.add_argument("--merge", action="store_true",
+                    help="keep the commands of an earlier latency.json in --out that this run does not measure")
     args = ap.parse_args(argv)
     commands = [c for c in COMMANDS if not args.only or c[0] in args.only.split(",")]
     label = subprocess.run(["git", "log", "-1", "--format=%s", args.base], cwd=ROOT, capture_output=True,
@@ -160,6 +181,9 @@ def main(argv=None):
     prepare()
     trees = {"before": checkout(args.base), "after": ROOT}
     runs = measure(trees, commands, args.repeats)
+    if args.merge and (args.out / "latency.json").exists():
+        earlier = json.loads((args.out / "latency.json").read_text())["runs"]
+        runs = {**earlier, **runs}
     result = {"base": args.base, "base_label": label, "head": head, "repeats": args.repeats, "runs": runs,
               **provenance(load, "workflows.bench.latency", argv)}
     args.out.mkdir(parents=True, exist_ok=True)
