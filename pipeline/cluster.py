@@ -213,12 +213,13 @@ def in_process_below_s():
         raise SweepError(f"${IN_PROCESS_VARIABLE}={text!r}: expected a number of seconds") from None
 
 
-def runs_in_process(workers, scheduler, estimate_s):
+def runs_in_process(workers, scheduler, estimate_s, tasks=None):
     """Whether a command runs in this process: never with a scheduler or a worker count given,
-    always with workers=0, else when its estimated work is below in_process_below_s()."""
+    always with workers=0, else when its estimated work is below in_process_below_s() or it is
+    one task (`tasks`: how many it can be split into at most; a cluster cannot speed up one)."""
     if scheduler or workers:
         return False
-    return workers == 0 or estimate_s < in_process_below_s()
+    return workers == 0 or tasks == 1 or estimate_s < in_process_below_s()
 
 
 def executor(workers, scheduler):

@@ -47,7 +47,7 @@ def run_lines(cfg, task, lines, workers, scheduler, stream, summary, unit="conti
     work (pipeline.workload, `unit`) is small or workers == 0, else as Dask tasks; a progress
     line per line done (`summary(result)`); the results in line order."""
     model = compute.model_of(cfg.data).name
-    in_process = cluster.runs_in_process(workers, scheduler, workload.estimate(unit, model, len(lines)))
+    in_process = cluster.runs_in_process(workers, scheduler, workload.estimate(unit, model, len(lines)), len(lines))
     executor = cluster.executor(0 if in_process else workers, scheduler)
     try:
         with cluster.heap_frozen():     # the imports' and the cluster's objects (see cluster.heap_frozen)

@@ -1,8 +1,9 @@
 """How much work a command's plan is, to choose where it runs (pipeline.cluster.runs_in_process):
 the number of units (sweep points, continuation or backbone lines) times the cost of a unit of
-that kind for the scene's model, as measured by earlier in-process runs on this machine and kept
-in the cache directory ($ROTORSWEEP_CACHE, default ~/.cache/rotorsweep: costs.json), else a
-conservative default. A wrong estimate costs only time, never results: they are the same bit for
+that kind for the scene's model, the largest measured by earlier in-process runs on this machine
+(units of one model cost 100-fold more in one scene than in another: a chaotic point, a line through
+a period-doubling cascade) and kept in the cache directory ($ROTORSWEEP_CACHE, default
+~/.cache/rotorsweep: costs.json), else a conservative default. A wrong estimate costs only time, never results: they are the same bit for
 bit wherever a command runs."""
 import json
 import os
@@ -11,9 +12,10 @@ import time
 # Default CPU seconds of one unit, where this machine has measured none: above the measured costs
 # of the paper scenes (warm, Intel Xeon / AMD EPYC): a periodic orbit and its multipliers 1-5 ms
 # (Fig. 13: 12,005 points in 6.8 s on 2 workers), with attractor diagnostics ~5 ms on average and
-# up to ~400 ms at a chaotic point; a Duffing or Bai fold continuation line 0.07-0.15 s; a
-# backbone line (manifold and continuation of a few modes) about a second.
-DEFAULT_COSTS = {"point": 0.01, "point_attractor": 0.2, "continuation_line": 0.5, "backbone_line": 2.0}
+# up to ~400 ms at a chaotic point; a Duffing or Bai fold continuation line 0.07-0.15 s, the Bai
+# 19 um line through its period-doubling cascade about a minute; a backbone line (manifold and
+# continuation of a few modes) about a second.
+DEFAULT_COSTS = {"point": 0.01, "point_attractor": 0.2, "continuation_line": 2.0, "backbone_line": 2.0}
 
 
 def costs_path():
@@ -46,11 +48,15 @@ def estimate(unit, model, n):
 
 
 def record(unit, model, n, seconds):
-    """Keep the measured cost of a unit (seconds of n units); a cache that cannot be written is
-    left as it is (the next estimate uses the default)."""
+    """Keep the measured cost of a unit (seconds of n units) where it is the largest so far; a
+    cache that cannot be written is left as it is."""
     if n <= 0:
         return
-    costs = {**_measured(), _key(unit, model): seconds / n}
+    costs = _measured()
+    earlier = costs.get(_key(unit, model))
+    if isinstance(earlier, (int, float)) and earlier >= seconds / n:
+        return
+    costs[_key(unit, model)] = seconds / n
     path = costs_path()
     tmp = f"{path}.{os.getpid()}.tmp"
     try:

@@ -49,6 +49,7 @@ def test_where_a_command_runs():
     assert cluster.runs_in_process(0, None, 1e3)                        # --workers 0 / --in-process
     assert not cluster.runs_in_process(2, None, 0.1)                    # a worker count asks for a cluster
     assert not cluster.runs_in_process(None, "tcp://127.0.0.1:1", 0.1)  # a scheduler is always used
+    assert cluster.runs_in_process(None, None, 1e3, tasks=1)            # one task: a cluster cannot help
 
 
 def test_the_threshold_is_overridable(monkeypatch):
@@ -63,6 +64,8 @@ def test_measured_unit_costs_are_kept_in_the_cache(tmp_path, monkeypatch):
     monkeypatch.setenv("ROTORSWEEP_CACHE", str(tmp_path))
     assert workload.estimate("point", "duffing", 10) == 10 * workload.DEFAULT_COSTS["point"]
     workload.record("point", "duffing", 4, 2.0)
+    assert workload.estimate("point", "duffing", 10) == pytest.approx(5.0)
+    workload.record("point", "duffing", 4, 1.0)        # the largest cost measured is kept
     assert workload.estimate("point", "duffing", 10) == pytest.approx(5.0)
     assert workload.unit_cost("point", "jeffcott_clearance") == workload.DEFAULT_COSTS["point"]
 
