@@ -36,10 +36,19 @@ def _measured():
         return {}
 
 
+# Units whose cost depends on the branch far more than on the model (a Bai fold line 0.15 s, its
+# 19 um line through the cascade a minute): a measured cost only raises their default, so that a
+# quick line measured once does not keep a scene of slow lines off the cluster.
+FLOORED = ("continuation_line", "backbone_line")
+
+
 def unit_cost(unit, model):
-    """CPU seconds of one `unit` (a DEFAULT_COSTS key) of `model`: measured, else the default."""
+    """CPU seconds of one `unit` (a DEFAULT_COSTS key) of `model`: measured, else the default
+    (at least the default for FLOORED units)."""
     cost = _measured().get(_key(unit, model))
-    return float(cost) if isinstance(cost, (int, float)) and cost >= 0 else DEFAULT_COSTS[unit]
+    if not isinstance(cost, (int, float)) or cost < 0:
+        return DEFAULT_COSTS[unit]
+    return max(float(cost), DEFAULT_COSTS[unit]) if unit in FLOORED else float(cost)
 
 
 def estimate(unit, model, n):

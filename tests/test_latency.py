@@ -68,6 +68,8 @@ def test_measured_unit_costs_are_kept_in_the_cache(tmp_path, monkeypatch):
     workload.record("point", "duffing", 4, 1.0)        # the largest cost measured is kept
     assert workload.estimate("point", "duffing", 10) == pytest.approx(5.0)
     assert workload.unit_cost("point", "jeffcott_clearance") == workload.DEFAULT_COSTS["point"]
+    workload.record("continuation_line", "duffing", 1, 0.07)       # a quick line does not lower the default
+    assert workload.unit_cost("continuation_line", "duffing") == workload.DEFAULT_COSTS["continuation_line"]
 
 
 def test_in_process_tasks_run_by_priority_and_raise_on_result():
