@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo docs test test-slow check-cf screenshots upgrade bench bench-scaling bench-atlas bench-chunk-plans bench-attractor bench-revisions bench-continuation bench-reductions bench-compile bench-backbone bench-models fig13 cascade fold backbone clean
+.PHONY: demo docs test test-slow check-cf screenshots upgrade bench bench-scaling bench-atlas bench-chunk-plans bench-attractor bench-revisions bench-continuation bench-reductions bench-compile bench-backbone bench-models bench-latency fig13 cascade fold backbone clean
 
 # CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
 CONSTRAINTS ?= constraints.txt
@@ -64,6 +64,9 @@ screenshots: demo fold  ## the demo and fold reports in headless Chromium (apt-g
 
 bench-scaling: $(STAMP)  ## 1 vs 2 workers, chunk sizes, memory of the Fig. 13 sweep (5 repeats, ~7 min, quiet machine) -> docs/benchmarks/scaling.*
 	$(BIN)/python -m workflows.bench.scaling --repeats 5
+
+bench-latency: $(STAMP)  ## tour commands and small continuations end to end, before (74f5cb3) and after, median of 5 (~15 min) -> docs/benchmarks/latency.*
+	$(BIN)/python -m workflows.bench.latency
 
 bench-chunk-plans: $(STAMP)  ## per-point cost spread of Fig. 13 (orbits, attractors) and the guided chunk plans simulated on it (~1 min) -> docs/benchmarks/chunk_plans.*
 	$(BIN)/python -m workflows.bench.chunk_plans

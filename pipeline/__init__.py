@@ -37,7 +37,9 @@ def _dataset(cube_or_path):
 
 def run(config=None, output=None, *, allow_large=False, **kwargs):
     """Run a sweep (config: path, Config or None for the demo scene); returns the cube path.
-    kwargs: workers, scheduler, resume, overwrite, chunk_points, progress.
+    kwargs: workers (None: in this process for small work, else a local cluster of one per core;
+    0: in this process; N: a local cluster of N), scheduler, resume, overwrite, chunk_points,
+    progress. Safe at a plain script's module level (cluster workers do not run the script).
 
     >>> import tempfile, rotorsweep
     >>> scene = rotorsweep.parse_config('''
@@ -62,7 +64,7 @@ def run(config=None, output=None, *, allow_large=False, **kwargs):
 
 def continue_branches(config=None, output=None, **kwargs):
     """Pseudo-arclength branches of a config's [continuation] (rotorsweep continue); returns the
-    result's path. kwargs: workers, scheduler, overwrite, stream."""
+    result's path. kwargs: workers (as for run), scheduler, overwrite, stream."""
     from pipeline import continuation
 
     cfg = as_config(config, whole_grid=False)

@@ -410,7 +410,8 @@ def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.s
           runlog.log_file(output, "backbone")):
         results.say(stream, f"backbones of {cfg.data['scene']['model']} on {len(pl.lines)} line(s)"
                             f"{'' if pl.continuation else ' (manifold only)'}")
-        lines = results.run_lines(cfg, backbone_line, pl.lines, workers, scheduler, stream, _line_summary, parts)
+        lines = results.run_lines(cfg, backbone_line, pl.lines, workers, scheduler, stream, _line_summary, parts,
+                                  unit="backbone_line")
         provenance = cluster.provenance(cfg, result_kinds.BACKBONE)
         results.say(stream, f"writing the result: {output}")
         return results.finish(to_dataset(cfg.data, pl, lines, provenance), output, parts)

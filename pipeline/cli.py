@@ -292,6 +292,17 @@ def _positive_int(text):
     return value
 
 
+def _worker_count(text):
+    """argparse type: an integer >= 0 (0: in this process, no cluster)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 0 (0: in this process; got {text!r})")
+    return value
+
+
 def cmd_warmup(args):
     import numba
 
@@ -314,9 +325,15 @@ def _positive_float(text):
 
 
 def _cluster_options(parser):
-    """The Dask options of run, continue and backbone."""
-    parser.add_argument("--workers", type=_positive_int,
-                        help="local Dask worker processes (default: one per core, at least 2)")
+    """Where run, continue and backbone run: in this process for small work (estimated below
+    $ROTORSWEEP_IN_PROCESS_BELOW_S, default 3 s of CPU), else on a local Dask cluster, or on a
+    given scheduler (always used when given); the flags choose."""
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=_worker_count,
+                       help="local Dask worker processes (default: one per core, at least 2, or none for small "
+                            "work); 0: in this process")
+    where.add_argument("--in-process", dest="workers", action="store_const", const=0,
+                       help="run in this process, no cluster (as --workers 0)")
     parser.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786 "
                                             "(tls://... with the --tls-* files)")
     parser.add_argument("--scheduler-timeout", type=_positive_float, default=cluster.SCHEDULER_TIMEOUT_S,

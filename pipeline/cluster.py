@@ -6,16 +6,24 @@ file records (the version, the command, the model, the config).
 
 The sweep (pipeline.sweep) and the per-line commands (pipeline.results) use this module; none of
 them starts or closes a cluster another way. It imports only the standard library at import time
-(the command line reads the version here; Dask is imported where a cluster starts)."""
+(the command line reads the version here; Dask is imported where a cluster starts).
+
+Commands run their tasks through an executor (`executor()`): a Dask cluster (`DaskExecutor`) or,
+for small work, this process (`InProcess`), with one interface (submitter, as_completed, lost,
+n_workers, close), so a command's task loop is written once for both."""
 import asyncio
 import concurrent.futures
 import contextlib
 import functools
 import gc
+import heapq
+import itertools
 import json
 import logging
 import os
 import socket
+import sys
+import types
 from datetime import datetime, timezone
 from importlib import metadata
 
@@ -109,6 +117,147 @@ def close(client, cluster):
             cluster.close()
     finally:
         logger.setLevel(level)
+
+
+class DaskExecutor:
+    """Tasks on a Dask cluster: a client and the local cluster it started (None for a scheduler
+    given by address)."""
+
+    def __init__(self, client, local):
+        self.client, self.local = client, local
+
+    @property
+    def n_workers(self):
+        return max(1, len(self.client.scheduler_info()["workers"]))
+
+    @property
+    def lost(self):
+        """The exception of a task whose workers died (KilledWorker)."""
+        from dask.distributed import KilledWorker
+        return KilledWorker
+
+    def submitter(self, fn, *fixed, **options):
+        return submitter(self.client, fn, *fixed, **options)
+
+    def as_completed(self, futures):
+        from dask.distributed import as_completed
+        return as_completed(futures)
+
+    def close(self):
+        close(self.client, self.local)
+
+
+class Task:
+    """A task of InProcess: run (once) when its result is first asked for; an exception it
+    raises is raised there, as a Dask future's result() raises it."""
+
+    def __init__(self, fn, args, priority):
+        self.fn, self.args, self.priority = fn, args, priority
+        self._outcome = None
+
+    def result(self):
+        if self._outcome is None:
+            try:
+                self._outcome = (True, self.fn(*self.args))
+            except Exception as exc:        # noqa: BLE001 (raised again below, and on every call)
+                self._outcome = (False, exc)
+        ok, value = self._outcome
+        if not ok:
+            raise value
+        return value
+
+    def release(self):
+        """Nothing is held elsewhere (the Dask future's counterpart)."""
+
+
+class Pending:
+    """InProcess's as_completed: the tasks in order of priority (higher first), then of
+    submission; each is run as it is yielded, so progress lines come as with a cluster."""
+
+    def __init__(self, tasks):
+        self._heap, self._order = [], itertools.count()
+        for task in tasks:
+            self.add(task)
+
+    def add(self, task):
+        heapq.heappush(self._heap, (-task.priority, next(self._order), task))
+
+    def __iter__(self):
+        while self._heap:
+            task = heapq.heappop(self._heap)[2]
+            with contextlib.suppress(Exception):
+                task.result()       # run it now; the caller's result() raises what it raised
+            yield task
+
+
+class InProcess:
+    """Tasks run in this process, one at a time: no cluster to start (seconds) for work that
+    takes less. The same functions, arguments and order of results as on a cluster, so results
+    are the same bit for bit."""
+    n_workers = 1
+    lost = ()           # no worker to lose: `except executor.lost` catches nothing
+
+    def submitter(self, fn, *fixed, priority=0, **_options):
+        return lambda *args: Task(functools.partial(fn, *fixed), args, priority)
+
+    def as_completed(self, tasks):
+        return Pending(tasks)
+
+    def close(self):
+        pass
+
+
+# Below this estimate of a command's work (CPU seconds, pipeline.workload) it runs in the driver
+# process: a local cluster of 2 workers took 2-3 s to start and load the kernels (2 cores), and
+# halves at best the time of the work, so it pays from about twice its start-up. Overridden by
+# $ROTORSWEEP_IN_PROCESS_BELOW_S (0: always a cluster).
+IN_PROCESS_BELOW_S = 3.0
+IN_PROCESS_VARIABLE = "ROTORSWEEP_IN_PROCESS_BELOW_S"
+
+
+def in_process_below_s():
+    """The threshold of in-process execution: $ROTORSWEEP_IN_PROCESS_BELOW_S, else IN_PROCESS_BELOW_S."""
+    text = os.environ.get(IN_PROCESS_VARIABLE, "").strip()
+    try:
+        return float(text) if text else IN_PROCESS_BELOW_S
+    except ValueError:
+        raise SweepError(f"${IN_PROCESS_VARIABLE}={text!r}: expected a number of seconds") from None
+
+
+def runs_in_process(workers, scheduler, estimate_s, tasks=None):
+    """Whether a command runs in this process: never with a scheduler or a worker count given,
+    always with workers=0, else when its estimated work is below in_process_below_s() or it is
+    one task (`tasks`: how many it can be split into at most; a cluster cannot speed up one)."""
+    if scheduler or workers:
+        return False
+    return workers == 0 or tasks == 1 or estimate_s < in_process_below_s()
+
+
+def executor(workers, scheduler):
+    """An executor of `workers` processes (0: InProcess) or of the scheduler at `scheduler`;
+    close() it when done. A local cluster's workers are started with the script that calls this
+    hidden from them (main_hidden)."""
+    if workers == 0 and not scheduler:
+        return InProcess()
+    with main_hidden():
+        return DaskExecutor(*connect(workers, scheduler))
+
+
+@contextlib.contextmanager
+def main_hidden():
+    """Start worker processes without the calling script: multiprocessing's spawn runs the
+    `__main__` module again in each new process (as `__mp_main__`), and a plain script that calls
+    rotorsweep.run at module level would then start the run again in every worker (issue 37).
+    A `__main__` with no file and no spec, as in a notebook, is not run again."""
+    main = sys.modules.get("__main__")
+    if main is None or not (getattr(main, "__file__", None) or getattr(main, "__spec__", None)):
+        yield
+        return
+    sys.modules["__main__"] = types.ModuleType("__main__")
+    try:
+        yield
+    finally:
+        sys.modules["__main__"] = main
 
 
 class Scheduler:

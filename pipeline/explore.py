@@ -13,9 +13,12 @@ accessor that importing this module (or `rotorsweep`) registers on xarray Datase
 Swept axes beyond x and `by` become hvplot's widgets. The report draws with HoloViews elements
 where hvplot has no such kind (see pipeline/report/figures/*); its Campbell figure is built on
 campbell() here.
+
+Plotting (hvplot, HoloViews, bokeh) is imported when a figure is first drawn, not when the
+accessor registers: `import rotorsweep` stays light (issue 35).
 """
-import hvplot.pandas  # noqa: F401  (registers .hvplot on pandas and xarray objects)
-import hvplot.xarray  # noqa: F401
+import functools
+
 import numpy as np
 import pandas as pd
 import xarray as xr
@@ -23,9 +26,19 @@ import xarray as xr
 from pipeline import result_kinds, schema
 from pipeline.report.cubeinfo import (branch_observables, branch_values, continued_axis,
                                       default_observable, has_attractor, other_axes)
-from pipeline.report.figures.campbell import campbell_points
 from pipeline.report.stability import CLASSES, PALETTE, stability_class
 from pipeline.report.style import holoviews
+
+
+def plotting(figure):
+    """A figure function that imports hvplot (registering .hvplot on pandas and xarray objects)
+    before it draws."""
+    @functools.wraps(figure)
+    def draw(*args, **kwargs):
+        import hvplot.pandas  # noqa: F401
+        import hvplot.xarray  # noqa: F401
+        return figure(*args, **kwargs)
+    return draw
 
 
 def _by(ds):
@@ -42,12 +55,14 @@ def _limit(y, **style):
     return holoviews().HLine(y).opts(color="#C00000", line_dash="dashed", **style)
 
 
+@plotting
 def max_multiplier(ds, **kwargs):
     """max |multiplier| along the continued axis, one line per value of the first other axis,
     and the |lambda| = 1 line."""
     return ds["max_abs_multiplier"].hvplot.line(x=continued_axis(ds), by=_by(ds), **kwargs) * _limit(1.0)
 
 
+@plotting
 def stability_map(ds, **kwargs):
     """The stability class of every grid point (colours of the report's map) over the continued
     axis and the first other axis (grid cells, not the refined edges of the report's map)."""
@@ -59,6 +74,7 @@ def stability_map(ds, **kwargs):
     return cls.hvplot.quadmesh(x=x, y=y, cmap=list(PALETTE), clim=(-0.5, len(CLASSES) - 0.5), **kwargs)
 
 
+@plotting
 def branches(ds, observable=None, **kwargs):
     """The periodic orbit's `observable` (see report.branch_observables; default: Poincare
     coordinate with attractors, else amplitude) along the continued axis, stable solid and
@@ -72,6 +88,7 @@ def branches(ds, observable=None, **kwargs):
             * da.where(~stable).hvplot.line(x=x, by=by, line_dash="dashed", **kwargs))
 
 
+@plotting
 def response(ds, observable=None, **kwargs):
     """Half peak-to-peak amplitude of an observable (default: the first) along the continued
     axis, one line per value of the first other axis."""
@@ -79,14 +96,18 @@ def response(ds, observable=None, **kwargs):
     return ds[f"amplitude_{observable}"].hvplot.line(x=continued_axis(ds), by=_by(ds), **kwargs)
 
 
+@plotting
 def campbell(ds, **kwargs):
     """Frequency of the critical multiplier (arg(lambda) / 2 pi / T) vs shaft speed, one series
     per value of the first other axis, with the 1x line."""
+    from pipeline.report.figures.campbell import campbell_points
+
     speed = ds[continued_axis(ds)].values
     one_x = holoviews().Curve((speed, speed), continued_axis(ds), "frequency", label="1x").opts(line_dash="dashed")
     return campbell_points(ds, _by(ds)).opts(**kwargs) * one_x
 
 
+@plotting
 def bifurcation(ds, variable="poincare_x", **kwargs):
     """The attractors' Poincare samples along the continued axis (all samples of a point in one
     column; pass rasterize=True for large cubes)."""
@@ -95,12 +116,14 @@ def bifurcation(ds, variable="poincare_x", **kwargs):
     return ds[variable].hvplot.scatter(x=continued_axis(ds), y=variable, by=_by(ds), groupby=[], size=2, **kwargs)
 
 
+@plotting
 def lle(ds, **kwargs):
     """Largest Lyapunov exponent along the continued axis, one line per value of the first
     other axis, and the zero line."""
     return ds["lle"].hvplot.line(x=continued_axis(ds), by=_by(ds), **kwargs) * _limit(0.0)
 
 
+@plotting
 def multipliers(ds, where=None, **kwargs):
     """The Floquet multipliers in the complex plane along a line (`where`: the other axes'
     values), coloured by the continued axis, in a square frame with the unit circle."""
@@ -115,6 +138,7 @@ def multipliers(ds, where=None, **kwargs):
     return circle * pts
 
 
+@plotting
 def branch_diagram(ds, observable=None, **kwargs):
     """A continuation result's branches: half peak-to-peak of `observable` (default: the
     result's report observable) over the continued parameter, one colour per branch, stable
@@ -130,6 +154,7 @@ def branch_diagram(ds, observable=None, **kwargs):
     return stable.hvplot.line(**style) * unstable.hvplot.line(line_dash="dashed", **style)
 
 
+@plotting
 def backbones(ds, where=None, **kwargs):
     """A backbone result's backbones at one line (`where`: the swept axes' values; default the
     first): frequency over the master's amplitude, continuation solid and manifold dashed, one

@@ -1,7 +1,7 @@
 """What `rotorsweep continue` and `rotorsweep backbone` share: writing their result files (netCDF
 with a `result_kind` attribute, see pipeline.result_kinds) and running a task per line of the
-swept axes on a Dask cluster (pipeline.cluster), the scene's kernels compiled first in the
-driver.
+swept axes on a Dask cluster or, for small work, in this process (pipeline.cluster), the
+scene's kernels compiled first in the driver.
 
 Like `run`'s chunks, every finished line is saved at once as a part file (pipeline.cube's
 write_part, in `<output>.parts/`): a run stopped by a full disk, a kill or Ctrl-C keeps its
@@ -15,7 +15,7 @@ import os
 
 import numpy as np
 
-from pipeline import cluster, cube, fileio, runlog, warmup
+from pipeline import cluster, compute, cube, fileio, runlog, warmup, workload
 
 
 def write(ds, path):
@@ -94,13 +94,12 @@ def finish(ds, output, parts):
     return output
 
 
-def run_lines(cfg, task, lines, workers, scheduler, stream, summary, parts):
-    """task(cfg.data, where) for every line {axis: value} as Dask tasks, after compiling the
-    scene's kernels in the driver (workers load them from the cache); the lines that part files
-    in `parts` hold already are read, not computed; each line done is saved as a part and gets
-    a progress line (`summary(result)`). The results in line order."""
-    from dask.distributed import as_completed
-
+def run_lines(cfg, task, lines, workers, scheduler, stream, summary, parts, unit="continuation_line"):
+    """task(cfg.data, where) for every line {axis: value}, after compiling the scene's kernels in
+    the driver (workers load them from the cache): in this process when the estimated work of the
+    lines to compute (pipeline.workload, `unit`) is small or workers == 0, else as Dask tasks. The
+    lines that part files in `parts` hold already are read, not computed; each line done is saved
+    as a part and gets a progress line (`summary(result)`). The results in line order."""
     config_hash = cfg.hash()
     results = earlier_lines(parts, config_hash, len(lines))
     todo = [k for k, r in enumerate(results) if r is None]
@@ -108,24 +107,36 @@ def run_lines(cfg, task, lines, workers, scheduler, stream, summary, parts):
         say(stream, f"{len(lines) - len(todo)} of {len(lines)} line(s) read from {parts}")
     if not todo:
         return results
-    say(stream, f"connecting to the Dask scheduler at {scheduler}" if scheduler else
+    model = compute.model_of(cfg.data).name
+    in_process = cluster.runs_in_process(workers, scheduler, workload.estimate(unit, model, len(todo)), len(todo))
+    say(stream, "computing in this process (small work: no cluster)" if in_process else
+        f"connecting to the Dask scheduler at {scheduler}" if scheduler else
         f"starting {cluster.local_workers(workers)} local Dask worker(s) (127.0.0.1)")
-    client, local = cluster.connect(workers, scheduler)
+    executor = cluster.executor(0 if in_process else workers, scheduler)
     try:
         with cluster.heap_frozen():     # the imports' and the cluster's objects (see cluster.heap_frozen)
             warmup.compile_scene(cfg.data, lambda text: say(stream, text))
-            submit = cluster.submitter(client, task, cfg.data)
-            futures = {submit(lines[k]): k for k in todo}
-            bar = runlog.Progress(len(todo), stream=stream, unit="lines")
-            for done, future in enumerate(as_completed(futures), len(lines) - len(todo) + 1):
-                k = futures[future]
-                results[k] = future.result()
-                save_line(parts, config_hash, k, results[k])
-                say(stream, f"[{done}/{len(lines)}] {_line_label(lines[k])}: {summary(results[k])}")
-                bar.update(1)
+            with workload.Meter() as meter:
+                _run_tasks(executor, cfg.data, task, lines, todo, results, stream, summary,
+                           lambda k: save_line(parts, config_hash, k, results[k]))
     finally:
-        cluster.close(client, local)
+        executor.close()
+    if in_process:
+        workload.record(unit, model, len(todo), meter.seconds)
     return results
+
+
+def _run_tasks(executor, data, task, lines, todo, results, stream, summary, saved):
+    """results[k] = task(data, lines[k]) for k in todo, each `saved(k)` and reported as it ends."""
+    submit = executor.submitter(task, data)
+    futures = {submit(lines[k]): k for k in todo}
+    bar = runlog.Progress(len(todo), stream=stream, unit="lines")
+    for done, future in enumerate(executor.as_completed(futures), len(lines) - len(todo) + 1):
+        k = futures[future]
+        results[k] = future.result()
+        saved(k)
+        say(stream, f"[{done}/{len(lines)}] {_line_label(lines[k])}: {summary(results[k])}")
+        bar.update(1)
 
 
 # --- a line's result as a part file -----------------------------------------------------------

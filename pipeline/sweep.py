@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline import boundaries, cluster, compute, cube, fileio, result_kinds, warmup
+from pipeline import boundaries, cluster, compute, cube, fileio, result_kinds, warmup, workload
 from pipeline.runlog import PHASE, Progress, log_file, phase_printer  # noqa: F401 (PHASE: the phase lines' mark)
 from pipeline.cluster import SweepError
 
@@ -183,7 +183,7 @@ def _prepare_output(output, cfg, resume, overwrite):
     output = os.path.abspath(output)
     parts = cube.parts_dir(output)
     if os.path.exists(output) and not overwrite:
-        raise SweepError(f"{output} exists; pass --overwrite to replace it")
+        raise SweepError(f"{output} exists; pass --overwrite (overwrite=True from Python) to replace it")
     if os.path.isdir(parts) and os.listdir(parts):
         if overwrite and not resume:
             for name in os.listdir(parts):
@@ -242,20 +242,21 @@ def _run_locked(cfg, output, parts, workers, scheduler, chunk_points, stream):
                              config_hash)
     for part in cube.iter_parts(parts):
         assembly.add(*part)
-    client = local = None
+    executor = None
     try:
         if todo:
-            client, local = _connect(cfg, workers, scheduler, say)
+            executor = _connect(cfg, workers, scheduler, sum(len(s) for s in todo), say)
             total = sum(len(s) for s in segs)
             bar = Progress(total, total - sum(len(s) for s in todo), stream)
-            refined.update(_run_chunks(client, cfg, todo, parts, assembly, chunk_points, bar, say))
+            refined.update(_run_chunks(executor, cfg, todo, parts, assembly, chunk_points, bar, say))
         say("assembling the cube and its boundary table")
         ds = assembly.dataset(fixed_coords(cfg), provenance(cfg))
-        ds = boundaries.add_boundary_table(cfg.data, ds, _map_tasks_on(client, stream) if client else None,
+        on_cluster = isinstance(executor, cluster.DaskExecutor)
+        ds = boundaries.add_boundary_table(cfg.data, ds, _map_tasks_on(executor.client, stream) if on_cluster else None,
                                            refined)
     finally:
-        if client is not None:
-            cluster.close(client, local)
+        if executor is not None:
+            executor.close()
     say(f"writing the cube: {output}")
     path = cube.write_cube(ds, output, overwrite=True)
     _remove_parts(parts)
@@ -306,22 +307,34 @@ def _write_failure(exc, output, parts):
 RESUBMITS = 3
 
 
-def _connect(cfg, workers, scheduler, say):
-    """cluster.connect(workers, scheduler), with the scene's kernels compiled (or loaded) here."""
-    say(f"connecting to the Dask scheduler at {scheduler}" if scheduler else
-        f"starting {_count(cluster.local_workers(workers), 'local Dask worker')} (127.0.0.1)")
-    client, local = cluster.connect(workers, scheduler)
+def point_unit(data):
+    """The unit of a sweep's work (pipeline.workload): a point, with or without attractors."""
+    return "point_attractor" if data["analysis"]["attractor"] else "point"
+
+
+def _connect(cfg, workers, scheduler, n_points, say):
+    """The executor of a sweep of n_points (pipeline.cluster.executor: this process for small
+    work or workers=0, else a cluster), with the scene's kernels compiled (or loaded) here."""
+    estimate = workload.estimate(point_unit(cfg.data), compute.model_of(cfg.data).name, n_points)
+    if cluster.runs_in_process(workers, scheduler, estimate):
+        say(f"computing in this process (about {estimate:.1f} s of work; a local cluster pays from "
+            f"{cluster.in_process_below_s():g} s)" if workers != 0 else "computing in this process (--workers 0)")
+        executor = cluster.executor(0, None)
+    else:
+        say(f"connecting to the Dask scheduler at {scheduler}" if scheduler else
+            f"starting {_count(cluster.local_workers(workers), 'local Dask worker')} (127.0.0.1)")
+        executor = cluster.executor(workers, scheduler)
     try:
-        n_workers = max(1, len(client.scheduler_info()["workers"]))
-        say(f"{_count(n_workers, 'worker')}; Dask dashboard: {client.dashboard_link}")
+        if isinstance(executor, cluster.DaskExecutor):
+            say(f"{_count(executor.n_workers, 'worker')}; Dask dashboard: {executor.client.dashboard_link}")
         # the cluster just started joins the frozen heap: with its objects in every full
         # collection, compiling the demo scene's kernels took 27.9 s of CPU instead of 19.6
         with cluster.heap_frozen():
             warmup.compile_scene(cfg.data, say)
     except BaseException:
-        cluster.close(client, local)
+        executor.close()
         raise
-    return client, local
+    return executor
 
 
 # Refinement tasks (of the stability changes between two chunks) run before the chunks still
@@ -329,35 +342,42 @@ def _connect(cfg, workers, scheduler, say):
 REFINE_PRIORITY = 1
 
 
-def _run_chunks(client, cfg, todo, parts, assembly, chunk_points, bar, say):
+def _run_chunks(executor, cfg, todo, parts, assembly, chunk_points, bar, say):
     """Compute the chunks into part files and `assembly`, each refining the stability changes
     between its own points; one between two chunks is refined by a task of its own as soon as
     both are done (a task and its result's round trip cost ~10 ms of CPU on the driver and the
     worker: Fig. 13 on 2 workers had 11 refinement tasks besides 31 chunks when every finished
-    chunk's changes were one): {(line, i): boundary row}."""
-    from dask.distributed import KilledWorker, as_completed
-
-    n_workers = max(1, len(client.scheduler_info()["workers"]))
-    chunks = chunks_for(cfg, todo, n_workers, chunk_points)
+    chunk's changes were one): {(line, i): boundary row}. An in-process run records its cost per
+    point (pipeline.workload)."""
+    chunks = chunks_for(cfg, todo, executor.n_workers, chunk_points)
     say(f"sweeping {_count(sum(len(s) for s in todo), 'point')} in {_count(len(chunks), 'chunk')}")
     bar.restart()
-    solve = cluster.submitter(client, compute_segments, cfg.data, cfg.axes, cfg.continued_axis)
+    with workload.Meter() as meter:
+        refined = _solve_chunks(executor, cfg, chunks, parts, assembly, bar)
+    if isinstance(executor, cluster.InProcess):
+        workload.record(point_unit(cfg.data), compute.model_of(cfg.data).name, sum(len(s) for s in todo),
+                        meter.seconds)
+    return refined
+
+
+def _solve_chunks(executor, cfg, chunks, parts, assembly, bar):
+    solve = executor.submitter(compute_segments, cfg.data, cfg.axes, cfg.continued_axis)
 
     def submit(chunk):
         return solve(tuple(seg.id for seg in chunk))
-    refine = cluster.submitter(client, boundaries.refine_brackets, cfg.data, cfg.continued_axis, priority=REFINE_PRIORITY)
+    refine = executor.submitter(boundaries.refine_brackets, cfg.data, cfg.continued_axis, priority=REFINE_PRIORITY)
     tracker = boundaries.Tracker(cfg.axes, cfg.continued_axis)
     futures = {submit(chunk): (chunk, 0) for chunk in chunks}
     refining, refined = {}, {}
-    pending = as_completed(futures)
+    pending = executor.as_completed(futures)
     for future in pending:
         if future in refining:
-            _collect_refined(future, refining.pop(future), refined)
+            _collect_refined(future, refining.pop(future), refined, executor.lost)
             continue
         chunk, resubmits = futures.pop(future)
         try:
             seg_ids, index, results, inside = future.result()
-        except KilledWorker:
+        except executor.lost:
             if resubmits == RESUBMITS:
                 raise SweepError(_killed_chunk(chunk, parts)) from None
             retry = submit(chunk)
@@ -380,14 +400,12 @@ def _run_chunks(client, cfg, todo, parts, assembly, chunk_points, bar, say):
     return refined
 
 
-def _collect_refined(future, found, refined):
-    """Add a refinement task's rows to `refined`; a task lost with its workers leaves its brackets
-    to the refinement after the sweep."""
-    from dask.distributed import KilledWorker
-
+def _collect_refined(future, found, refined, lost):
+    """Add a refinement task's rows to `refined`; a task lost with its workers (`lost`: the
+    executor's exception for that) leaves its brackets to the refinement after the sweep."""
     try:
         rows = future.result()
-    except KilledWorker:
+    except lost:
         return
     refined.update({(b.line, b.i): row for (_, b), row in zip(found, rows)})
     future.release()

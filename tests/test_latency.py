@@ -1,0 +1,148 @@
+"""Small work answers without a cluster (issue 35): where a command runs (in this process or on a
+Dask cluster) changes no result bit; `import rotorsweep` and `rotorsweep info` import no plotting
+or Dask module; the README's Python example runs as a plain script and in an exec (issue 37)."""
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline import cluster, config, continuation, cube, sweep, workload
+from tests.test_continue_command import DUFFING
+from tests.test_pipeline import SMALL
+
+ROOT = Path(__file__).resolve().parents[1]
+CLI = [str(Path(sys.executable).with_name("rotorsweep"))]
+HEAVY = ("hvplot", "panel", "holoviews", "bokeh", "matplotlib", "dask", "distributed", "scipy.linalg",
+         "scipy.interpolate", "scipy.integrate", "scipy.optimize")
+
+
+def env():
+    return {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+
+
+def test_a_sweep_in_process_and_on_a_cluster_give_the_same_bits(tmp_path):
+    cfg = config.parse_config(SMALL)
+    here = cube.open_cube(sweep.run(cfg, tmp_path / "here.nc", workers=0, progress=False))
+    there = cube.open_cube(sweep.run(cfg, tmp_path / "there.nc", workers=2, progress=False))
+    for name in here.data_vars:
+        if name != "compute_time":          # the only variable that measures the machine
+            np.testing.assert_array_equal(here[name].values, there[name].values, err_msg=name)
+
+
+def test_a_continuation_in_process_and_on_a_cluster_give_the_same_bits(tmp_path):
+    cfg = config.parse_config(DUFFING)
+    import xarray as xr
+    here = xr.load_dataset(continuation.run(cfg, tmp_path / "here.nc", workers=0, stream=None))
+    there = xr.load_dataset(continuation.run(cfg, tmp_path / "there.nc", workers=1, stream=None))
+    assert set(here.data_vars) == set(there.data_vars)
+    for name in here.data_vars:
+        np.testing.assert_array_equal(here[name].values, there[name].values, err_msg=name)
+
+
+def test_where_a_command_runs():
+    assert cluster.runs_in_process(None, None, 0.1)
+    assert not cluster.runs_in_process(None, None, 1e3)
+    assert cluster.runs_in_process(0, None, 1e3)                        # --workers 0 / --in-process
+    assert not cluster.runs_in_process(2, None, 0.1)                    # a worker count asks for a cluster
+    assert not cluster.runs_in_process(None, "tcp://127.0.0.1:1", 0.1)  # a scheduler is always used
+    assert cluster.runs_in_process(None, None, 1e3, tasks=1)            # one task: a cluster cannot help
+
+
+def test_the_threshold_is_overridable(monkeypatch):
+    monkeypatch.setenv(cluster.IN_PROCESS_VARIABLE, "0")
+    assert not cluster.runs_in_process(None, None, 0.1)
+    monkeypatch.setenv(cluster.IN_PROCESS_VARIABLE, "ten")
+    with pytest.raises(cluster.SweepError, match=cluster.IN_PROCESS_VARIABLE):
+        cluster.in_process_below_s()
+
+
+def test_measured_unit_costs_are_kept_in_the_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("ROTORSWEEP_CACHE", str(tmp_path))
+    assert workload.estimate("point", "duffing", 10) == 10 * workload.DEFAULT_COSTS["point"]
+    workload.record("point", "duffing", 4, 2.0)
+    assert workload.estimate("point", "duffing", 10) == pytest.approx(5.0)
+    workload.record("point", "duffing", 4, 1.0)        # the largest cost measured is kept
+    assert workload.estimate("point", "duffing", 10) == pytest.approx(5.0)
+    assert workload.unit_cost("point", "jeffcott_clearance") == workload.DEFAULT_COSTS["point"]
+    workload.record("continuation_line", "duffing", 1, 0.07)       # a quick line does not lower the default
+    assert workload.unit_cost("continuation_line", "duffing") == workload.DEFAULT_COSTS["continuation_line"]
+
+
+def test_in_process_tasks_run_by_priority_and_raise_on_result():
+    ex = cluster.InProcess()
+    ran = []
+    low, high = ex.submitter(ran.append), ex.submitter(ran.append, priority=1)
+    tasks = [low("a"), high("b")]
+    assert [t.result() is None for t in ex.as_completed(tasks)] == [True, True] and ran == ["b", "a"]
+    failing = ex.submitter(lambda: 1 / 0)()
+    for task in ex.as_completed([failing]):
+        with pytest.raises(ZeroDivisionError):
+            task.result()
+
+
+def imported_modules(args):
+    """The modules a Python process imports (from `-X importtime`)."""
+    proc = subprocess.run([sys.executable, "-X", "importtime", *args], capture_output=True, text=True,
+                          env=env(), timeout=300, cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    return {m.group(1) for m in re.finditer(r"^import time:.*\|\s*([\w.]+)\s*$", proc.stderr, re.M)}
+
+
+def heavy(modules):
+    return sorted(m for m in modules if any(m == h or m.startswith(h + ".") for h in HEAVY))
+
+
+def test_import_rotorsweep_loads_no_plotting_dask_or_scipy_solvers():
+    assert heavy(imported_modules(["-c", "import rotorsweep"])) == []
+
+
+def test_info_loads_no_plotting_dask_or_scipy_solvers(tiny_cube):
+    assert heavy(imported_modules(["-m", "pipeline.cli", "info", str(tiny_cube)])) == []
+
+
+def test_the_accessor_registers_without_hvplot_and_draws_with_it(tiny_cube):
+    code = ("import sys, rotorsweep; ds = rotorsweep.open_cube(sys.argv[1]); assert 'hvplot' not in sys.modules; "
+            "ds.rotorsweep.max_multiplier(); assert 'hvplot' in sys.modules")
+    subprocess.run([sys.executable, "-c", code, str(tiny_cube)], check=True, env=env(), timeout=300, cwd=ROOT)
+
+
+def readme_example(tmp_path):
+    """The README's Python example on the small scene, its paths in tmp_path."""
+    text = (ROOT / "README.md").read_text()
+    code = re.search(r"```python\n(import rotorsweep\n.*?)```", text, re.S).group(1)
+    assert "rotorsweep.run(" in code
+    (tmp_path / "small.toml").write_text(SMALL)
+    code = code.replace("configs/demo.toml", str(tmp_path / "small.toml"))
+    code = code.replace('"out/fold.nc"', 'path')         # no continuation result here: the cube (any result)
+    return code.replace('"out/', f'"{tmp_path}/out/')
+
+
+def test_the_readme_python_example_runs_as_a_plain_script(tmp_path):
+    """No `if __name__ == "__main__":`: the workers must not run the script again."""
+    script = tmp_path / "example.py"
+    script.write_text(readme_example(tmp_path))
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, env=env(), timeout=600,
+                          cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "Traceback" not in proc.stderr and (tmp_path / "out" / "demo_report").is_dir()
+
+
+def test_the_readme_python_example_runs_in_an_exec(tmp_path):
+    """As a notebook runs a cell."""
+    (tmp_path / "cell.py").write_text(readme_example(tmp_path))
+    code = "exec(compile(open('cell.py').read(), '<cell>', 'exec'), {'__name__': '__main__'})"
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env(), timeout=600,
+                          cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+
+
+def test_the_overwrite_hint_names_the_python_keyword(tmp_path):
+    cfg = config.parse_config(DUFFING)
+    out = tmp_path / "x.nc"
+    out.write_text("")
+    with pytest.raises(cube.CubeError, match="overwrite=True"):
+        continuation.run(cfg, out, workers=0, stream=None)
