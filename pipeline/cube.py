@@ -128,7 +128,7 @@ def write_cube(ds, path, overwrite=False):
     `path` holds either the previous file or the complete new one."""
     path = Path(path).absolute()
     if path.exists() and not overwrite:
-        raise CubeError(f"{path} exists; pass --overwrite to replace it")
+        raise CubeError(f"{path} exists; pass --overwrite (overwrite=True from Python) to replace it")
     path.parent.mkdir(parents=True, exist_ok=True)
     with fileio.atomic_path(path) as tmp, _local_write_lock():
         try:

@@ -49,7 +49,7 @@ def result_output(cfg, output, overwrite, scheduler, resume=False):
     disk) becomes one CubeError naming the path and the finished lines kept."""
     output = os.path.abspath(output)
     if os.path.exists(output) and not overwrite:
-        raise cube.CubeError(f"{output} exists; pass --overwrite to replace it")
+        raise cube.CubeError(f"{output} exists; pass --overwrite (overwrite=True from Python) to replace it")
     with fileio.output_lock(output, cfg.path or "<default scene>"):
         if scheduler:
             cluster.check_scheduler(scheduler)
