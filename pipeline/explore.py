@@ -11,8 +11,8 @@ accessor that importing this module (or `rotorsweep`) registers on xarray Datase
     ds.rotorsweep.branch_diagram()                            # its branches (a backbone result: backbones())
 
 Swept axes beyond x and `by` become hvplot's widgets. The report draws with HoloViews elements
-where hvplot has no such kind (see pipeline/report/figures/*); its Campbell figure is built on
-campbell() here.
+where hvplot has no such kind (see pipeline/report/figures/*); its critical-multiplier frequency
+figure is built on multiplier_frequency() here.
 """
 import hvplot.pandas  # noqa: F401  (registers .hvplot on pandas and xarray objects)
 import hvplot.xarray  # noqa: F401
@@ -23,7 +23,7 @@ import xarray as xr
 from pipeline import result_kinds, schema
 from pipeline.report.cubeinfo import (branch_observables, branch_values, continued_axis,
                                       default_observable, has_attractor, other_axes)
-from pipeline.report.figures.campbell import campbell_points
+from pipeline.report.figures.multiplier_frequency import multiplier_frequency_points
 from pipeline.report.stability import CLASSES, PALETTE, stability_class
 from pipeline.report.style import holoviews
 
@@ -79,12 +79,12 @@ def response(ds, observable=None, **kwargs):
     return ds[f"amplitude_{observable}"].hvplot.line(x=continued_axis(ds), by=_by(ds), **kwargs)
 
 
-def campbell(ds, **kwargs):
+def multiplier_frequency(ds, **kwargs):
     """Frequency of the critical multiplier (arg(lambda) / 2 pi / T) vs shaft speed, one series
-    per value of the first other axis, with the 1x line."""
+    per value of the first other axis, with the 1x line (not a Campbell diagram: campbell())."""
     speed = ds[continued_axis(ds)].values
     one_x = holoviews().Curve((speed, speed), continued_axis(ds), "frequency", label="1x").opts(line_dash="dashed")
-    return campbell_points(ds, _by(ds)).opts(**kwargs) * one_x
+    return multiplier_frequency_points(ds, _by(ds)).opts(**kwargs) * one_x
 
 
 def bifurcation(ds, variable="poincare_x", **kwargs):
@@ -146,7 +146,7 @@ def backbones(ds, where=None, **kwargs):
 
 # the accessor's figures of each result kind (pipeline.result_kinds)
 FIGURES = {kind: {f.__name__: f for f in figures} for kind, figures in (
-    (result_kinds.SWEEP, (max_multiplier, stability_map, branches, response, campbell, bifurcation, lle, multipliers)),
+    (result_kinds.SWEEP, (max_multiplier, stability_map, branches, response, multiplier_frequency, bifurcation, lle, multipliers)),
     (result_kinds.CONTINUATION, (branch_diagram,)),
     (result_kinds.BACKBONE, (backbones,)))}
 
@@ -189,8 +189,8 @@ class CubeAccessor:
     def response(self, observable=None, **kwargs):
         return self._draw("response", observable, **kwargs)
 
-    def campbell(self, **kwargs):
-        return self._draw("campbell", **kwargs)
+    def multiplier_frequency(self, **kwargs):
+        return self._draw("multiplier_frequency", **kwargs)
 
     def bifurcation(self, variable="poincare_x", **kwargs):
         return self._draw("bifurcation", variable, **kwargs)

@@ -16,7 +16,7 @@ from tests.synthetic import synthetic_cube
 report = importlib.import_module("pipeline.report")
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
-BASE_PNGS = ("stability_map.png", "branches.png", "max_multiplier.png", "response.png", "campbell.png",
+BASE_PNGS = ("stability_map.png", "branches.png", "max_multiplier.png", "response.png", "multiplier_frequency.png",
              "multiplier_paths.png")
 
 
@@ -530,9 +530,9 @@ def test_multiplier_panels_are_square_with_units_on_the_colour_bar():
 @pytest.mark.slow    # 17-41 s: the default suite stays under 15 min on 2 cores (make test-slow)
 def test_every_line_plot_has_a_hover_with_the_parameter_and_the_value():
     ds = attractor_cube()
-    from pipeline.report.figures import branch_diagram, campbell, response
+    from pipeline.report.figures import branch_diagram, multiplier_frequency, response
     values = {report.fig_max_multiplier: "max |multiplier|", report.fig_bifurcation: "Poincaré x [µm]",
-              report.fig_lle: "largest Lyapunov exp. [1/s]", campbell.fig_campbell: "frequency [Hz]",
+              report.fig_lle: "largest Lyapunov exp. [1/s]", multiplier_frequency.fig_multiplier_frequency: "frequency [Hz]",
               response.fig_response: "amplitude of",
               branch_diagram.fig_branches: "Poincaré x of the orbit [µm]"}
     for make, value in values.items():

@@ -172,8 +172,7 @@ def figures(ds, backend):
     out.append(("Largest Floquet multiplier modulus along the branches", "branch_max_multiplier.png",
                 _panel(hv, ds, "max_abs_multiplier", "max |multiplier|", backend, ref_one=True)))
     if mode_campbell.has_linear_analysis(ds):
-        out.append(("Campbell diagram: natural frequencies vs shaft speed (forward solid, backward dashed)",
-                    "mode_campbell.png", mode_campbell.result_figure(ds, backend)))
+        out.append((mode_campbell.CAPTION, "mode_campbell.png", mode_campbell.result_figure(ds, backend)))
     return out
 
 
