@@ -461,7 +461,8 @@ def test_point_detail_on_a_real_attractor_cube(tiny_cube, tmp_path, capsys):
                               "clearance=19e-6"], capsys)
     assert code == 0, err
     phases = [line for line in err.splitlines() if line.startswith("== ")]
-    assert phases[0].startswith("== drawing the figures (8) and the points in detail (1): ")
+    # a real cube stores its scene: the Bode plot (orbits integrated again) joins the synthetic cubes' set
+    assert phases[0].startswith("== drawing the figures (9) and the points in detail (1): ")
     assert sorted(p.split(" (")[0] for p in phases[1:]) == ["== HTML page written", "== PNGs written"]
     png = out / "point_64Hz_19um.png"
     assert f"figure: {png}" in stdout
@@ -476,7 +477,7 @@ def test_point_detail_on_a_real_attractor_cube(tiny_cube, tmp_path, capsys):
     assert "<tr><th>attractor (sweep up, cube)</th><td>periodic</td></tr>" in text
     assert "<tr><th>  period</th><td>2 forcing periods</td></tr>" in text
     assert "from the cube&#x27;s attractor_state" in text
-    assert text.count('<div class="figure">') == len(BASE_PNGS) + 3      # + bifurcation, lle, point
+    assert text.count('<div class="figure">') == len(BASE_PNGS) + 4      # + bode, bifurcation, lle, point
     # the real boundary table drives the map: its refined speed is a rectangle edge
     ds = cube.open_cube(tiny_cube)
     (speed,) = ds["boundary_speed"].values

@@ -10,9 +10,9 @@ import html
 
 import numpy as np
 
-from pipeline import continuation, query
-from pipeline.report import branches, page, style
-from pipeline.report.figures import mode_campbell
+from pipeline import compute, continuation, query
+from pipeline.report import branches, harmonics, page, style
+from pipeline.report.figures import bode, mode_campbell
 from rotorkernels.continuation import arclength as al
 
 def _shown(value, units):
@@ -169,11 +169,26 @@ def figures(ds, backend):
     if "curve" in ds.dims and ds.sizes["curve"]:
         out.insert(2, (f"Stability boundary curves in ({ds.attrs['parameter']}, {ds.attrs['curves_in']})",
                        "boundary_curves.png", _curves_map(hv, ds, backend)))
+    out.insert(2, (f"Bode and polar plots: first harmonic of {main} along the branches (stable solid, unstable "
+                   "dashed)", "bode.png", _bode(ds, main, backend)))
     out.append(("Largest Floquet multiplier modulus along the branches", "branch_max_multiplier.png",
                 _panel(hv, ds, "max_abs_multiplier", "max |multiplier|", backend, ref_one=True)))
     if mode_campbell.has_linear_analysis(ds):
         out.append((mode_campbell.CAPTION, "mode_campbell.png", mode_campbell.result_figure(ds, backend)))
     return out
+
+
+def _bode(ds, observable, backend):
+    """The Bode and polar plots of the branches, along the parameter as the other panels draw it."""
+    from pipeline.report.points import scene_data
+
+    data = scene_data(ds)
+    names = [_branch_label(ds, b) for b in range(ds.sizes["branch"])]
+    lines = harmonics.continuation_lines(ds, data, observable, names)
+    xs, _, xlabel = parameter_axis(ds)
+    lines = lines._replace(x=[row[:len(x)] for row, x in zip(xs, lines.x)])
+    unit = next(o.unit for o in compute.model_of(data).observables if o.name == observable)
+    return bode.fig_bode(lines, observable, unit, xlabel, backend)
 
 
 def _bistable_html(ds):

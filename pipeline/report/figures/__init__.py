@@ -5,6 +5,7 @@ from pipeline.report.figures import atlas  # noqa: F401
 from pipeline.report.figures import branch_diagram  # noqa: F401
 from pipeline.report.figures import max_multiplier  # noqa: F401
 from pipeline.report.figures import response  # noqa: F401
+from pipeline.report.figures import bode  # noqa: F401
 from pipeline.report.figures import multiplier_frequency  # noqa: F401
 from pipeline.report.figures import mode_campbell  # noqa: F401
 from pipeline.report.figures import multiplier_paths  # noqa: F401
