@@ -87,6 +87,37 @@ def multiplier_frequency(ds, **kwargs):
     return multiplier_frequency_points(ds, _by(ds)).opts(**kwargs) * one_x
 
 
+def bode(ds, observable=None, **kwargs):
+    """Bode (amplitude, phase) and polar plots of the first harmonic of `observable` (default:
+    the scene's report observable) of the orbits along the swept or continued parameter, stable
+    solid, unstable dashed (pipeline.report.figures.bode; the orbits are integrated again)."""
+    from pipeline.report import harmonics
+    from pipeline.report.figures import bode as figure
+    from pipeline.report.points import scene_data
+
+    data = scene_data(ds)
+    observable = observable or figure.report_observable(data)
+    if result_kinds.kind_of(ds).name == result_kinds.CONTINUATION:
+        lines = harmonics.continuation_lines(ds, data, observable, [f"branch {b}" for b in range(ds.sizes["branch"])])
+        xlabel = f"{ds.attrs['parameter']} [{ds['parameter'].attrs.get('units', '')}]"
+    else:
+        lines = harmonics.sweep_lines(ds, data, observable)
+        xlabel = f"{lines.parameter} [{ds[lines.parameter].attrs.get('units', '')}]"
+    unit = next(o.unit for o in schema.model_of(ds).observables if o.name == observable)
+    return figure.fig_bode(lines, observable, unit, xlabel).opts(**kwargs)
+
+
+def campbell(ds, **kwargs):
+    """The Campbell diagram of the result's scene (models with a linearization and a shaft
+    speed): damped natural frequencies vs shaft speed, critical speeds marked and listed."""
+    from pipeline.report.figures import mode_campbell
+
+    if not mode_campbell.has_linear_analysis(ds):
+        raise ValueError(f"model {ds.attrs.get('model')}: no Campbell diagram (it needs a linearization, a shaft "
+                         "speed and the scene stored in the result)")
+    return mode_campbell.result_figure(ds, "bokeh").opts(**kwargs)
+
+
 def bifurcation(ds, variable="poincare_x", **kwargs):
     """The attractors' Poincare samples along the continued axis (all samples of a point in one
     column; pass rasterize=True for large cubes)."""
@@ -146,8 +177,9 @@ def backbones(ds, where=None, **kwargs):
 
 # the accessor's figures of each result kind (pipeline.result_kinds)
 FIGURES = {kind: {f.__name__: f for f in figures} for kind, figures in (
-    (result_kinds.SWEEP, (max_multiplier, stability_map, branches, response, multiplier_frequency, bifurcation, lle, multipliers)),
-    (result_kinds.CONTINUATION, (branch_diagram,)),
+    (result_kinds.SWEEP, (max_multiplier, stability_map, branches, response, multiplier_frequency, bifurcation, lle,
+                          multipliers, bode, campbell)),
+    (result_kinds.CONTINUATION, (branch_diagram, bode, campbell)),
     (result_kinds.BACKBONE, (backbones,)))}
 
 
@@ -191,6 +223,12 @@ class CubeAccessor:
 
     def multiplier_frequency(self, **kwargs):
         return self._draw("multiplier_frequency", **kwargs)
+
+    def bode(self, observable=None, **kwargs):
+        return self._draw("bode", observable, **kwargs)
+
+    def campbell(self, **kwargs):
+        return self._draw("campbell", **kwargs)
 
     def bifurcation(self, variable="poincare_x", **kwargs):
         return self._draw("bifurcation", variable, **kwargs)

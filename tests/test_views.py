@@ -138,3 +138,15 @@ def _width(plot):
 def _bode_inputs(cfg, ds):
     from pipeline.report import harmonics
     return harmonics.sweep_lines(ds, cfg.data, "x"), "x", "1", "omega [rad s-1]"
+
+
+def test_accessor_draws_bode_and_says_why_no_campbell(linear_cube):
+    """ds.rotorsweep.bode() on a sweep cube; campbell() refuses a model without a shaft speed."""
+    import holoviews as hv
+    import rotorsweep  # noqa: F401  (registers the accessor)
+    cfg, ds = linear_cube
+    ds = ds.assign_attrs(config_toml=cfg.source)
+    plot = ds.rotorsweep.bode()
+    assert isinstance(plot, hv.Layout) and len(plot) == 3
+    with pytest.raises(ValueError, match="no Campbell diagram"):
+        ds.rotorsweep.campbell()
