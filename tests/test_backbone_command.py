@@ -11,6 +11,7 @@ import pytest
 
 from pipeline import backbone, cli, compute, config, result_kinds
 from tests import cfcheck
+from tests.browser import assert_renders, needs_chromium
 
 AXIAL = "configs/filipkovsky2010_axial.toml"
 
@@ -161,3 +162,8 @@ def test_cf_checkers_find_no_error_and_units_are_stated(axial_result, tmp_path):
     mixed = [n for n, v in ds.data_vars.items() if v.dtype.kind == "f" and "units" not in v.attrs]
     assert mixed == ["reduced_coefficient", "manifold_coefficient"]
     assert all(ds[n].attrs["comment"].startswith(result_kinds.MIXED_UNITS) for n in mixed)
+
+
+@needs_chromium
+def test_backbone_report_renders_in_a_browser(axial_result, tmp_path):
+    assert_renders(axial_result[1], tmp_path / "shot.png")

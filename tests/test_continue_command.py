@@ -10,6 +10,7 @@ import pytest
 
 from pipeline import config, continuation
 from tests import cfcheck
+from tests.browser import assert_renders, needs_chromium
 from rotorkernels.continuation import arclength as al
 
 CLI = [str(Path(sys.executable).with_name("rotorsweep"))]
@@ -182,3 +183,8 @@ def test_cf_checkers_find_no_error(duffing_result, tmp_path):
     assert messages["FATAL"] == messages["ERROR"] == []
     assert messages["WARN"] == ["observable: (5): Possible incorrect declaration of a coordinate variable."]
     assert cfcheck.ioos_failures(out, tmp_path) == []
+
+
+@needs_chromium
+def test_continuation_report_renders_in_a_browser(duffing_result, tmp_path):
+    assert_renders(duffing_result[1] / "report", tmp_path / "shot.png")
