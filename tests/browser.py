@@ -11,7 +11,9 @@ needs_chromium = pytest.mark.skipif(
 
 
 def assert_renders(report_dir, png):
-    """The report in report_dir opens with no console errors and every figure drawn."""
+    """The report in report_dir opens with no console errors, every figure drawn, nothing wider
+    than the window."""
     shot = screenshots.capture(report_dir / "report.html", png)
     assert not shot.errors, shot.errors
     assert shot.figures > 0 and shot.rendered == shot.figures, shot
+    assert shot.width <= screenshots.WIDTH, shot

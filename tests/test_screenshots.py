@@ -45,11 +45,12 @@ def test_a_page_is_rendered_cropped_and_its_script_errors_reported(tmp_path):
 
 @pytest.fixture(scope="module")
 def sweep_report(tiny_cube, tmp_path_factory):
-    """The report of the suite's tiny real sweep cube (tests/conftest.py), drawn once."""
+    """The report of the suite's tiny real sweep cube (tests/conftest.py) with a point in detail,
+    drawn once."""
     from pipeline import cube
     from pipeline.report import make_report
     out = tmp_path_factory.mktemp("sweep") / "report"
-    make_report(cube.open_cube(tiny_cube), out, parallel=False)
+    make_report(cube.open_cube(tiny_cube), out, points=["speed=64 clearance=19e-6"], parallel=False)
     return out
 
 

@@ -46,23 +46,25 @@ def browser():
     return found
 
 
-# appended to a copy of the page: once loaded, the number of bokeh figure slots (div.figure) and of
-# those holding a rendered bokeh view (an element with a shadow root holding a canvas), on the console
+# appended to a copy of the page: once loaded, the number of bokeh figure slots (div.figure), of
+# those holding a rendered bokeh view (an element with a shadow root holding a canvas) and the
+# page's width [px] (wider than the window: something is off-screen), on the console
 RENDER_PROBE = """<script>
 window.addEventListener("load", () => setTimeout(() => {
   const slots = [...document.querySelectorAll("div.figure")];
   const drawn = slots.filter(d => [...d.querySelectorAll("*")].some(
     e => e.shadowRoot && (e.shadowRoot.querySelector("canvas") || e.shadowRoot.querySelector("*"))));
-  console.log("rotorsweep-render " + drawn.length + "/" + slots.length);
+  console.log("rotorsweep-render " + drawn.length + "/" + slots.length + " " + document.documentElement.scrollWidth);
 }, 2000));
 </script>"""
-RENDERED = re.compile(r"rotorsweep-render (\d+)/(\d+)")
+RENDERED = re.compile(r"rotorsweep-render (\d+)/(\d+) (\d+)")
 
 
 class Capture(NamedTuple):
     errors: list        # the page's JavaScript errors (lines of the browser's console)
     rendered: int       # figure slots holding a rendered bokeh figure
     figures: int        # figure slots of the page
+    width: int          # the page's width [px] in a WIDTH window
 
 
 def capture(html, png, chromium=None):
@@ -88,8 +90,8 @@ def capture(html, png, chromium=None):
         png.parent.mkdir(parents=True, exist_ok=True)
         crop_to_content(raw, png)
     counts = RENDERED.search(done.stderr)
-    rendered, figures = (int(counts.group(1)), int(counts.group(2))) if counts else (0, -1)
-    return Capture([line for line in done.stderr.splitlines() if JS_ERROR.search(line)], rendered, figures)
+    rendered, figures, width = (int(g) for g in counts.groups()) if counts else (0, -1, -1)
+    return Capture([line for line in done.stderr.splitlines() if JS_ERROR.search(line)], rendered, figures, width)
 
 
 def crop_to_content(src, dst, margin=16):
@@ -116,8 +118,8 @@ def main(argv=None):
             png = Path(args.out) / f"{Path(report).name}.png"
             shot = capture(Path(report) / "report.html", png, chromium)
             print(f"{png}: {'JavaScript errors: ' + '; '.join(shot.errors) if shot.errors else 'no JavaScript errors'}"
-                  f", {shot.rendered} of {shot.figures} figures rendered")
-            failed |= bool(shot.errors) or shot.rendered != shot.figures
+                  f", {shot.rendered} of {shot.figures} figures rendered, page {shot.width} px wide")
+            failed |= bool(shot.errors) or shot.rendered != shot.figures or shot.width > WIDTH
     except ScreenshotError as exc:
         print(f"screenshots: {exc}", file=sys.stderr)
         return 2

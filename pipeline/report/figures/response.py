@@ -45,8 +45,8 @@ def fig_response(ds, backend="bokeh"):
     for k, (o, where) in enumerate(cells):
         show_x, _ = style.grid_opts(k, len(cells), backend, columns)
         long_name = next(ob.long_name for ob in schema.model_of(ds).observables if ob.name == o)
-        title = f"{o}: {long_name}" + (f" ({where_label(ds, where)})" if where else "")
-        slot = Slot(title, backend == "bokeh" or k == columns - 1, show_x, True)
+        panel_title = f"{o}: {long_name}" + (f" ({where_label(ds, where)})" if where else "")
+        slot = Slot(panel_title, backend == "bokeh" or k == columns - 1, show_x, True)
         panel = _response_panel(hv, ds, where, backend, slot, o, plan["y"])
         size = {"width": 1150 if columns == 1 else 570, "height": 380} if backend == "bokeh" else {"aspect": 1.6}
         panels.append(panel.opts(**size, backend=backend))
