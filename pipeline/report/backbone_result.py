@@ -93,11 +93,12 @@ def _backbone_panel(hv, ds, k, backend, show, forced=None):
 
 def _backbones(hv, ds, backend, forced=None):
     n = ds.sizes["mode"]
-    columns = style.ncols(n)
+    # bokeh: at most two 560 px panels a row (the page fits a 1400 px window)
+    columns = min(2, style.ncols(n)) if backend == "bokeh" else style.ncols(n)
     panels = []
     for k in range(n):
         panel = _backbone_panel(hv, ds, k, backend, style.grid_opts(k, n, backend, columns), forced)
-        size = {"width": 520, "height": 340} if backend == "bokeh" else {}
+        size = {"width": 560, "height": 340} if backend == "bokeh" else {}
         panels.append(panel.opts(legend_position="bottom_left", show_legend=k == 0, **size, backend=backend))
     rows = -(-n // columns)
     return style.layout(hv, panels, backend, columns, "Backbone curves: invariant manifold (dashed), continuation (solid)",
@@ -127,7 +128,7 @@ def _difference(hv, ds, backend):
                         .opts(color="#777777", **style.line_style(backend, 1.0, dash=True), backend=backend))
     elements.append(hv.Curve((grid[[0, -1]], [backbone.PART_RTOL] * 2), *dims, label="1 %")
                     .opts(color="#C00000", **style.line_style(backend, 1.0, dash=True), backend=backend))
-    size = {"width": 900, "height": 420} if backend == "bokeh" else {"fig_inches": (9, 4.6)}
+    size = {"width": 900, "height": 420, "tools": ["hover"]} if backend == "bokeh" else {"fig_inches": (9, 4.6)}
     return hv.Overlay(elements).opts(logx=True, logy=True, show_grid=True, legend_position="bottom_right", **size,
                                      backend=backend)
 
@@ -156,7 +157,7 @@ def _surface(hv, ds, backend):
              .opts(color="#D55E00", **style.line_style(backend, 1.2, dash=True), backend=backend)) \
         .opts(title=f"{slave} along 10 periods at A = {info['amplitude'] * UM:.3g} µm", legend_position="top_right",
               backend=backend)
-    size = {"width": 560, "height": 420} if backend == "bokeh" else {}
+    size = {"width": 560, "height": 420, "tools": ["hover"]} if backend == "bokeh" else {}
     return style.layout(hv, [left.opts(**size, backend=backend), right.opts(**size, backend=backend)], backend, 2,
                         "Invariant manifold and an orbit of the full system on it", fig_inches=(13, 4.6))
 
