@@ -120,7 +120,7 @@ def campbell(ds, **kwargs):
 
 def bifurcation(ds, variable="poincare_x", **kwargs):
     """The attractors' Poincare samples along the continued axis (all samples of a point in one
-    column; pass rasterize=True for large cubes)."""
+    column; pass rasterize=True for large cubes, which needs datashader: not installed with rotorsweep)."""
     if not has_attractor(ds):
         raise ValueError("the cube has no attractor diagnostics ([analysis] attractor = true)")
     return ds[variable].hvplot.scatter(x=continued_axis(ds), y=variable, by=_by(ds), groupby=[], size=2, **kwargs)
