@@ -188,3 +188,9 @@ def test_cf_checkers_find_no_error(duffing_result, tmp_path):
 @needs_chromium
 def test_continuation_report_renders_in_a_browser(duffing_result, tmp_path):
     assert_renders(duffing_result[1] / "report", tmp_path / "shot.png")
+
+
+def test_events_csv_has_units_in_every_numeric_header(duffing_result):
+    header = (duffing_result[1] / "report" / "events.csv").read_text().splitlines()[0].split(",")
+    assert header == ["type", "branch", "periods [1]", "omega [rad s-1]", "multiplier_real [1]",
+                      "multiplier_imag [1]", "amplitude_max_x [1]"]

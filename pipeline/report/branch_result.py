@@ -10,7 +10,7 @@ import html
 
 import numpy as np
 
-from pipeline import compute, continuation, query
+from pipeline import compute, continuation, query, schema
 from pipeline.report import branches, harmonics, page, style
 from pipeline.report.figures import bode, mode_campbell
 from rotorkernels.continuation import arclength as al
@@ -191,15 +191,32 @@ def _bode(ds, observable, backend):
     return bode.fig_bode(lines, observable, unit, xlabel, backend)
 
 
+def column_units(ds):
+    """{column of the events and bistable tables: its unit}: the parameter's, the line axes', the
+    observables' (model spec), 1 for multipliers and period counts."""
+    par_unit = ds["parameter"].attrs.get("units", "")
+    units = {ds.attrs["parameter"]: par_unit, "lo": par_unit, "hi": par_unit, "periods": "1",
+             "multiplier_real": "1", "multiplier_imag": "1"}
+    units.update({c: ds[c].attrs.get("units", "") for c in ds.coords if ds[c].dims == ("branch",)})
+    units.update({f"amplitude_max_{o.name}": o.unit for o in schema.model_of(ds).observables})
+    return units
+
+
+def with_units(ds, cols):
+    """The columns {name: values} renamed "name [unit]" where the name has a unit."""
+    units = column_units(ds)
+    return {f"{k} [{units[k]}]" if units.get(k) else k: v for k, v in cols.items()}
+
+
 def _bistable_html(ds):
     rows = continuation.bistable_intervals(ds)
     if not rows:
         return "<h2>Coexisting stable orbits</h2><p>none on the computed branches</p>"
-    return page.columns_html("Coexisting stable orbits", {k: [r[k] for r in rows] for k in rows[0]})
+    return page.columns_html("Coexisting stable orbits", with_units(ds, {k: [r[k] for r in rows] for k in rows[0]}))
 
 
 def _events_html(ds):
-    cols = continuation.events_table(ds)
+    cols = with_units(ds, continuation.events_table(ds))
     if not cols["type"]:
         return "<h2>Located points</h2><p>no fold, period doubling or Neimark-Sacker point on the branches</p>"
     return page.columns_html("Located points", cols)
@@ -219,4 +236,4 @@ def make_report(ds, out_dir, title=None):
     title = title or f"Continuation report: {ds.attrs.get('scene', '')}"
     return page.write_result_report(out_dir, title, _header_html(ds, title), lambda backend: figures(ds, backend),
                                     _events_html(ds) + _bistable_html(ds), ds.attrs.get("config_toml", ""),
-                                    "events.csv", query.render(continuation.events_table(ds), "csv"))
+                                    "events.csv", query.render(with_units(ds, continuation.events_table(ds)), "csv"))
