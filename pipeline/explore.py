@@ -118,6 +118,17 @@ def campbell(ds, **kwargs):
     return mode_campbell.result_figure(ds, "bokeh").opts(**kwargs)
 
 
+def mode_shapes(ds, **kwargs):
+    """The mode shapes at the scene's first grid point: each station's orbit, one panel per mode
+    (models with a linearization whose coordinates name stations)."""
+    from pipeline.report.figures import mode_shapes as figure
+
+    if not figure.has_stations(ds):
+        raise ValueError(f"model {ds.attrs.get('model')}: no mode shapes (they need a linearization, a shaft "
+                         "speed, coordinates that name stations and the scene stored in the result)")
+    return figure.result_figure(ds, "bokeh").opts(**kwargs)
+
+
 def bifurcation(ds, variable="poincare_x", **kwargs):
     """The attractors' Poincare samples along the continued axis (all samples of a point in one
     column; pass rasterize=True for large cubes, which needs datashader: not installed with rotorsweep)."""
@@ -178,8 +189,8 @@ def backbones(ds, where=None, **kwargs):
 # the accessor's figures of each result kind (pipeline.result_kinds)
 FIGURES = {kind: {f.__name__: f for f in figures} for kind, figures in (
     (result_kinds.SWEEP, (max_multiplier, stability_map, branches, response, multiplier_frequency, bifurcation, lle,
-                          multipliers, bode, campbell)),
-    (result_kinds.CONTINUATION, (branch_diagram, bode, campbell)),
+                          multipliers, bode, campbell, mode_shapes)),
+    (result_kinds.CONTINUATION, (branch_diagram, bode, campbell, mode_shapes)),
     (result_kinds.BACKBONE, (backbones,)))}
 
 
@@ -229,6 +240,9 @@ class CubeAccessor:
 
     def campbell(self, **kwargs):
         return self._draw("campbell", **kwargs)
+
+    def mode_shapes(self, **kwargs):
+        return self._draw("mode_shapes", **kwargs)
 
     def bifurcation(self, variable="poincare_x", **kwargs):
         return self._draw("bifurcation", variable, **kwargs)

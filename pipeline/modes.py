@@ -135,6 +135,18 @@ def scene_critical_speeds(spec, values, speeds_hz=None):
                            excitation_lines(spec, values))
 
 
+def station_shapes(mode, coordinates):
+    """{station: (X, Y)}: the complex transverse amplitudes of each station of a mode (a journal
+    or bearing centre: the coordinates "x1", "y1" make station "1"); its orbit over one period is
+    x = Re(X e^{i theta}), y = Re(Y e^{i theta}), theta in [0, 2 pi)."""
+    kinds = modal.kinds_from_names(coordinates) or ()
+    found = {}
+    for value, (axis, station) in zip(mode.shape, kinds):
+        if axis in ("x", "y"):
+            found.setdefault(station, {})[axis] = complex(value)
+    return {station: (c["x"], c["y"]) for station, c in found.items() if len(c) == 2}
+
+
 def omega_l(data):
     """omega_l [Hz] of a scene: the model's own (`ModelSpec.omega_l`) at the scene's first grid point."""
     spec = compute.model_of(data)

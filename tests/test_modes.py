@@ -148,3 +148,26 @@ def test_modes_text_lists_critical_speeds(capsys):
     assert cli.main(["modes", str(ROOT_CONFIGS / "filipkovsky2010_symmetric.toml")]) == 0
     text = capsys.readouterr().out
     assert "critical speeds (damped frequency = excitation line)" in text and " 1x " in text
+
+
+def test_station_shapes_of_a_whirling_pair_are_circles_turning_with_the_whirl():
+    """Forward whirl x = cos, y = sin is X = 1, Y = -i (y = Re(-i e^{i theta}) = sin theta);
+    backward Y = +i X: the station's orbit is a circle run the whirl's way (exact: rtol 1e-12)."""
+    modes_at = _tilting_rotor(2.0, 0.8, 4.0e6)
+    for mode in modes_at(100.0):
+        ((station, (x, y)),) = modes.station_shapes(mode, ("x", "y")).items()
+        assert station is None
+        assert y / x == pytest.approx(-1j if mode.whirl == "forward" else 1j, rel=1e-12)
+
+
+def test_mode_shapes_figure_has_a_panel_per_mode():
+    from pipeline import config
+    from pipeline.report import style
+    from pipeline.report.figures import mode_shapes
+    data = config.load_config(ROOT_CONFIGS / "filipkovsky2010_symmetric.toml").data
+    found, coordinates = mode_shapes.scene_modes(data)
+    fig = mode_shapes.fig_mode_shapes(data, "bokeh")
+    assert len(fig) == len(found) == 4
+    assert [c.label for c in fig.values()[0].values() if c.label] == ["station 1", "station 2"]
+    with style.backend("bokeh") as hv:
+        hv.render(fig, backend="bokeh")

@@ -150,3 +150,5 @@ def test_accessor_draws_bode_and_says_why_no_campbell(linear_cube):
     assert isinstance(plot, hv.Layout) and len(plot) == 3
     with pytest.raises(ValueError, match="no Campbell diagram"):
         ds.rotorsweep.campbell()
+    with pytest.raises(ValueError, match="no mode shapes"):
+        ds.rotorsweep.mode_shapes()

@@ -12,7 +12,7 @@ import numpy as np
 
 from pipeline import compute, continuation, query, schema
 from pipeline.report import branches, harmonics, page, style
-from pipeline.report.figures import bode, mode_campbell
+from pipeline.report.figures import bode, mode_campbell, mode_shapes
 from rotorkernels.continuation import arclength as al
 
 def _shown(value, units):
@@ -175,6 +175,8 @@ def figures(ds, backend):
                 _panel(hv, ds, "max_abs_multiplier", "max |multiplier|", backend, ref_one=True)))
     if mode_campbell.has_linear_analysis(ds):
         out.append((mode_campbell.CAPTION, "mode_campbell.png", mode_campbell.result_figure(ds, backend)))
+    if mode_shapes.has_stations(ds):
+        out.append((mode_shapes.CAPTION, "mode_shapes.png", mode_shapes.result_figure(ds, backend)))
     return out
 
 
