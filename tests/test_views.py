@@ -152,3 +152,12 @@ def test_accessor_draws_bode_and_says_why_no_campbell(linear_cube):
         ds.rotorsweep.campbell()
     with pytest.raises(ValueError, match="no mode shapes"):
         ds.rotorsweep.mode_shapes()
+
+
+def test_special_points_at_one_place_share_one_label():
+    """Two PDs at one point (a branch and the branch switched there) give one "PD"; an LP beside
+    them too: one text "PD/LP"; a PD elsewhere keeps its own."""
+    from pipeline.report.branches import Special, merged_labels
+    special = [Special(30.0, 2.0, "PD"), Special(30.0 + 1e-6, 2.0, "PD"), Special(30.0, 2.0 + 1e-6, "LP"),
+               Special(40.0, 1.0, "PD")]
+    assert [label for _, _, label in merged_labels(special)] == ["PD/LP", "PD"]
