@@ -11,6 +11,7 @@ import pytest
 from pipeline import config, continuation
 from tests import cfcheck
 from tests.browser import assert_renders, needs_chromium
+from tests.figure_checks import assert_legend_hover_and_width
 from rotorkernels.continuation import arclength as al
 
 CLI = [str(Path(sys.executable).with_name("rotorsweep"))]
@@ -194,3 +195,8 @@ def test_events_csv_has_units_in_every_numeric_header(duffing_result):
     header = (duffing_result[1] / "report" / "events.csv").read_text().splitlines()[0].split(",")
     assert header == ["type", "branch", "periods [1]", "omega [rad s-1]", "multiplier_real [1]",
                       "multiplier_imag [1]", "amplitude_max_x [1]"]
+
+
+def test_every_plot_of_the_report_has_a_legend_and_a_hover(duffing_result):
+    from pipeline.report import branch_result
+    assert_legend_hover_and_width(branch_result.figures(continuation.open_result(duffing_result[0]), "bokeh"))

@@ -99,7 +99,9 @@ def _backbones(hv, ds, backend, forced=None):
     for k in range(n):
         panel = _backbone_panel(hv, ds, k, backend, style.grid_opts(k, n, backend, columns), forced)
         size = {"width": 560, "height": 340} if backend == "bokeh" else {}
-        panels.append(panel.opts(legend_position="bottom_left", show_legend=k == 0, **size, backend=backend))
+        # the HTML: a legend on every panel (separate figures); the PNG: one, on the first
+        panels.append(panel.opts(legend_position="bottom_left", show_legend=backend == "bokeh" or k == 0, **size,
+                                 backend=backend))
     rows = -(-n // columns)
     return style.layout(hv, panels, backend, columns, "Backbone curves: invariant manifold (dashed), continuation (solid)",
                         fig_inches=(5.0 * columns, 3.6 * rows))
@@ -128,7 +130,7 @@ def _difference(hv, ds, backend):
                         .opts(color="#777777", **style.line_style(backend, 1.0, dash=True), backend=backend))
     elements.append(hv.Curve((grid[[0, -1]], [backbone.PART_RTOL] * 2), *dims, label="1 %")
                     .opts(color="#C00000", **style.line_style(backend, 1.0, dash=True), backend=backend))
-    size = {"width": 900, "height": 420, "tools": ["hover"]} if backend == "bokeh" else {"fig_inches": (9, 4.6)}
+    size = {"width": 900, "height": 420} if backend == "bokeh" else {"fig_inches": (9, 4.6)}
     return hv.Overlay(elements).opts(logx=True, logy=True, show_grid=True, legend_position="bottom_right", **size,
                                      backend=backend)
 
@@ -157,9 +159,16 @@ def _surface(hv, ds, backend):
              .opts(color="#D55E00", **style.line_style(backend, 1.2, dash=True), backend=backend)) \
         .opts(title=f"{slave} along 10 periods at A = {info['amplitude'] * UM:.3g} µm", legend_position="top_right",
               backend=backend)
-    size = {"width": 560, "height": 420, "tools": ["hover"]} if backend == "bokeh" else {}
+    size = {"width": 560, "height": 420} if backend == "bokeh" else {}
     return style.layout(hv, [left.opts(**size, backend=backend), right.opts(**size, backend=backend)], backend, 2,
                         "Invariant manifold and an orbit of the full system on it", fig_inches=(13, 4.6))
+
+
+def with_hover(fig, backend):
+    """A hover tool on every curve, point set and mesh of a bokeh figure (the matplotlib one as is)."""
+    if backend != "bokeh":
+        return fig
+    return fig.map(lambda el: el.opts(tools=["hover"], backend=backend), ["Curve", "Points", "QuadMesh"])
 
 
 def figures(ds, backend, forced=None):
@@ -173,7 +182,7 @@ def figures(ds, backend, forced=None):
     if "surface_info" in ds:
         out.append(("The invariant manifold of one mode with a full-system orbit", "manifold_surface.png",
                     _surface(hv, ds, backend)))
-    return out
+    return [(caption, filename, with_hover(fig, backend)) for caption, filename, fig in out]
 
 
 def _header_html(ds, title):

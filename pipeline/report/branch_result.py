@@ -58,7 +58,9 @@ def _panel(hv, ds, yname, ylabel, backend, ref_one=False, kind="amplitude_max"):
     if ref_one:
         ref = hv.Curve(([np.nanmin(xs), np.nanmax(xs)], [1.0, 1.0]), *dims, label="|λ| = 1")
         elements.append(ref.opts(color="#C00000", **style.line_style(backend, 1.2, dash=True), backend=backend))
-    size = {"width": 1100, "height": 460} if backend == "bokeh" else {"fig_inches": (12, 4.8), "aspect": 1.9}
+    # bokeh: holoviews hides a legend of more than 25 renderers (legend_limit), six branches have more
+    size = ({"width": 1100, "height": 460, "legend_limit": 200} if backend == "bokeh"
+            else {"fig_inches": (12, 4.8), "aspect": 1.9})
     return hv.Overlay(elements).opts(show_grid=True, legend_position="right", **size, backend=backend)
 
 

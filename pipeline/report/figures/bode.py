@@ -43,7 +43,8 @@ def fig_bode(lines, observable, unit, xlabel, backend="bokeh"):
     amp_label, phase_label = f"|X| of {observable} [{shown}]", f"phase of {observable} [deg]"
     re_label, im_label = f"Re X of {observable} [{shown}]", f"Im X of {observable} [{shown}]"
     wide = {"width": 620, "height": 320} if backend == "bokeh" else {"aspect": 1.8}
-    legend = {"legend_position": "top_right"} if backend == "bokeh" else {"legend_position": "best"}
+    # holoviews hides a bokeh legend of more than 25 renderers (legend_limit)
+    legend = {"legend_position": "top_right", "legend_limit": 200} if backend == "bokeh" else {"legend_position": "best"}
     amp = _panel(hv, lines, lines.x, [np.abs(h) * factor for h in lines.harmonic], (par, "amplitude"), (xlabel, amp_label),
                  backend, {**wide, **legend, "xlabel": xlabel, "ylabel": amp_label, "title": "Bode: amplitude"})
     phase = _panel(hv, lines, lines.x, [unwrapped_phase(h) for h in lines.harmonic], (par, "phase"), (xlabel, phase_label),

@@ -35,8 +35,9 @@ def fig_response(ds, backend="bokeh"):
     MAX_PANELS in all)."""
     hv = style.holoviews()
     plan = axes_plan(ds)
-    head = (f"Response curves: amplitude (half peak-to-peak) vs {axis_display(ds, plan['x'])[2]} "
-            "(solid: stable, dashed: unstable)")
+    # two lines: one would widen the PNG past its panels
+    head = (f"Response curves: amplitude (half peak-to-peak) vs {axis_display(ds, plan['x'])[2]}\n"
+            "solid: stable, dashed: unstable")
     title = figure_title(ds, head, plan)
     observables = [o.name for o in schema.model_of(ds).observables]
     cells = [(o, where) for where in plan["shown"] for o in observables][:MAX_PANELS]
