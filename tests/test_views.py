@@ -8,9 +8,9 @@ import pytest
 from pipeline import compute, config, modes
 from pipeline.report import style
 from pipeline.report.figures import mode_campbell
+from tests.figure_checks import WINDOW
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
-WINDOW = 1400     # px: every figure fits a window this wide
 
 
 def _render(fig):
