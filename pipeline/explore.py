@@ -11,8 +11,8 @@ accessor that importing this module (or `rotorsweep`) registers on xarray Datase
     ds.rotorsweep.branch_diagram()                            # its branches (a backbone result: backbones())
 
 Swept axes beyond x and `by` become hvplot's widgets. The report draws with HoloViews elements
-where hvplot has no such kind (see pipeline/report/figures/*); its Campbell figure is built on
-campbell() here.
+where hvplot has no such kind (see pipeline/report/figures/*); its critical-multiplier frequency
+figure is built on multiplier_frequency() here.
 
 Plotting (hvplot, HoloViews, bokeh) is imported when a figure is first drawn, not when the
 accessor registers: `import rotorsweep` stays light (issue 35).
@@ -97,20 +97,65 @@ def response(ds, observable=None, **kwargs):
 
 
 @plotting
-def campbell(ds, **kwargs):
+def multiplier_frequency(ds, **kwargs):
     """Frequency of the critical multiplier (arg(lambda) / 2 pi / T) vs shaft speed, one series
-    per value of the first other axis, with the 1x line."""
-    from pipeline.report.figures.campbell import campbell_points
+    per value of the first other axis, with the 1x line (not a Campbell diagram: campbell())."""
+    from pipeline.report.figures.multiplier_frequency import multiplier_frequency_points
 
     speed = ds[continued_axis(ds)].values
     one_x = holoviews().Curve((speed, speed), continued_axis(ds), "frequency", label="1x").opts(line_dash="dashed")
-    return campbell_points(ds, _by(ds)).opts(**kwargs) * one_x
+    return multiplier_frequency_points(ds, _by(ds)).opts(**kwargs) * one_x
+
+
+@plotting
+def bode(ds, observable=None, **kwargs):
+    """Bode (amplitude, phase) and polar plots of the first harmonic of `observable` (default:
+    the scene's report observable) of the orbits along the swept or continued parameter, stable
+    solid, unstable dashed (pipeline.report.figures.bode; the orbits are integrated again)."""
+    from pipeline.report import harmonics
+    from pipeline.report.figures import bode as figure
+    from pipeline.report.points import scene_data
+
+    data = scene_data(ds)
+    observable = observable or figure.report_observable(data)
+    if result_kinds.kind_of(ds).name == result_kinds.CONTINUATION:
+        lines = harmonics.continuation_lines(ds, data, observable, [f"branch {b}" for b in range(ds.sizes["branch"])])
+        xlabel = f"{ds.attrs['parameter']} [{ds['parameter'].attrs.get('units', '')}]"
+    else:
+        lines = harmonics.sweep_lines(ds, data, observable)
+        xlabel = f"{lines.parameter} [{ds[lines.parameter].attrs.get('units', '')}]"
+    unit = next(o.unit for o in schema.model_of(ds).observables if o.name == observable)
+    return figure.fig_bode(lines, observable, unit, xlabel).opts(**kwargs)
+
+
+@plotting
+def campbell(ds, **kwargs):
+    """The Campbell diagram of the result's scene (models with a linearization and a shaft
+    speed): damped natural frequencies vs shaft speed, critical speeds marked and listed."""
+    from pipeline.report.figures import mode_campbell
+
+    if not mode_campbell.has_linear_analysis(ds):
+        raise ValueError(f"model {ds.attrs.get('model')}: no Campbell diagram (it needs a linearization, a shaft "
+                         "speed and the scene stored in the result)")
+    return mode_campbell.result_figure(ds, "bokeh").opts(**kwargs)
+
+
+@plotting
+def mode_shapes(ds, **kwargs):
+    """The mode shapes at the scene's first grid point: each station's orbit, one panel per mode
+    (models with a linearization whose coordinates name stations)."""
+    from pipeline.report.figures import mode_shapes as figure
+
+    if not figure.has_stations(ds):
+        raise ValueError(f"model {ds.attrs.get('model')}: no mode shapes (they need a linearization, a shaft "
+                         "speed, coordinates that name stations and the scene stored in the result)")
+    return figure.result_figure(ds, "bokeh").opts(**kwargs)
 
 
 @plotting
 def bifurcation(ds, variable="poincare_x", **kwargs):
     """The attractors' Poincare samples along the continued axis (all samples of a point in one
-    column; pass rasterize=True for large cubes)."""
+    column; pass rasterize=True for large cubes, which needs datashader: not installed with rotorsweep)."""
     if not has_attractor(ds):
         raise ValueError("the cube has no attractor diagnostics ([analysis] attractor = true)")
     return ds[variable].hvplot.scatter(x=continued_axis(ds), y=variable, by=_by(ds), groupby=[], size=2, **kwargs)
@@ -171,8 +216,9 @@ def backbones(ds, where=None, **kwargs):
 
 # the accessor's figures of each result kind (pipeline.result_kinds)
 FIGURES = {kind: {f.__name__: f for f in figures} for kind, figures in (
-    (result_kinds.SWEEP, (max_multiplier, stability_map, branches, response, campbell, bifurcation, lle, multipliers)),
-    (result_kinds.CONTINUATION, (branch_diagram,)),
+    (result_kinds.SWEEP, (max_multiplier, stability_map, branches, response, multiplier_frequency, bifurcation, lle,
+                          multipliers, bode, campbell, mode_shapes)),
+    (result_kinds.CONTINUATION, (branch_diagram, bode, campbell, mode_shapes)),
     (result_kinds.BACKBONE, (backbones,)))}
 
 
@@ -214,8 +260,17 @@ class CubeAccessor:
     def response(self, observable=None, **kwargs):
         return self._draw("response", observable, **kwargs)
 
+    def multiplier_frequency(self, **kwargs):
+        return self._draw("multiplier_frequency", **kwargs)
+
+    def bode(self, observable=None, **kwargs):
+        return self._draw("bode", observable, **kwargs)
+
     def campbell(self, **kwargs):
         return self._draw("campbell", **kwargs)
+
+    def mode_shapes(self, **kwargs):
+        return self._draw("mode_shapes", **kwargs)
 
     def bifurcation(self, variable="poincare_x", **kwargs):
         return self._draw("bifurcation", variable, **kwargs)

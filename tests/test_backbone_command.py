@@ -12,6 +12,8 @@ import pytest
 from pipeline import backbone, cli, compute, config, result_kinds
 from tests import cfcheck
 from tests.runlog_check import check_log
+from tests.browser import assert_renders, needs_chromium
+from tests.figure_checks import assert_legend_hover_and_width
 
 AXIAL = "configs/filipkovsky2010_axial.toml"
 
@@ -174,3 +176,13 @@ def test_cf_checkers_find_no_error_and_units_are_stated(axial_result, tmp_path):
     mixed = [n for n, v in ds.data_vars.items() if v.dtype.kind == "f" and "units" not in v.attrs]
     assert mixed == ["reduced_coefficient", "manifold_coefficient"]
     assert all(ds[n].attrs["comment"].startswith(result_kinds.MIXED_UNITS) for n in mixed)
+
+
+@needs_chromium
+def test_backbone_report_renders_in_a_browser(axial_result, tmp_path):
+    assert_renders(axial_result[1], tmp_path / "shot.png")
+
+
+def test_every_plot_of_the_report_has_a_legend_and_a_hover(axial_result):
+    from pipeline.report import backbone_result
+    assert_legend_hover_and_width(backbone_result.figures(backbone.open_result(axial_result[0]), "bokeh"))

@@ -11,6 +11,8 @@ import pytest
 from pipeline import config, continuation
 from tests import cfcheck
 from tests.runlog_check import check_log
+from tests.browser import assert_renders, needs_chromium
+from tests.figure_checks import assert_legend_hover_and_width
 from rotorkernels.continuation import arclength as al
 
 CLI = [str(Path(sys.executable).with_name("rotorsweep"))]
@@ -193,3 +195,19 @@ def test_cf_checkers_find_no_error(duffing_result, tmp_path):
     assert messages["FATAL"] == messages["ERROR"] == []
     assert messages["WARN"] == ["observable: (5): Possible incorrect declaration of a coordinate variable."]
     assert cfcheck.ioos_failures(out, tmp_path) == []
+
+
+@needs_chromium
+def test_continuation_report_renders_in_a_browser(duffing_result, tmp_path):
+    assert_renders(duffing_result[1] / "report", tmp_path / "shot.png")
+
+
+def test_events_csv_has_units_in_every_numeric_header(duffing_result):
+    header = (duffing_result[1] / "report" / "events.csv").read_text().splitlines()[0].split(",")
+    assert header == ["type", "branch", "periods [1]", "omega [rad s-1]", "multiplier_real [1]",
+                      "multiplier_imag [1]", "amplitude_max_x [1]"]
+
+
+def test_every_plot_of_the_report_has_a_legend_and_a_hover(duffing_result):
+    from pipeline.report import branch_result
+    assert_legend_hover_and_width(branch_result.figures(continuation.open_result(duffing_result[0]), "bokeh"))

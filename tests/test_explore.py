@@ -8,7 +8,7 @@ import rotorsweep
 from pipeline import explore
 from tests.synthetic import synthetic_cube
 
-KINDS = ("max_multiplier", "stability_map", "branches", "response", "campbell", "bifurcation", "lle",
+KINDS = ("max_multiplier", "stability_map", "branches", "response", "multiplier_frequency", "bifurcation", "lle",
          "multipliers")
 
 

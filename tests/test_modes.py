@@ -5,6 +5,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 
 from pipeline import cli, modes
 from rotorkernels import modal, models
@@ -154,3 +155,82 @@ def test_campbell_without_an_output_file_is_refused(capsys):
     """--campbell without -o computed nothing and said nothing."""
     assert cli.main(["modes", SYMMETRIC, "--campbell", "0:100:3"]) == 2
     assert "give -o FILE.csv" in capsys.readouterr().err
+
+
+def _tilting_rotor(i_d, i_p, k):
+    """modes_at(speed [Hz]) of the tilting rotor I_d (a'' , b'') + I_p W (b', -a') + k (a, b) = 0
+    (W = 2 pi speed): forward w = (I_p W + sqrt((I_p W)^2 + 4 I_d k)) / 2 I_d, backward with -I_p W."""
+    kinds = modal.kinds_from_names(("x", "y"))
+
+    def modes_at(speed):
+        w = 2 * np.pi * speed
+        gyro = i_p * w * np.array([[0.0, 1.0], [-1.0, 0.0]])
+        return modal.modes_of(i_d * np.eye(2), np.zeros((2, 2)), gyro, k * np.eye(2), kinds)
+    return modes_at
+
+
+def test_critical_speeds_of_a_gyroscopic_rotor_against_the_closed_form_and_brentq():
+    """1x crossings: I_d w^2 -+ I_p w^2 = k, so W = sqrt(k / (I_d +- I_p)) (backward +, forward -);
+    a support line f_s crosses the forward mode where I_p W w = I_d w^2 - k (w = 2 pi f_s), the
+    backward one where I_p W w = k - I_d w^2. The crossing is located to 1e-12 of the top speed
+    (CRITICAL_XTOL) and the frequencies are exact to rounding: rtol 1e-9."""
+    i_d, i_p, k = 2.0, 0.8, 4.0e6
+    modes_at = _tilting_rotor(i_d, i_p, k)
+    speeds = np.linspace(0, 400, 81)[1:]
+    # at rest both modes are at sqrt(k / I_d) / 2 pi = 225 Hz: the backward one falls through 160 Hz,
+    # the forward one rises through 300 Hz
+    lines = [modes.Line("1x", 1.0, 0.0), modes.Line("low", 0.0, 160.0), modes.Line("high", 0.0, 300.0)]
+    found = modes.critical_speeds(modes_at, speeds, lines)
+    one_x = {c.whirl: c.speed_hz for c in found if c.line == "1x"}
+    assert one_x["backward"] == pytest.approx(np.sqrt(k / (i_d + i_p)) / (2 * np.pi), rel=1e-9)
+    assert one_x["forward"] == pytest.approx(np.sqrt(k / (i_d - i_p)) / (2 * np.pi), rel=1e-9)
+    w = 2 * np.pi * 300.0
+    support = {c.whirl: c for c in found if c.line != "1x"}
+    assert support["forward"].speed_hz == pytest.approx((i_d * w * w - k) / (i_p * w) / (2 * np.pi), rel=1e-9)
+    w = 2 * np.pi * 160.0
+    backward = brentq(lambda s: (-i_p * 2 * np.pi * s + np.sqrt((i_p * 2 * np.pi * s) ** 2 + 4 * i_d * k))
+                      / (2 * i_d) - w, 1e-3, 400)
+    assert support["backward"].speed_hz == pytest.approx(backward, rel=1e-9)
+    targets = {"1x": None, "low": 160.0, "high": 300.0}
+    assert all(c.frequency_hz == pytest.approx(targets[c.line] or c.speed_hz, rel=1e-9) for c in found)
+    assert len(found) == 4
+
+
+def test_modes_json_lists_critical_speeds_on_the_1x_line(capsys):
+    """Every listed 1x critical speed of the 2016 rotor has its damped frequency equal to the speed
+    (the root solve's residual, 1e-9 relative), its mode's frequency at that speed recomputed."""
+    assert cli.main(["modes", str(ROOT_CONFIGS / "filipkovsky2016_fig2a.toml"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    crit = [c for c in out["critical_speeds"] if c["line"] == "1x"]
+    assert len(crit) >= 3 and out["critical_speed_search_hz"][1] > crit[-1]["speed_hz"]
+    for c in crit:
+        assert c["frequency_hz"] == pytest.approx(c["speed_hz"], rel=1e-9)
+
+
+def test_modes_text_lists_critical_speeds(capsys):
+    assert cli.main(["modes", str(ROOT_CONFIGS / "filipkovsky2010_symmetric.toml")]) == 0
+    text = capsys.readouterr().out
+    assert "critical speeds (damped frequency = excitation line)" in text and " 1x " in text
+
+
+def test_station_shapes_of_a_whirling_pair_are_circles_turning_with_the_whirl():
+    """Forward whirl x = cos, y = sin is X = 1, Y = -i (y = Re(-i e^{i theta}) = sin theta);
+    backward Y = +i X: the station's orbit is a circle run the whirl's way (exact: rtol 1e-12)."""
+    modes_at = _tilting_rotor(2.0, 0.8, 4.0e6)
+    for mode in modes_at(100.0):
+        ((station, (x, y)),) = modes.station_shapes(mode, ("x", "y")).items()
+        assert station is None
+        assert y / x == pytest.approx(-1j if mode.whirl == "forward" else 1j, rel=1e-12)
+
+
+def test_mode_shapes_figure_has_a_panel_per_mode():
+    from pipeline import config
+    from pipeline.report import style
+    from pipeline.report.figures import mode_shapes
+    data = config.load_config(ROOT_CONFIGS / "filipkovsky2010_symmetric.toml").data
+    found, coordinates = mode_shapes.scene_modes(data)
+    fig = mode_shapes.fig_mode_shapes(data, "bokeh")
+    assert len(fig) == len(found) == 4
+    assert [c.label for c in fig.values()[0].values() if c.label] == ["station 1", "station 2"]
+    with style.backend("bokeh") as hv:
+        hv.render(fig, backend="bokeh")

@@ -16,7 +16,7 @@ from tests.synthetic import synthetic_cube
 report = importlib.import_module("pipeline.report")
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
-BASE_PNGS = ("stability_map.png", "branches.png", "max_multiplier.png", "response.png", "campbell.png",
+BASE_PNGS = ("stability_map.png", "branches.png", "max_multiplier.png", "response.png", "multiplier_frequency.png",
              "multiplier_paths.png")
 
 
@@ -461,7 +461,8 @@ def test_point_detail_on_a_real_attractor_cube(tiny_cube, tmp_path, capsys):
                               "clearance=19e-6"], capsys)
     assert code == 0, err
     phases = [line for line in err.splitlines() if line.startswith("== ")]
-    assert phases[0].startswith("== drawing the figures (8) and the points in detail (1): ")
+    # a real cube stores its scene: the Bode plot (orbits integrated again) joins the synthetic cubes' set
+    assert phases[0].startswith("== drawing the figures (9) and the points in detail (1): ")
     assert sorted(p.split(" (")[0] for p in phases[1:]) == ["== HTML page written", "== PNGs written"]
     png = out / "point_64Hz_19um.png"
     assert f"figure: {png}" in stdout
@@ -476,7 +477,7 @@ def test_point_detail_on_a_real_attractor_cube(tiny_cube, tmp_path, capsys):
     assert "<tr><th>attractor (sweep up, cube)</th><td>periodic</td></tr>" in text
     assert "<tr><th>  period</th><td>2 forcing periods</td></tr>" in text
     assert "from the cube&#x27;s attractor_state" in text
-    assert text.count('<div class="figure">') == len(BASE_PNGS) + 3      # + bifurcation, lle, point
+    assert text.count('<div class="figure">') == len(BASE_PNGS) + 4      # + bode, bifurcation, lle, point
     # the real boundary table drives the map: its refined speed is a rectangle edge
     ds = cube.open_cube(tiny_cube)
     (speed,) = ds["boundary_speed"].values
@@ -530,9 +531,9 @@ def test_multiplier_panels_are_square_with_units_on_the_colour_bar():
 @pytest.mark.slow    # 17-41 s: the default suite stays under 15 min on 2 cores (make test-slow)
 def test_every_line_plot_has_a_hover_with_the_parameter_and_the_value():
     ds = attractor_cube()
-    from pipeline.report.figures import branch_diagram, campbell, response
+    from pipeline.report.figures import branch_diagram, multiplier_frequency, response
     values = {report.fig_max_multiplier: "max |multiplier|", report.fig_bifurcation: "Poincaré x [µm]",
-              report.fig_lle: "largest Lyapunov exp. [1/s]", campbell.fig_campbell: "frequency [Hz]",
+              report.fig_lle: "largest Lyapunov exp. [1/s]", multiplier_frequency.fig_multiplier_frequency: "frequency [Hz]",
               response.fig_response: "amplitude of",
               branch_diagram.fig_branches: "Poincaré x of the orbit [µm]"}
     for make, value in values.items():

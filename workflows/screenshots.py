@@ -5,7 +5,8 @@
 Each REPORT_DIR/report.html is opened offline (file://, no network needed: the reports inline
 bokeh) with a fixed window width; the page's JavaScript runs for a virtual 20 s, the page is
 captured and cropped below its last non-white row, and the browser's console is searched for
-JavaScript errors, which fail the run. Defaults: the reports `make demo` and `make fold` write
+JavaScript errors, which fail the run, as does a figure that bokeh did not render (a probe script
+appended to a copy of the page counts them). Defaults: the reports `make demo` and `make fold` write
 (a sweep with attractors, a continuation), into docs/screenshots/<report dir name>.png.
 
 Chromium is found as $CHROMIUM or chromium, chromium-browser, google-chrome on the PATH (Debian:
@@ -21,6 +22,7 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+from typing import NamedTuple
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_REPORTS = ("out/demo_report", "out/bai2006_fold_report")
@@ -44,25 +46,52 @@ def browser():
     return found
 
 
+# appended to a copy of the page: once loaded, the number of bokeh figure slots (div.figure), of
+# those holding a rendered bokeh view (an element with a shadow root holding a canvas) and the
+# page's width [px] (wider than the window: something is off-screen), on the console
+RENDER_PROBE = """<script>
+window.addEventListener("load", () => setTimeout(() => {
+  const slots = [...document.querySelectorAll("div.figure")];
+  const drawn = slots.filter(d => [...d.querySelectorAll("*")].some(
+    e => e.shadowRoot && (e.shadowRoot.querySelector("canvas") || e.shadowRoot.querySelector("*"))));
+  console.log("rotorsweep-render " + drawn.length + "/" + slots.length + " " + document.documentElement.scrollWidth);
+}, 2000));
+</script>"""
+RENDERED = re.compile(r"rotorsweep-render (\d+)/(\d+) (\d+)")
+
+
+class Capture(NamedTuple):
+    errors: list        # the page's JavaScript errors (lines of the browser's console)
+    rendered: int       # figure slots holding a rendered bokeh figure
+    figures: int        # figure slots of the page
+    width: int          # the page's width [px] in a WIDTH window
+
+
 def capture(html, png, chromium=None):
-    """Render `html` in headless Chromium into `png`, cropped to the page; returns the page's
-    JavaScript errors (lines of the browser's console)."""
+    """Render `html` in headless Chromium into `png`, cropped to the page; returns a Capture
+    (JavaScript errors, figures rendered of the page's figures)."""
     html, png = Path(html).resolve(), Path(png)
     if not html.is_file():
         raise ScreenshotError(f"{html}: no such report page (make it first, e.g. `make demo`)")
-    with tempfile.TemporaryDirectory(prefix="rotorsweep-shot-") as tmp:
+    with tempfile.TemporaryDirectory(prefix="rotorsweep-shot-", dir=html.parent) as tmp:
+        probed = Path(tmp) / "page.html"        # beside the page: relative links resolve the same
+        page = html.read_text(encoding="utf-8")
+        end = page.rfind("</body>")      # the last: bokeh's inlined JavaScript holds the string too
+        probed.write_text(page[:end] + RENDER_PROBE + page[end:], encoding="utf-8")
         raw = Path(tmp) / "page.png"
         cmd = [chromium or browser(), "--headless=new", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
                "--no-first-run", "--enable-logging=stderr", "--v=0", f"--user-data-dir={tmp}/profile",
                f"--window-size={WIDTH},{MAX_HEIGHT}", f"--virtual-time-budget={VIRTUAL_TIME_MS}",
-               f"--screenshot={raw}", html.as_uri()]
+               f"--screenshot={raw}", probed.as_uri()]
         done = subprocess.run(cmd, capture_output=True, text=True, timeout=180)
         if not raw.is_file():
             raise ScreenshotError(f"{html}: Chromium wrote no screenshot (exit {done.returncode}): "
                                   f"{done.stderr.strip()[-500:]}")
         png.parent.mkdir(parents=True, exist_ok=True)
         crop_to_content(raw, png)
-    return [line for line in done.stderr.splitlines() if JS_ERROR.search(line)]
+    counts = RENDERED.search(done.stderr)
+    rendered, figures, width = (int(g) for g in counts.groups()) if counts else (0, -1, -1)
+    return Capture([line for line in done.stderr.splitlines() if JS_ERROR.search(line)], rendered, figures, width)
 
 
 def crop_to_content(src, dst, margin=16):
@@ -87,9 +116,10 @@ def main(argv=None):
         failed = False
         for report in args.reports:
             png = Path(args.out) / f"{Path(report).name}.png"
-            errors = capture(Path(report) / "report.html", png, chromium)
-            print(f"{png}: {'JavaScript errors: ' + '; '.join(errors) if errors else 'no JavaScript errors'}")
-            failed |= bool(errors)
+            shot = capture(Path(report) / "report.html", png, chromium)
+            print(f"{png}: {'JavaScript errors: ' + '; '.join(shot.errors) if shot.errors else 'no JavaScript errors'}"
+                  f", {shot.rendered} of {shot.figures} figures rendered, page {shot.width} px wide")
+            failed |= bool(shot.errors) or shot.rendered != shot.figures or shot.width > WIDTH
     except ScreenshotError as exc:
         print(f"screenshots: {exc}", file=sys.stderr)
         return 2

@@ -9,7 +9,7 @@ registration order. Today: the stability-region map (runs of one stability class
 whose edges are the refined boundaries of the cube's boundary table), the periodic orbit's branch
 diagram (stable solid, unstable dashed, LP / PD / NS at the refined boundaries; branches.py draws
 any branch from plain arrays), max |multiplier| in the same style, response curves, a
-Campbell-type plot of the critical multiplier's frequency and the multipliers around stability
+frequency of the critical multiplier and the multipliers around stability
 boundaries; for cubes with attractor diagnostics also the bifurcation diagram (Poincare x) and
 the largest Lyapunov exponent. Every figure runs along the
 cube's continued axis (cubeinfo.continued_axis). Per requested point (`points`, `rotorsweep
@@ -34,7 +34,7 @@ from pipeline.report.cubeinfo import (attractor_counts, axis_edges, branch_obser
 from pipeline.report.driver import make_report
 from pipeline.report.figures.bifurcation import fig_bifurcation
 from pipeline.report.figures.branch_diagram import fig_branches
-from pipeline.report.figures.campbell import critical_frequency, fig_campbell
+from pipeline.report.figures.multiplier_frequency import critical_frequency, fig_multiplier_frequency
 from pipeline.report.figures.lle import fig_lle
 from pipeline.report.figures.max_multiplier import fig_max_multiplier
 from pipeline.report.figures.multiplier_paths import (MAX_BOUNDARIES, fig_multiplier_paths,
@@ -56,7 +56,7 @@ __all__ = [
     "BIF_POINTS", "CLASSES", "Figure", "MAX_BOUNDARIES", "MAX_PANELS", "PALETTE", "RECT_HALF",
     "SPECIAL_LABELS", "SWEEP_COLOURS", "Special", "attractor_counts", "axes_plan", "axis_display",
     "axis_edges", "branch_elements", "branch_observables", "continued_axis", "counts",
-    "critical_frequency", "fig_bifurcation", "fig_branches", "fig_campbell", "fig_lle",
+    "critical_frequency", "fig_bifurcation", "fig_branches", "fig_multiplier_frequency", "fig_lle",
     "fig_max_multiplier", "fig_multiplier_paths", "fig_point", "fig_response", "fig_stability_map",
     "figure_title", "figures_for", "has_attractor", "has_down", "header_html", "holoviews", "line_plan", "line_segments",
     "make_report", "map_rectangles", "parse_point", "point_filename", "refined_edges", "register",

@@ -93,12 +93,15 @@ def _backbone_panel(hv, ds, k, backend, show, forced=None):
 
 def _backbones(hv, ds, backend, forced=None):
     n = ds.sizes["mode"]
-    columns = style.ncols(n)
+    # bokeh: at most two 560 px panels a row (the page fits a 1400 px window)
+    columns = min(2, style.ncols(n)) if backend == "bokeh" else style.ncols(n)
     panels = []
     for k in range(n):
         panel = _backbone_panel(hv, ds, k, backend, style.grid_opts(k, n, backend, columns), forced)
-        size = {"width": 520, "height": 340} if backend == "bokeh" else {}
-        panels.append(panel.opts(legend_position="bottom_left", show_legend=k == 0, **size, backend=backend))
+        size = {"width": 560, "height": 340} if backend == "bokeh" else {}
+        # the HTML: a legend on every panel (separate figures); the PNG: one, on the first
+        panels.append(panel.opts(legend_position="bottom_left", show_legend=backend == "bokeh" or k == 0, **size,
+                                 backend=backend))
     rows = -(-n // columns)
     return style.layout(hv, panels, backend, columns, "Backbone curves: invariant manifold (dashed), continuation (solid)",
                         fig_inches=(5.0 * columns, 3.6 * rows))
@@ -161,6 +164,13 @@ def _surface(hv, ds, backend):
                         "Invariant manifold and an orbit of the full system on it", fig_inches=(13, 4.6))
 
 
+def with_hover(fig, backend):
+    """A hover tool on every curve, point set and mesh of a bokeh figure (the matplotlib one as is)."""
+    if backend != "bokeh":
+        return fig
+    return fig.map(lambda el: el.opts(tools=["hover"], backend=backend), ["Curve", "Points", "QuadMesh"])
+
+
 def figures(ds, backend, forced=None):
     """(caption, filename, figure) of each figure; forced: a continuation result to draw the
     backbones over."""
@@ -172,7 +182,7 @@ def figures(ds, backend, forced=None):
     if "surface_info" in ds:
         out.append(("The invariant manifold of one mode with a full-system orbit", "manifold_surface.png",
                     _surface(hv, ds, backend)))
-    return out
+    return [(caption, filename, with_hover(fig, backend)) for caption, filename, fig in out]
 
 
 def _header_html(ds, title):

@@ -10,9 +10,9 @@ import html
 
 import numpy as np
 
-from pipeline import continuation, query
-from pipeline.report import branches, page, style
-from pipeline.report.figures import mode_campbell
+from pipeline import compute, continuation, query, schema
+from pipeline.report import branches, harmonics, page, style
+from pipeline.report.figures import bode, mode_campbell, mode_shapes
 from rotorkernels.continuation import arclength as al
 
 def _shown(value, units):
@@ -58,7 +58,9 @@ def _panel(hv, ds, yname, ylabel, backend, ref_one=False, kind="amplitude_max"):
     if ref_one:
         ref = hv.Curve(([np.nanmin(xs), np.nanmax(xs)], [1.0, 1.0]), *dims, label="|λ| = 1")
         elements.append(ref.opts(color="#C00000", **style.line_style(backend, 1.2, dash=True), backend=backend))
-    size = {"width": 1100, "height": 460} if backend == "bokeh" else {"fig_inches": (12, 4.8), "aspect": 1.9}
+    # bokeh: holoviews hides a legend of more than 25 renderers (legend_limit), six branches have more
+    size = ({"width": 1100, "height": 460, "legend_limit": 200} if backend == "bokeh"
+            else {"fig_inches": (12, 4.8), "aspect": 1.9})
     return hv.Overlay(elements).opts(show_grid=True, legend_position="right", **size, backend=backend)
 
 
@@ -169,23 +171,56 @@ def figures(ds, backend):
     if "curve" in ds.dims and ds.sizes["curve"]:
         out.insert(2, (f"Stability boundary curves in ({ds.attrs['parameter']}, {ds.attrs['curves_in']})",
                        "boundary_curves.png", _curves_map(hv, ds, backend)))
+    out.insert(2, (f"Bode and polar plots: first harmonic of {main} along the branches (stable solid, unstable "
+                   "dashed)", "bode.png", _bode(ds, main, backend)))
     out.append(("Largest Floquet multiplier modulus along the branches", "branch_max_multiplier.png",
                 _panel(hv, ds, "max_abs_multiplier", "max |multiplier|", backend, ref_one=True)))
     if mode_campbell.has_linear_analysis(ds):
-        out.append(("Campbell diagram: natural frequencies vs shaft speed (forward solid, backward dashed)",
-                    "mode_campbell.png", mode_campbell.result_figure(ds, backend)))
+        out.append((mode_campbell.CAPTION, "mode_campbell.png", mode_campbell.result_figure(ds, backend)))
+    if mode_shapes.has_stations(ds):
+        out.append((mode_shapes.CAPTION, "mode_shapes.png", mode_shapes.result_figure(ds, backend)))
     return out
+
+
+def _bode(ds, observable, backend):
+    """The Bode and polar plots of the branches, along the parameter as the other panels draw it."""
+    from pipeline.report.points import scene_data
+
+    data = scene_data(ds)
+    names = [_branch_label(ds, b) for b in range(ds.sizes["branch"])]
+    lines = harmonics.continuation_lines(ds, data, observable, names)
+    xs, _, xlabel = parameter_axis(ds)
+    lines = lines._replace(x=[row[:len(x)] for row, x in zip(xs, lines.x)])
+    unit = next(o.unit for o in compute.model_of(data).observables if o.name == observable)
+    return bode.fig_bode(lines, observable, unit, xlabel, backend)
+
+
+def column_units(ds):
+    """{column of the events and bistable tables: its unit}: the parameter's, the line axes', the
+    observables' (model spec), 1 for multipliers and period counts."""
+    par_unit = ds["parameter"].attrs.get("units", "")
+    units = {ds.attrs["parameter"]: par_unit, "lo": par_unit, "hi": par_unit, "periods": "1",
+             "multiplier_real": "1", "multiplier_imag": "1"}
+    units.update({c: ds[c].attrs.get("units", "") for c in ds.coords if ds[c].dims == ("branch",)})
+    units.update({f"amplitude_max_{o.name}": o.unit for o in schema.model_of(ds).observables})
+    return units
+
+
+def with_units(ds, cols):
+    """The columns {name: values} renamed "name [unit]" where the name has a unit."""
+    units = column_units(ds)
+    return {f"{k} [{units[k]}]" if units.get(k) else k: v for k, v in cols.items()}
 
 
 def _bistable_html(ds):
     rows = continuation.bistable_intervals(ds)
     if not rows:
         return "<h2>Coexisting stable orbits</h2><p>none on the computed branches</p>"
-    return page.columns_html("Coexisting stable orbits", {k: [r[k] for r in rows] for k in rows[0]})
+    return page.columns_html("Coexisting stable orbits", with_units(ds, {k: [r[k] for r in rows] for k in rows[0]}))
 
 
 def _events_html(ds):
-    cols = continuation.events_table(ds)
+    cols = with_units(ds, continuation.events_table(ds))
     if not cols["type"]:
         return "<h2>Located points</h2><p>no fold, period doubling, Neimark-Sacker point or peak on the branches</p>"
     return page.columns_html("Located points", cols)
@@ -205,4 +240,4 @@ def make_report(ds, out_dir, title=None):
     title = title or f"Continuation report: {ds.attrs.get('scene', '')}"
     return page.write_result_report(out_dir, title, _header_html(ds, title), lambda backend: figures(ds, backend),
                                     _events_html(ds) + _bistable_html(ds), ds.attrs.get("config_toml", ""),
-                                    "events.csv", query.render(continuation.events_table(ds), "csv"))
+                                    "events.csv", query.render(with_units(ds, continuation.events_table(ds)), "csv"))

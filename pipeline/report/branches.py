@@ -85,14 +85,36 @@ def special_elements(special, backend, dims=("x", "y")):
     special = [Special(*s) for s in special if np.isfinite(s[0]) and np.isfinite(s[1])]
     if not special:
         return []
-    xs, ys, texts = (np.array(v) for v in zip(*special))
+    xs, ys, _ = (np.array(v) for v in zip(*special))
     marks = hv.Points((xs, ys), list(dims), label="special point (LP fold, PD, NS)").opts(
         **style.marker_style(backend, SPECIAL_COLOUR, 9 if backend == "bokeh" else 6, "D"), backend=backend)
-    text = hv.Labels((xs, ys, texts), list(dims), "label")
+    lx, ly, texts = (np.array(v) for v in zip(*merged_labels(special)))
+    # left-aligned from the point: a label at the left edge of the frame is not cut
+    text = hv.Labels((lx, ly, texts), list(dims), "label")
     if backend == "bokeh":
         text = text.opts(text_color=SPECIAL_COLOUR, text_font_size="10pt", text_font_style="bold",
-                         text_baseline="bottom", backend=backend)
+                         text_baseline="bottom", text_align="left", xoffset=0, backend=backend)
     else:
         text = text.opts(color=SPECIAL_COLOUR, size=9, weight="bold", verticalalignment="bottom",
-                         backend=backend)
+                         horizontalalignment="left", backend=backend)
     return [marks, text]
+
+
+# two special points closer than this, relative to the specials' span (or their size), share a label
+SAME_PLACE_RTOL = 1e-3
+
+
+def merged_labels(special):
+    """One label per place: special points at (nearly) the same (x, y) -- a period doubling found
+    on a branch and again on the branch switched there -- get one text, their distinct labels
+    joined in order ("PD", "PD/LP"), not "PDPD" drawn over each other."""
+    xs, ys = (np.array([getattr(s, a) for s in special]) for a in ("x", "y"))
+    tol = [SAME_PLACE_RTOL * max(np.ptp(v), np.abs(v).max(), 1e-300) for v in (xs, ys)]
+    places = []
+    for s in special:
+        near = next((p for p in places if abs(p[0] - s.x) <= tol[0] and abs(p[1] - s.y) <= tol[1]), None)
+        if near is None:
+            places.append([s.x, s.y, [s.label]])
+        elif s.label not in near[2]:
+            near[2].append(s.label)
+    return [(x, y, "/".join(labels)) for x, y, labels in places]

@@ -41,10 +41,15 @@ def fonts(backend):
             "cticks": 9.5, "clabel": 10}
 
 
+_DASHES = {False: ("solid", "-"), True: ("dashed", "--"), "dotted": ("dotted", ":")}
+
+
 def line_style(backend, width=1.5, dash=False, alpha=1.0):
+    """dash: False (solid), True (dashed) or "dotted"."""
+    bokeh, mpl = _DASHES[dash]
     if backend == "bokeh":
-        return {"line_width": width, "line_dash": "dashed" if dash else "solid", "alpha": alpha}
-    return {"linewidth": width, "linestyle": "--" if dash else "-", "alpha": alpha}
+        return {"line_width": width, "line_dash": bokeh, "alpha": alpha}
+    return {"linewidth": width, "linestyle": mpl, "alpha": alpha}
 
 
 def fill_style(backend, colour, alpha=None):

@@ -563,5 +563,6 @@ SPEC = ModelSpec(
     },
     check=check,
     equilibrium=static_equilibrium, linearization=linearization, speed="speed", omega_l=omega_l,
+    support_frequency="support_frequency",
     derived_axes={"contact_angle": "derived from the preload solve per point, see contact_angle_used"},
 )

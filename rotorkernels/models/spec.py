@@ -127,6 +127,8 @@ class ModelSpec:
     #                                 linear part if given, else no linear analysis)
     no_linearization: str = ""      # why a model without one has none (what `rotorsweep modes` says)
     speed: str = ""                 # the parameter that is the shaft speed [Hz] (Campbell diagrams, the 1x line)
+    support_frequency: str = ""     # the parameter that is a support excitation frequency [Hz] (where > 0: a
+    #                                 horizontal line of Campbell diagrams, its crossings critical speeds)
     omega_l: Callable = None        # omega_l(values) -> [Hz]: the reports' frequency unit (None: Hz only)
     derived_axes: dict = field(default_factory=dict)   # axis -> how it is derived per point when neither
     #                                                    given nor swept ("derived from X ...")

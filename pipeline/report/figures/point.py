@@ -107,11 +107,12 @@ def fig_point(pt, backend="bokeh", table=True):
     sp = _spectrum(hv, pt, backend)
     th = _history(hv, pt, backend)
     if backend == "bokeh":
-        o = o.opts(width=380, height=360, backend=backend)
-        q = q.opts(width=380, height=360, backend=backend)
-        sp = sp.opts(width=560, height=360, backend=backend)
-        th = th.opts(width=1320, height=260, backend=backend)
-        return hv.Layout([o, q, sp, th]).cols(3).opts(title=point_title(pt), shared_axes=False, backend=backend)
+        # two 600 px panels a row: the page fits a 1400 px window (legends outside add to a row)
+        o = o.opts(width=600, height=360, backend=backend)
+        q = q.opts(width=600, height=360, backend=backend)
+        sp = sp.opts(width=600, height=360, backend=backend)
+        th = th.opts(width=600, height=360, backend=backend)
+        return hv.Layout([o, q, sp, th]).cols(2).opts(title=point_title(pt), shared_axes=False, backend=backend)
     # "auto": a numeric aspect is a data aspect in holoviews-mpl, wrong on the log axis
     panels = [p.opts(aspect="auto", backend=backend) for p in (o, q, sp, th)]
     if table:

@@ -35,8 +35,9 @@ def fig_response(ds, backend="bokeh"):
     MAX_PANELS in all)."""
     hv = style.holoviews()
     plan = axes_plan(ds)
-    head = (f"Response curves: amplitude (half peak-to-peak) vs {axis_display(ds, plan['x'])[2]} "
-            "(solid: stable, dashed: unstable)")
+    # two lines: one would widen the PNG past its panels
+    head = (f"Response curves: amplitude (half peak-to-peak) vs {axis_display(ds, plan['x'])[2]}\n"
+            "solid: stable, dashed: unstable")
     title = figure_title(ds, head, plan)
     observables = [o.name for o in schema.model_of(ds).observables]
     cells = [(o, where) for where in plan["shown"] for o in observables][:MAX_PANELS]
@@ -45,8 +46,8 @@ def fig_response(ds, backend="bokeh"):
     for k, (o, where) in enumerate(cells):
         show_x, _ = style.grid_opts(k, len(cells), backend, columns)
         long_name = next(ob.long_name for ob in schema.model_of(ds).observables if ob.name == o)
-        title = f"{o}: {long_name}" + (f" ({where_label(ds, where)})" if where else "")
-        slot = Slot(title, backend == "bokeh" or k == columns - 1, show_x, True)
+        panel_title = f"{o}: {long_name}" + (f" ({where_label(ds, where)})" if where else "")
+        slot = Slot(panel_title, backend == "bokeh" or k == columns - 1, show_x, True)
         panel = _response_panel(hv, ds, where, backend, slot, o, plan["y"])
         size = {"width": 1150 if columns == 1 else 570, "height": 380} if backend == "bokeh" else {"aspect": 1.6}
         panels.append(panel.opts(**size, backend=backend))

@@ -1,7 +1,9 @@
-"""Campbell-type plot: the frequency of the critical (largest) Floquet multiplier, arg(lambda) /
-2 pi times the forcing frequency 1/T, against shaft speed, one series per value of the first other
-swept axis, with the 1x (shaft speed) and ball-passage (1/T) lines. A multiplier's frequency is
-defined modulo 1/T; arg in [0, pi] puts it in [0, 1/(2T)]."""
+"""Frequency of the critical (largest) Floquet multiplier, arg(lambda) / 2 pi times the forcing
+frequency 1/T, against shaft speed, one series per value of the first other swept axis, with the
+1x (shaft speed) and ball-passage (1/T) lines. A multiplier's frequency is defined modulo 1/T;
+arg in [0, pi] folds it into [0, 1/(2T)], so the points zig-zag where the frequency passes a
+multiple of 1/(2T): this is not a Campbell diagram (natural frequencies of the linear modes
+against speed, figures/mode_campbell.py, for the models with a linearization)."""
 import numpy as np
 import xarray as xr
 
@@ -25,7 +27,7 @@ def critical_frequency(ds):
         units="Hz", long_name="frequency of the critical Floquet multiplier")
 
 
-def campbell_points(ds, by=None):
+def multiplier_frequency_points(ds, by=None):
     """hvplot scatter of critical_frequency along the continued axis, one series per value of
     `by` (hover: the value of max |multiplier| too)."""
     import hvplot.xarray  # noqa: F401  (registers .hvplot)
@@ -34,12 +36,12 @@ def campbell_points(ds, by=None):
     return data.hvplot.scatter(x=continued_axis(ds), y="frequency", by=by, hover_cols=["max_abs_multiplier"])
 
 
-def _campbell_panel(hv, ds, where, backend, slot, y):
+def _frequency_panel(hv, ds, where, backend, slot, y):
     sub = select(ds, where)
     x = continued_axis(ds)
     grid = sub[x].values.astype(float)
     tips = hover((x, "frequency", "max_abs_multiplier"), (axis_label(ds, x), FREQUENCY_LABEL, "max |multiplier|"))
-    series = campbell_points(sub, y)
+    series = multiplier_frequency_points(sub, y)
     groups = list(series.items()) if y else [(None, series)]
     elements = []
     for i, (v, pts) in enumerate(groups):
@@ -56,16 +58,16 @@ def _campbell_panel(hv, ds, where, backend, slot, y):
     return hv.Overlay(elements).opts(show_grid=True, ylim=(0, top), **panel_opts(ds, slot, backend, FREQUENCY_LABEL))
 
 
-def fig_campbell(ds, backend="bokeh"):
+def fig_multiplier_frequency(ds, backend="bokeh"):
     """Frequency of the critical multiplier vs shaft speed with the 1x and ball-passage lines."""
     y = axes_plan(ds)["y"]
 
     def panel(hv, ds, where, backend, slot):
-        return _campbell_panel(hv, ds, where, backend, slot, y)
+        return _frequency_panel(hv, ds, where, backend, slot, y)
     sizes = Sizes(bokeh_one=(1150, 440), bokeh_grid=(560, 300), aspect_one=2.4, aspect_grid=1.5,
                   inches_one=(11, 4.6), grid_width=9.6)
-    return facet_figure(ds, backend, "Campbell-type plot: frequency of the critical Floquet multiplier "
-                        "arg(λ)/2π · 1/T", panel, sizes)
+    return facet_figure(ds, backend, "Frequency of the critical Floquet multiplier "
+                        "arg(λ)/2π · 1/T (folded into [0, 1/2T])", panel, sizes)
 
 
 def along_shaft_speed(ds):
@@ -73,6 +75,7 @@ def along_shaft_speed(ds):
     return continued_axis(ds) == schema.model_of(ds).speed and bool((ds["orbit_status"].values == 0).any())
 
 
-register(Figure(name="campbell", filename="campbell.png", title="Campbell-type plot (critical multiplier)",
+register(Figure(name="multiplier_frequency", filename="multiplier_frequency.png",
+                title="Frequency of the critical Floquet multiplier vs {axis} (not a Campbell diagram)",
                 applies=along_shaft_speed,
-                build=lambda ds, backend, intervals: fig_campbell(ds, backend)))
+                build=lambda ds, backend, intervals: fig_multiplier_frequency(ds, backend)))
