@@ -113,14 +113,17 @@ def node_maps(kernel, nodes, thetas, p, phase_index, period, opts, variational):
     return ends, monos, True, n_rhs
 
 
-def _collocation(kernel, nodes, p, phase_index, rho, period, opts):
-    """(residual R (N, n), Jacobian, monodromies, ok, n_rhs) of the collocation equations."""
+def collocation(kernel, nodes, p, phase_index, rho, period, opts, variational=True):
+    """(residual R (N, n), Jacobian dR/dU or None, monodromies or None, ok, n_rhs) of the
+    collocation equations (the Jacobian only with the variational equations)."""
     n_nodes, n = nodes.shape
     thetas = node_phases(n_nodes)
     shift = interpolation_matrix(n_nodes, thetas + rho)
-    ends, monos, ok, n_rhs = node_maps(kernel, nodes, thetas, p, phase_index, period, opts, True)
+    ends, monos, ok, n_rhs = node_maps(kernel, nodes, thetas, p, phase_index, period, opts, variational)
     if not ok:
         return None, None, None, False, n_rhs
+    if not variational:
+        return ends - shift @ nodes, None, None, True, n_rhs
     jac = -np.kron(shift, np.eye(n))
     for j in range(n_nodes):
         jac[j * n:(j + 1) * n, j * n:(j + 1) * n] += monos[j]
@@ -131,7 +134,7 @@ def _newton(kernel, nodes, p, phase_index, rho, period, opts, tol, max_iter):
     """Newton with backtracking on all nodes at once at one resolution:
     (nodes, jacobian, monodromies, status, iterations, residual, n_rhs)."""
     scale = max(1.0, np.abs(nodes).max())
-    r, jac, monos, ok, n_rhs = _collocation(kernel, nodes, p, phase_index, rho, period, opts)
+    r, jac, monos, ok, n_rhs = collocation(kernel, nodes, p, phase_index, rho, period, opts)
     if not ok:
         return nodes, None, None, INTEGRATION_FAILED, 0, np.inf, n_rhs
     res = np.abs(r).max()
@@ -147,7 +150,7 @@ def _newton(kernel, nodes, p, phase_index, rho, period, opts, tol, max_iter):
         lam = 1.0
         for _ in range(_MAX_HALVINGS):
             trial = nodes + lam * step
-            rt, jt, mt, ok, nr = _collocation(kernel, trial, p, phase_index, rho, period, opts)
+            rt, jt, mt, ok, nr = collocation(kernel, trial, p, phase_index, rho, period, opts)
             n_rhs += nr
             if ok and np.abs(rt).max() < (1.0 - 1e-4 * lam) * res:
                 nodes, r, jac, monos, res = trial, rt, jt, mt, np.abs(rt).max()
@@ -163,7 +166,7 @@ def resample(nodes, n_nodes):
     return interpolation_matrix(nodes.shape[0], node_phases(n_nodes)) @ nodes
 
 
-def _error_estimate(kernel, nodes, jac, p, phase_index, rho, period, opts, tail):
+def error_estimate(kernel, nodes, jac, p, phase_index, rho, period, opts, tail):
     """(estimate, ok, n_rhs): the invariance defect at the midpoints between nodes times
     ||dR/dU^{-1}||_inf, not below the Fourier tail (scaled like the nodes). The midpoints are
     shot at a hundredth of the tolerances, so that the defect holds the solver's own integration
@@ -206,7 +209,7 @@ def solve_torus(kernel, guess, p, phase_index, rho, opts, period=1.0, tol=1e-10,
         nodes = resample(nodes, 2 * nodes.shape[0] + 1)
     error = np.inf
     if status in (CONVERGED, FOURIER_DECAY_FAILED):
-        error, ok, nr = _error_estimate(kernel, nodes, jac, p, phase_index, rho, period, opts, tail)
+        error, ok, nr = error_estimate(kernel, nodes, jac, p, phase_index, rho, period, opts, tail)
         n_rhs += nr
         status = status if ok else INTEGRATION_FAILED
     if monos is None:
