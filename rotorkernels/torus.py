@@ -217,6 +217,14 @@ def solve_torus(kernel, guess, p, phase_index, rho, opts, period=1.0, tol=1e-10,
     return Torus(nodes, float(rho), float(period), status, total_it, float(res), tail, float(error), monos, n_rhs)
 
 
+def fitted_guess(samples, phases, n_nodes):
+    """Node values (n_nodes, n) of the least-squares trigonometric fit (n_nodes modes) of
+    stroboscopic samples (m >= n_nodes, n) at their forcing phases: a guess from a transient that
+    has settled near an attracting torus."""
+    basis = interpolation_matrix(n_nodes, np.asarray(phases, float))
+    return np.linalg.lstsq(basis, np.asarray(samples, float), rcond=None)[0]
+
+
 def periodic_guess(state, n_nodes):
     """Node values (n_nodes, n) of a constant circle through one periodic state."""
     return np.tile(np.asarray(state, float), (n_nodes, 1))
