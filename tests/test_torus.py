@@ -121,3 +121,28 @@ def test_failures_are_statuses():
     assert torus.stability(blowup).status == torus.UNDECIDED
     with pytest.raises(ValueError, match="N odd"):
         solve(p, n_nodes=6)
+
+
+def test_saddle_torus_of_a_resonant_duffing_is_unstable():
+    """Hardening Duffing above resonance (omega_n = 2 pi / sqrt 1.3) with three periodic responses
+    (harmonic balance, a^2 = 1.13, 9.05, 14.1): the middle one is a saddle; under a weak second
+    forcing its torus is a saddle torus, whose exponents are near the orbit's log|multipliers|
+    (the second forcing, 1% of the first, perturbs them at O(1e-2)) with the exact sum log det M =
+    -c, and a transient started next to it leaves it."""
+    w = 2.0 * np.pi
+    k, c, gamma, f1 = w ** 2 / 1.3, 0.3, 1.0, 9.0
+    p = params(w * GOLDEN, k=k, c=c, gamma=gamma, f1=f1, f2=0.0)
+    a2 = 9.04946491
+    phi = np.arctan2(c * w, k - w ** 2 + 0.75 * gamma * a2)      # x = a cos(w tau - phi)
+    guess = np.sqrt(a2) * np.array([np.cos(phi), w * np.sin(phi)])
+    orbit = shooting.periodic_orbit(MODEL, guess, p, OPTS, tol=1e-11, staged=False)
+    logs = np.sort(np.log(np.abs(np.linalg.eigvals(orbit.monodromy))))[::-1]
+    assert orbit.status == shooting.CONVERGED and logs[0] > 0.1
+    p[duffing2.P_F2] = 0.09
+    tor = torus.solve_torus(MODEL.kernel, torus.periodic_guess(orbit.state, 7), p, PHASE, p[duffing2.P_W2], OPTS)
+    st = torus.stability(tor)
+    assert st.status == torus.UNSTABLE
+    assert np.abs(st.exponents - logs).max() < 2e-2
+    assert abs(st.exponents.sum() + c) < 1e-8
+    gap = np.abs(_strobe(p, tor.nodes[0] + 1e-6, 60) - tor.at(np.fmod(p[duffing2.P_W2] * np.arange(1, 61), 2 * np.pi)))
+    assert gap.max(axis=1)[-1] > 1e3 * 1e-6
