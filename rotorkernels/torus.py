@@ -31,7 +31,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rotorkernels import integrators as ig
+from rotorkernels import integrators as ig, shooting
 
 CONVERGED, NOT_CONVERGED, FOURIER_DECAY_FAILED, INTEGRATION_FAILED = (
     "converged", "not_converged", "fourier_decay_failed", "integration_failed")
@@ -258,3 +258,18 @@ def stability(torus, n_steps=4000, theta0=0.0, margin=1e-6):
     if abs(exponents[0]) <= spread:
         return Stability(exponents, spread, UNDECIDED, "largest exponent within its error of 0")
     return Stability(exponents, spread, STABLE if exponents[0] < 0 else UNSTABLE, "")
+
+
+def surface_samples(kernel, circle, p, phase_index, opts, n_phases=64, n_per_period=64):
+    """States on the torus (n_phases, n_per_period, n): the trajectories over one period T from
+    n_phases points of the circle, each from its forcing phase (what an amplitude, a time history
+    or a picture of the torus reads). An amplitude from them is the torus's to the sampling
+    grid: the sup of a smooth function on a grid of spacing h lies within O(h^2) of the true sup."""
+    phases = 2.0 * np.pi * np.arange(n_phases) / n_phases
+    starts = circle.at(phases)
+    pj = np.array(p, float)
+    out = np.empty((n_phases, n_per_period, kernel.n_state))
+    for j, theta in enumerate(phases):
+        pj[phase_index] = theta
+        out[j] = shooting.sample_orbit(kernel, starts[j], pj, circle.period, n_per_period, opts)
+    return out

@@ -146,3 +146,19 @@ def test_saddle_torus_of_a_resonant_duffing_is_unstable():
     assert abs(st.exponents.sum() + c) < 1e-8
     gap = np.abs(_strobe(p, tor.nodes[0] + 1e-6, 60) - tor.at(np.fmod(p[duffing2.P_W2] * np.arange(1, 61), 2 * np.pi)))
     assert gap.max(axis=1)[-1] > 1e3 * 1e-6
+
+
+def test_the_sampled_torus_has_the_linear_half_swing():
+    """Linear: x(tau, theta) = Re(a1 e^{i 2 pi tau} + a2 e^{i (w2 tau + theta)}) with independent
+    phases, so its half swing over the torus is |a1| + |a2|; sampled on a grid of n phases and n
+    times each phase lies within pi / n of the maximizing one: the sampled max is below the true
+    one by at most (|a1| + |a2|)(1 - cos(pi / n)) (both phases off by up to pi / n), the min above
+    the true min by as much."""
+    p = params(2.0 * np.pi * GOLDEN * 1.3)
+    tor = solve(p)
+    n = 64
+    x = torus.surface_samples(MODEL.kernel, tor, p, PHASE, OPTS, n, n)[..., 0]
+    k, c, _, f1, f2, w2, _ = p
+    exact = abs(f1 / (k - 4 * np.pi ** 2 + 2j * np.pi * c)) + abs(f2 / (k - w2 ** 2 + 1j * c * w2))
+    half = (x.max() - x.min()) / 2.0
+    assert exact * np.cos(np.pi / n) <= half <= exact + 1e-10
