@@ -130,7 +130,9 @@ def render(rows, machine, whole):
     t_cont, n_points, t_brute, worst = whole
     lines += ["", f"Whole response curve: {n_points} tori continued in {1e3 * t_cont:.0f} ms; brute force at the "
               f"same points {1e3 * t_brute:.0f} ms ({t_brute / t_cont:.1f}x; its fitted circles' error at most "
-              f"{worst:.1f}x the continuation's, which lies below what its 15 points resolve). The continuation's time "
+              f"{worst:.1f}x the continuation's: near 3/5 a transient's successive points visit about 5 distinct "
+              "phases, so 15 of them resolve the circle badly, while the collocation nodes are placed). The "
+              "continuation's time "
               "includes each point's tangent (two more collocation residuals) and normal stability (QR over 4000 "
               "rotations), which brute force does not give: per point the continuation does not beat a well "
               "attracting transient at this size; it follows the unstable tori and the stability."]
