@@ -40,13 +40,13 @@ def test_unknown_id_in_a_group_is_an_error_status_not_another_model():
 
 
 def test_models_are_compiled_in_their_kernel_groups():
-    """Each model's tag type is its group's: the two test-only validation models share one, every
+    """Each model's tag type is its group's: the test-only validation models share one, every
     model with a scene is alone (its first result compiles no other model's equations)."""
     tags = {name: models.get(name).kernel.tag for name in models.BUILTIN_NAMES}
     groups = {}
     for n in tags:
         groups.setdefault(models.get(n).group, set()).add(n)
-    assert groups["validation"] == {"linear_oscillator", "damped_mathieu"}
+    assert groups["validation"] == {"linear_oscillator", "damped_mathieu", "duffing2"}
     with_scene = {tomllib.loads(p.read_text())["scene"]["model"] for p in (ROOT / "configs").glob("*.toml")}
     assert with_scene >= {"jeffcott_clearance", "duffing", "rigid_preloaded", "symmetric4", "asymmetric5"}
     assert all(groups[models.get(n).group] == {n} for n in with_scene)

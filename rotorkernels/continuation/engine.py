@@ -54,8 +54,9 @@ END_REASONS = (
     "start_failed",        # no solution at the starting point
     "rejoined",            # a switched (period-2k) branch met its period-k parent again
     "closed_loop",         # the branch came back to its first point (an isola, a period-doubling bubble)
+    "torus_breakdown",     # an invariant torus lost its smoothness (its Fourier decay failed: continuation.tori)
 )
-LEFT_RANGE, STEP_BUDGET, NEWTON_FAILED, INTEGRATION_FAILED, START_FAILED, REJOINED, CLOSED_LOOP = range(7)
+LEFT_RANGE, STEP_BUDGET, NEWTON_FAILED, INTEGRATION_FAILED, START_FAILED, REJOINED, CLOSED_LOOP, TORUS_BREAKDOWN = range(8)
 # The first point is solved at a fixed parameter from a guess that may be rough (a settled transient).
 START_NEWTON = 30
 

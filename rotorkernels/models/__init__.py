@@ -17,11 +17,12 @@ import os
 import sys
 
 from rotorkernels import PLUGINS_VARIABLE, plugin_modules
-from rotorkernels.models import (asymmetric5, damped_mathieu, duffing, jeffcott_clearance, linear_oscillator,
-                                 rigid_preloaded, symmetric4)
+from rotorkernels.models import (asymmetric5, damped_mathieu, duffing, duffing2, jeffcott_clearance,
+                                 linear_oscillator, rigid_preloaded, symmetric4)
 from rotorkernels.models.spec import Built, KernelId, ModelSpec, Observable, Parameter  # noqa: F401 (API)
 
-BUILTIN = (jeffcott_clearance, linear_oscillator, damped_mathieu, duffing, rigid_preloaded, symmetric4, asymmetric5)
+BUILTIN = (jeffcott_clearance, linear_oscillator, damped_mathieu, duffing, rigid_preloaded, symmetric4, asymmetric5,
+           duffing2)
 BUILTIN_NAMES = tuple(m.SPEC.name for m in BUILTIN)
 
 REGISTRY = {}

@@ -15,6 +15,7 @@ import rotorkernels.models.duffing as m3
 import rotorkernels.models.rigid_preloaded as m4
 import rotorkernels.models.symmetric4 as m5
 import rotorkernels.models.asymmetric5 as m6
+import rotorkernels.models.duffing2 as m7
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -218,7 +219,7 @@ class _Symmetric4Kernels:
 
 
 class Validation(NamedTuple):
-    """Kernel tag of the group `validation`: linear_oscillator (1), damped_mathieu (2)."""
+    """Kernel tag of the group `validation`: linear_oscillator (1), damped_mathieu (2), duffing2 (7)."""
     id: int
 
 
@@ -230,6 +231,8 @@ class _ValidationKernels:
             m1.rhs(tau, u, p, du)
         elif tag.id == 2:
             m2.rhs(tau, u, p, du)
+        elif tag.id == 7:
+            m7.rhs(tau, u, p, du)
         else:
             _fill_nan(du)
 
@@ -238,6 +241,8 @@ class _ValidationKernels:
             m1.jac(tau, u, p, out)
         elif tag.id == 2:
             m2.jac(tau, u, p, out)
+        elif tag.id == 7:
+            m7.jac(tau, u, p, out)
         else:
             _fill_nan_2d(out)
 
@@ -246,20 +251,26 @@ class _ValidationKernels:
             m1.rhs_jac(tau, u, p, du, out)
         elif tag.id == 2:
             m2.rhs_jac(tau, u, p, du, out)
+        elif tag.id == 7:
+            m7.rhs_jac(tau, u, p, du, out)
         else:
             _fill_nan(du)
 
     def known(tag):
-        return tag.id == 1 or tag.id == 2
+        return tag.id == 1 or tag.id == 2 or tag.id == 7
 
     def tangent(tag, velocity_form, z, n, jbuf, dz):
-        if n == 4:
+        if n == 2:
+            stages.tangent_product(velocity_form, z, 2, jbuf, dz)
+        elif n == 4:
             stages.tangent_product(velocity_form, z, 4, jbuf, dz)
         else:
             stages.tangent_product(velocity_form, z, n, jbuf, dz)
 
     def combine(tag, K, coef, n_terms, z, step, out):
-        if z.size == 4:
+        if z.size == 2:
+            stages.combine(K, coef, n_terms, z, step, out, 2)
+        elif z.size == 4:
             stages.combine(K, coef, n_terms, z, step, out, 4)
         else:
             stages.combine(K, coef, n_terms, z, step, out, z.size)
@@ -268,7 +279,7 @@ class _ValidationKernels:
 # tag class -> the bodies of its group
 _GROUPS = {Asymmetric5: _Asymmetric5Kernels, Duffing: _DuffingKernels, JeffcottClearance: _JeffcottClearanceKernels, RigidPreloaded: _RigidPreloadedKernels, Symmetric4: _Symmetric4Kernels, Validation: _ValidationKernels}
 # model name -> its kernel tag (ModelSpec.kernel.tag)
-TAGS = {'jeffcott_clearance': JeffcottClearance(0), 'linear_oscillator': Validation(1), 'damped_mathieu': Validation(2), 'duffing': Duffing(3), 'rigid_preloaded': RigidPreloaded(4), 'symmetric4': Symmetric4(5), 'asymmetric5': Asymmetric5(6)}
+TAGS = {'jeffcott_clearance': JeffcottClearance(0), 'linear_oscillator': Validation(1), 'damped_mathieu': Validation(2), 'duffing': Duffing(3), 'rigid_preloaded': RigidPreloaded(4), 'symmetric4': Symmetric4(5), 'asymmetric5': Asymmetric5(6), 'duffing2': Validation(7)}
 
 
 def _kernels(tag):

@@ -68,7 +68,8 @@ P_SUP = 65          # -T^2 / L A_s
 P_WU, P_WS, P_OFFSET, P_COS_A, P_SIN_A, P_NBALLS, P_COS_D, P_SIN_D = range(70, 78)
 P_LAW, P_CR, P_CA, P_Z0, P_TAN2 = range(78, 83)   # law 1: cubic series, its scaled coefficients
 P_ARR = 83          # +1 back to back (+z compresses A), -1 face to face (+z compresses B)
-N_PARAMS = 84
+P_PHASE = 84        # the support vibration's phase at tau = 0 [rad] (0; the torus solver's node phase)
+N_PARAMS = 85
 LAWS = {"ball_sum": 0.0, "cubic": 1.0}
 
 # Rational detection: a ratio within RATIO_RTOL of p / q with q <= DETECTION_DENOMINATOR is
@@ -86,7 +87,7 @@ def _accelerations(tau, u, p, fxa, fya, fxb, fyb, fz, du):
     """du[5:] = -gain F - damp q' + gravity + unbalance + support, F the ball-sum forces."""
     cu = np.cos(p[P_WU] * tau)
     su = np.sin(p[P_WU] * tau)
-    ss = np.sin(p[P_WS] * tau)
+    ss = np.sin(p[P_WS] * tau + p[P_PHASE])
     for i in range(N_POS):
         g = P_GAIN + N_POS * i
         d = P_DAMP + N_POS * i
@@ -336,6 +337,7 @@ def kernel_params(rotor, state, n_balls, forcing, speed, eccentricity, support, 
     p[P_SUP:P_SUP + 5] = -t * t / el * support
     p[P_WU] = 2.0 * np.pi * forcing.shaft_turns
     p[P_WS] = 2.0 * np.pi * forcing.support_turns
+    p[P_PHASE] = 0.0
     _bearing_params(p, state, n_balls, law, el, arrangement)
     return p
 

@@ -1,0 +1,187 @@
+"""Pseudo-arclength continuation of invariant tori under two-frequency forcing (a problem class of
+`engine.follow`) along one parameter lambda, e.g. the second forcing's frequency omega.
+
+Unknowns X = (U, mu): the torus's node values U (N x n, rotorkernels.torus, N fixed along the
+branch) and mu = lambda / scale. Equations: the collocation residual R(U, lambda) = 0 (the
+rotation rho(lambda) and the kernel vector p(lambda) both follow lambda) and one scalar condition
+c . X = target. Bordered Newton with dR/dU from the nodes' monodromies and the shift operator,
+dR/dmu by a central difference of two plain collocation residuals (as arclength.Family's
+dphi/dmu: it enters only the Newton matrix and the tangent, never the residual).
+
+The imposed forcing phase is the torus coordinate, so a rational ratio omega / Omega = p / q is
+no special point: there the circle is the union of the q-periodic orbits' stroboscopic points
+over the forcing phases, and the branch passes through it. A branch ends with
+`torus_breakdown` where the circle's Fourier tail exceeds the decay tolerance at the branch's N
+(it is losing smoothness: N no longer resolves it), and flags a change of normal stability
+(`TS`: the largest normal Lyapunov exponent changes sign).
+"""
+from dataclasses import replace
+from typing import Callable, NamedTuple
+
+import numpy as np
+
+from rotorkernels import torus as tr
+from rotorkernels.continuation import engine, events as ev
+from rotorkernels.continuation.engine import INTEGRATION_FAILED, NEWTON_FAILED, START_NEWTON, TORUS_BREAKDOWN
+
+
+class Solution(NamedTuple):
+    X: np.ndarray
+    jacobian: np.ndarray    # dR/dU at X
+    monodromies: np.ndarray
+    iterations: int
+    residual: float
+
+
+class Point(NamedTuple):
+    X: np.ndarray           # (U.ravel(), mu)
+    lam: float
+    tangent: np.ndarray
+    iterations: int
+    residual: float
+    tail: float             # the circle's Fourier tail (torus.fourier_tail)
+    stability: tr.Stability
+    monodromies: np.ndarray
+
+
+class TorusFamily(NamedTuple):
+    """Tori of `kernel` along lambda: params(lambda) -> kernel vector p, rotation(lambda) -> rho.
+    An engine problem (engine's contract)."""
+    kernel: object
+    params: Callable
+    rotation: Callable
+    phase_index: int
+    opts: object
+    n_nodes: int
+    scale: float = 1.0
+    period: float = 1.0
+    decay_tol: float = 1e-8
+
+    @property
+    def parameters(self):
+        return (("lambda", -1, self.scale),)
+
+    def lam(self, X):
+        return float(X[-1] * self.scale)
+
+    def nodes(self, X):
+        return X[:-1].reshape(self.n_nodes, self.kernel.n_state)
+
+    def torus(self, point):
+        """The point's circle as a `torus.Torus` (its error estimate not computed: nan)."""
+        lam = self.lam(point.X)
+        return tr.Torus(self.nodes(point.X), float(self.rotation(lam)), self.period, tr.CONVERGED,
+                        point.iterations, point.residual, point.tail, np.nan, point.monodromies, 0)
+
+    def residual(self, X, variational):
+        lam = self.lam(X)
+        return tr.collocation(self.kernel, self.nodes(X), self.params(lam), self.phase_index,
+                              self.rotation(lam), self.period, self.opts, variational)
+
+    def dr_dmu(self, X, fd_step):
+        """Central difference of R in mu: (column or None, n_rhs)."""
+        step = fd_step * max(1.0, abs(X[-1]))
+        cols, n_rhs = [], 0
+        for sign in (1.0, -1.0):
+            Y = X.copy()
+            Y[-1] += sign * step
+            r, _, _, ok, nr = self.residual(Y, False)
+            n_rhs += nr
+            if not ok:
+                return None, n_rhs
+            cols.append(r.ravel())
+        return (cols[0] - cols[1]) / (2.0 * step), n_rhs
+
+    def correct(self, X0, c, target, at, settings, counter):
+        """Newton on [R(U, lambda) = 0, c . X = target]: (Solution, None) or (None, failure)."""
+        X = X0.copy()
+        for it in range(settings.max_newton + 1):
+            r, jac, monos, ok, n_rhs = self.residual(X, True)
+            counter.n += n_rhs
+            if not ok:
+                return None, INTEGRATION_FAILED
+            res = np.abs(r).max() / max(1.0, np.abs(X[:-1]).max())
+            if res <= settings.tol:
+                return Solution(X, jac, monos, it, res), None
+            if it == settings.max_newton:
+                break
+            col, n_rhs = self.dr_dmu(X, settings.fd_step)
+            counter.n += n_rhs
+            if col is None:
+                return None, INTEGRATION_FAILED
+            try:
+                X = X + np.linalg.solve(_bordered(jac, col, c), np.append(-r.ravel(), target - c @ X))
+            except np.linalg.LinAlgError:
+                break
+        return None, NEWTON_FAILED
+
+    def point(self, sol, at, settings, counter):
+        col, n_rhs = self.dr_dmu(sol.X, settings.fd_step)
+        counter.n += n_rhs
+        if col is None:
+            return None
+        try:
+            t = engine.tangent(_bordered(sol.jacobian, col, at.tangent))
+        except np.linalg.LinAlgError:
+            return None
+        lam = self.lam(sol.X)
+        nodes = self.nodes(sol.X)
+        circle = tr.Torus(nodes, float(self.rotation(lam)), self.period, tr.CONVERGED, sol.iterations,
+                          sol.residual, 0.0, np.nan, sol.monodromies, 0)
+        return Point(sol.X, lam, t, sol.iterations, sol.residual, tr.fourier_tail(nodes),
+                     tr.stability(circle), sol.monodromies)
+
+    def where(self, point):
+        return f"lambda = {point.lam!r}"
+
+    def solves_edge(self, k, edge):
+        return True
+
+
+def _bordered(jac, col, c):
+    m = col.size
+    A = np.empty((m + 1, m + 1))
+    A[:m, :m] = jac
+    A[:m, m] = col
+    A[m] = c
+    return A
+
+
+class Breakdown(ev.BranchEvent):
+    """The circle's Fourier tail exceeds the family's decay tolerance: the branch ends there."""
+    label, code, locates, end = "TB", "torus_breakdown", False, TORUS_BREAKDOWN
+
+    def detect(self, problem, a, b):
+        return b.tail > problem.decay_tol
+
+    def end_detail(self, problem, point, a, b):
+        return (f"Fourier decay failed at {problem.where(b)}: tail {b.tail:.2g} > {problem.decay_tol:g} "
+                f"with {problem.n_nodes} nodes")
+
+
+class StabilityChange(ev.BranchEvent):
+    """The largest normal Lyapunov exponent changes sign (a fold of tori or a loss of normal
+    hyperbolicity); a flag between two points, undecided stabilities never flag."""
+    label, code, locates, end = "TS", "torus_stability", False, None
+
+    def detect(self, problem, a, b):
+        decided = (tr.STABLE, tr.UNSTABLE)
+        return a.stability.status in decided and b.stability.status in decided and \
+            a.stability.status != b.stability.status
+
+
+def start(family, lam0, guess, direction=1, settings=engine.Settings(), counter=None):
+    """The first point at lambda = lam0 from node values `guess` (N x n, e.g. torus.solve_torus's),
+    tangent towards increasing lambda for direction = +1. A Point or None."""
+    counter = counter or engine.Counter()
+    X = np.append(np.asarray(guess, float).ravel(), lam0 / family.scale)
+    c = np.zeros(X.size)
+    c[-1] = 1.0
+    seed = engine.Seed(direction * c)
+    sol, failure = family.correct(X, c, X[-1], seed, replace(settings, max_newton=START_NEWTON), counter)
+    return None if failure is not None else family.point(sol, seed, settings, counter)
+
+
+def follow_tori(family, first, lam_range, settings=engine.Settings(), counter=None):
+    """engine.follow from `first` within lam_range with the torus events (Breakdown, StabilityChange): a Run."""
+    return engine.follow(family, first, [tuple(lam_range)], settings, (Breakdown(), StabilityChange()), counter)

@@ -1,0 +1,49 @@
+"""Validation model `duffing2`: a Duffing oscillator under two-frequency forcing, in scaled time
+tau = Omega t / 2 pi (the first forcing's period is 1):
+
+    x'' + c x' + k x + gamma x^3 = f1 cos(2 pi tau) + f2 cos(w2 tau + theta),
+
+p = (k, c, gamma, f1, f2, w2, theta), state (x, x'). The second forcing's phase theta at tau = 0 is
+a parameter: the torus solver (rotorkernels.torus) shoots one forcing period from each phase node.
+With gamma = 0 it is linear and its quasi-periodic response is the sum of two periodic ones."""
+import numpy as np
+from numba import njit
+
+from rotorkernels.models.spec import VALIDATION_GROUP, Built, ModelSpec, Parameter
+from rotorkernels.models.velocity import upper_rows, velocity_rows
+
+P_K, P_C, P_GAMMA, P_F1, P_F2, P_W2, P_PHASE = range(7)
+NAMES = ("k", "c", "gamma", "f1", "f2", "w2", "theta")
+
+
+@njit(cache=True, nogil=True, inline="always")
+def rhs(tau, u, p, du):
+    velocity_rows(u, du, 1)
+    x = u[0]
+    du[1] = (p[P_F1] * np.cos(2.0 * np.pi * tau) + p[P_F2] * np.cos(p[P_W2] * tau + p[P_PHASE])
+             - p[P_K] * x - p[P_GAMMA] * x * x * x - p[P_C] * u[1])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def jac(tau, u, p, out):
+    upper_rows(out, 1)
+    out[1, 0] = -p[P_K] - 3.0 * p[P_GAMMA] * u[0] * u[0]
+    out[1, 1] = -p[P_C]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def rhs_jac(tau, u, p, du, out):
+    rhs(tau, u, p, du)
+    jac(tau, u, p, out)
+
+
+def build(v):
+    return Built(np.array([float(v[k]) for k in NAMES]), 1.0, {}, periodic=False)
+
+
+SPEC = ModelSpec(
+    name="duffing2", id=7, module=__name__, n_position=1,
+    description="validation: Duffing oscillator under two-frequency forcing (scaled time)",
+    parameters=tuple(Parameter(name=k, default=0.0) for k in NAMES), build=build,
+    cold_guess=lambda p: np.zeros(2), length_scale=1.0, kernel_group=VALIDATION_GROUP,
+)

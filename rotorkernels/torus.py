@@ -1,0 +1,275 @@
+"""Invariant 2-tori of a model under two-frequency forcing (quasi-periodic shooting).
+
+The first forcing has period T (the stroboscopic period, scaled time), the second one's phase theta
+at the start of a period is a kernel parameter (p[phase_index]) and advances by rho = 2 pi omega /
+Omega over T. A torus is an invariant circle u(theta) of the stroboscopic map P_theta (the flow over
+T started at phase theta):
+
+    P_theta(u(theta)) = u(theta + rho).
+
+Fourier collocation (Schilder, Osinga & Vogt 2005, with the forcing phase as the torus coordinate,
+so there is neither a phase condition nor an unknown rotation): u is the trigonometric interpolant
+of its values U_j at N = 2K + 1 nodes theta_j = 2 pi j / N; each node is shot over T from phase
+theta_j, and Newton solves all nodes at once on
+
+    R(U) = [P_theta_j(U_j)]_j - (S kron I_n) U = 0,    dR/dU = blockdiag(M_j) - S kron I_n,
+
+M_j the nodes' monodromies and S the interpolation matrix that evaluates the interpolant at the
+shifted nodes theta_j + rho. N grows until the interpolant's highest modes fall below the decay
+tolerance (else the torus ends `fourier_decay_failed`: a torus losing smoothness before it breaks
+down). Each torus carries an error estimate: the invariance defect between the nodes (at the
+midpoints, where collocation does not force it to zero) times the norm of the inverse Jacobian
+(the defect's amplification into a distance from the invariant circle), and not below the Fourier
+tail.
+
+Stability (`stability`): the normal Lyapunov exponents of the linearized map over the rotation,
+v -> M(theta) v, theta -> theta + rho (the linearized invariance equation), by QR iteration with
+M(theta) the interpolant of the nodes' monodromies; `undecided` where the largest exponent is not
+told apart from 0 by its own convergence error. Kernels only: arrays in, arrays out, no I/O.
+"""
+from typing import NamedTuple
+
+import numpy as np
+
+from rotorkernels import integrators as ig, shooting
+
+CONVERGED, NOT_CONVERGED, FOURIER_DECAY_FAILED, INTEGRATION_FAILED = (
+    "converged", "not_converged", "fourier_decay_failed", "integration_failed")
+STABLE, UNSTABLE, UNDECIDED = "stable", "unstable", "undecided"
+
+_MAX_HALVINGS = 8
+_FINE = 100.0      # tolerance ratio of the error estimate's reference flow
+
+
+class Torus(NamedTuple):
+    nodes: np.ndarray        # U (N, n): the circle's values at theta_j = 2 pi j / N
+    rho: float               # rotation of the forcing phase per period T [rad]
+    period: float            # the stroboscopic period T (scaled time)
+    status: str              # CONVERGED, NOT_CONVERGED, FOURIER_DECAY_FAILED, INTEGRATION_FAILED
+    iterations: int          # Newton iterations, all resolutions together
+    residual: float          # max |R| at the nodes
+    tail: float              # largest Fourier coefficient in the top quarter of the modes
+    error: float             # the error estimate (see the module docstring)
+    monodromies: np.ndarray  # (N, n, n) at the nodes
+    n_rhs: int
+
+    @property
+    def thetas(self):
+        return node_phases(self.nodes.shape[0])
+
+    def at(self, theta):
+        """u(theta) on the circle (any array of phases): the trigonometric interpolant."""
+        return interpolation_matrix(self.nodes.shape[0], np.atleast_1d(theta)) @ self.nodes
+
+
+class Stability(NamedTuple):
+    exponents: np.ndarray    # normal Lyapunov exponents per unit scaled time, descending
+    spread: float            # their convergence error (two halves of the iteration)
+    status: str              # STABLE, UNSTABLE, UNDECIDED
+    reason: str              # why undecided ("" otherwise)
+
+
+def node_phases(n_nodes):
+    return 2.0 * np.pi * np.arange(n_nodes) / n_nodes
+
+
+def interpolation_matrix(n_nodes, thetas):
+    """E (len(thetas), N): E @ U is the trigonometric interpolant of the node values U at
+    `thetas` (N odd: the Dirichlet kernel sum_{|m| <= K} exp(i m (theta - theta_k)) / N)."""
+    k = (n_nodes - 1) // 2
+    d = np.asarray(thetas, float)[:, None] - node_phases(n_nodes)[None, :]
+    m = np.arange(1, k + 1)
+    return (1.0 + 2.0 * np.cos(d[..., None] * m).sum(axis=-1)) / n_nodes
+
+
+def fourier_tail(values):
+    """Largest Fourier coefficient of the top quarter of the modes (at least one mode) of the node
+    values (N, ...), relative to the largest of the values (floor 1): how far N resolves them."""
+    n_nodes = values.shape[0]
+    coef = np.abs(np.fft.rfft(values.reshape(n_nodes, -1), axis=0)) / n_nodes
+    k = (n_nodes - 1) // 2
+    top = max(1, (k + 1) // 4)
+    return float(coef[k + 1 - top:k + 1].max() / max(1.0, np.abs(values).max()))
+
+
+def node_maps(kernel, nodes, thetas, p, phase_index, period, opts, variational):
+    """(ends (N, n), monodromies (N, n, n) or None, ok, n_rhs): the stroboscopic map of each node,
+    shot over `period` from its forcing phase."""
+    n = kernel.n_state
+    ends = np.empty_like(nodes)
+    monos = np.empty((len(thetas), n, n)) if variational else None
+    pj = np.array(p, float)
+    n_rhs = 0
+    for j, theta in enumerate(thetas):
+        pj[phase_index] = theta
+        z, status, nr, _ = ig.flow(kernel, 0.0, period, ig.initial_state(nodes[j], n, variational),
+                                   pj, variational, opts, 0.0)
+        n_rhs += nr
+        if status != ig.STATUS_OK:
+            return ends, monos, False, n_rhs
+        ends[j] = z[:n]
+        if variational:
+            monos[j] = z[n:].reshape(n, n)
+    return ends, monos, True, n_rhs
+
+
+def collocation(kernel, nodes, p, phase_index, rho, period, opts, variational=True):
+    """(residual R (N, n), Jacobian dR/dU or None, monodromies or None, ok, n_rhs) of the
+    collocation equations (the Jacobian only with the variational equations)."""
+    n_nodes, n = nodes.shape
+    thetas = node_phases(n_nodes)
+    shift = interpolation_matrix(n_nodes, thetas + rho)
+    ends, monos, ok, n_rhs = node_maps(kernel, nodes, thetas, p, phase_index, period, opts, variational)
+    if not ok:
+        return None, None, None, False, n_rhs
+    if not variational:
+        return ends - shift @ nodes, None, None, True, n_rhs
+    jac = -np.kron(shift, np.eye(n))
+    for j in range(n_nodes):
+        jac[j * n:(j + 1) * n, j * n:(j + 1) * n] += monos[j]
+    return ends - shift @ nodes, jac, monos, True, n_rhs
+
+
+def _newton(kernel, nodes, p, phase_index, rho, period, opts, tol, max_iter):
+    """Newton with backtracking on all nodes at once at one resolution:
+    (nodes, jacobian, monodromies, status, iterations, residual, n_rhs)."""
+    scale = max(1.0, np.abs(nodes).max())
+    r, jac, monos, ok, n_rhs = collocation(kernel, nodes, p, phase_index, rho, period, opts)
+    if not ok:
+        return nodes, None, None, INTEGRATION_FAILED, 0, np.inf, n_rhs
+    res = np.abs(r).max()
+    for it in range(max_iter + 1):
+        if res <= tol * scale:
+            return nodes, jac, monos, CONVERGED, it, res, n_rhs
+        if it == max_iter:
+            break
+        try:
+            step = np.linalg.solve(jac, -r.ravel()).reshape(nodes.shape)
+        except np.linalg.LinAlgError:
+            break
+        lam = 1.0
+        for _ in range(_MAX_HALVINGS):
+            trial = nodes + lam * step
+            rt, jt, mt, ok, nr = collocation(kernel, trial, p, phase_index, rho, period, opts)
+            n_rhs += nr
+            if ok and np.abs(rt).max() < (1.0 - 1e-4 * lam) * res:
+                nodes, r, jac, monos, res = trial, rt, jt, mt, np.abs(rt).max()
+                break
+            lam *= 0.5
+        else:
+            break
+    return nodes, jac, monos, NOT_CONVERGED, it, res, n_rhs
+
+
+def resample(nodes, n_nodes):
+    """The circle's node values at another (odd) number of nodes, by its interpolant."""
+    return interpolation_matrix(nodes.shape[0], node_phases(n_nodes)) @ nodes
+
+
+def error_estimate(kernel, nodes, jac, p, phase_index, rho, period, opts, tail):
+    """(estimate, ok, n_rhs): the invariance defect at the midpoints between nodes times
+    ||dR/dU^{-1}||_inf, not below the Fourier tail (scaled like the nodes). The midpoints are
+    shot at a hundredth of the tolerances, so that the defect holds the solver's own integration
+    error too (against the flow, not only against its own map)."""
+    n_nodes = nodes.shape[0]
+    mid = node_phases(n_nodes) + np.pi / n_nodes
+    start = interpolation_matrix(n_nodes, mid) @ nodes
+    fine = opts._replace(rtol=opts[ig.S_RTOL] / _FINE, atol=opts[ig.S_ATOL] / _FINE)
+    ends, _, ok, n_rhs = node_maps(kernel, start, mid, p, phase_index, period, fine, False)
+    if not ok:
+        return np.inf, False, n_rhs
+    defect = np.abs(ends - interpolation_matrix(n_nodes, mid + rho) @ nodes).max()
+    amplification = np.abs(np.linalg.inv(jac)).sum(axis=1).max()
+    return max(defect * amplification, tail * max(1.0, np.abs(nodes).max())), True, n_rhs
+
+
+def solve_torus(kernel, guess, p, phase_index, rho, opts, period=1.0, tol=1e-10, decay_tol=1e-11,
+                max_nodes=257, max_iter=20):
+    """The invariant circle near `guess` ((N, n) node values, N odd; a periodic state repeated
+    over the nodes is a fine guess for weak second forcing) with the rotation rho [rad per period].
+
+    N starts at guess's node count and grows (N -> 2N + 1) while the Fourier tail exceeds
+    decay_tol; beyond max_nodes the torus is FOURIER_DECAY_FAILED. tol: Newton's max |R| relative
+    to max(1, max |U|). Returns a `Torus` (failure is its status, never an exception)."""
+    nodes = np.array(guess, float)
+    if nodes.ndim != 2 or nodes.shape[0] % 2 == 0 or nodes.shape[1] != kernel.n_state:
+        raise ValueError(f"guess must be (N odd, {kernel.n_state}), got {nodes.shape}")
+    total_it, n_rhs = 0, 0
+    while True:
+        nodes, jac, monos, status, it, res, nr = _newton(kernel, nodes, p, phase_index, rho, period, opts,
+                                                         tol, max_iter)
+        total_it += it
+        n_rhs += nr
+        tail = fourier_tail(nodes) if status != INTEGRATION_FAILED else np.inf
+        if status != CONVERGED or tail <= decay_tol:
+            break
+        if 2 * nodes.shape[0] + 1 > max_nodes:
+            status = FOURIER_DECAY_FAILED
+            break
+        nodes = resample(nodes, 2 * nodes.shape[0] + 1)
+    error = np.inf
+    if status in (CONVERGED, FOURIER_DECAY_FAILED):
+        error, ok, nr = error_estimate(kernel, nodes, jac, p, phase_index, rho, period, opts, tail)
+        n_rhs += nr
+        status = status if ok else INTEGRATION_FAILED
+    if monos is None:
+        monos = np.full((nodes.shape[0], kernel.n_state, kernel.n_state), np.nan)
+    return Torus(nodes, float(rho), float(period), status, total_it, float(res), tail, float(error), monos, n_rhs)
+
+
+def fitted_guess(samples, phases, n_nodes):
+    """Node values (n_nodes, n) of the least-squares trigonometric fit (n_nodes modes) of
+    stroboscopic samples (m >= n_nodes, n) at their forcing phases: a guess from a transient that
+    has settled near an attracting torus."""
+    basis = interpolation_matrix(n_nodes, np.asarray(phases, float))
+    return np.linalg.lstsq(basis, np.asarray(samples, float), rcond=None)[0]
+
+
+def periodic_guess(state, n_nodes):
+    """Node values (n_nodes, n) of a constant circle through one periodic state."""
+    return np.tile(np.asarray(state, float), (n_nodes, 1))
+
+
+def stability(torus, n_steps=4000, theta0=0.0, margin=1e-6):
+    """Normal Lyapunov exponents of the torus (per unit scaled time) by QR iteration of the
+    linearized map along the rotation, the monodromy interpolated between the nodes.
+
+    Undecided when the torus did not converge, the monodromies are not resolved by the nodes, or
+    the largest exponent lies within its convergence error (the two halves' difference, at least
+    `margin`) of 0."""
+    if torus.status != CONVERGED:
+        return Stability(np.full(torus.nodes.shape[1], np.nan), np.inf, UNDECIDED, f"torus {torus.status}")
+    n_nodes, n = torus.nodes.shape
+    flat = torus.monodromies.reshape(n_nodes, n * n)
+    thetas = theta0 + torus.rho * np.arange(n_steps)
+    monos = (interpolation_matrix(n_nodes, thetas) @ flat).reshape(n_steps, n, n)
+    q = np.eye(n)
+    logs = np.zeros((n_steps, n))
+    for k in range(n_steps):
+        q, r = np.linalg.qr(monos[k] @ q)
+        logs[k] = np.log(np.abs(np.diag(r)))
+    half = n_steps // 2
+    first = np.sort(logs[:half].mean(axis=0))[::-1] / torus.period
+    second = np.sort(logs[half:].mean(axis=0))[::-1] / torus.period
+    exponents = np.sort(logs.mean(axis=0))[::-1] / torus.period
+    spread = max(float(np.abs(first - second).max()), margin)
+    if fourier_tail(torus.monodromies) > 1e-6:
+        return Stability(exponents, spread, UNDECIDED, "monodromies not resolved by the nodes")
+    if abs(exponents[0]) <= spread:
+        return Stability(exponents, spread, UNDECIDED, "largest exponent within its error of 0")
+    return Stability(exponents, spread, STABLE if exponents[0] < 0 else UNSTABLE, "")
+
+
+def surface_samples(kernel, circle, p, phase_index, opts, n_phases=64, n_per_period=64):
+    """States on the torus (n_phases, n_per_period, n): the trajectories over one period T from
+    n_phases points of the circle, each from its forcing phase (what an amplitude, a time history
+    or a picture of the torus reads). An amplitude from them is the torus's to the sampling
+    grid: the sup of a smooth function on a grid of spacing h lies within O(h^2) of the true sup."""
+    phases = 2.0 * np.pi * np.arange(n_phases) / n_phases
+    starts = circle.at(phases)
+    pj = np.array(p, float)
+    out = np.empty((n_phases, n_per_period, kernel.n_state))
+    for j, theta in enumerate(phases):
+        pj[phase_index] = theta
+        out[j] = shooting.sample_orbit(kernel, starts[j], pj, circle.period, n_per_period, opts)
+    return out
