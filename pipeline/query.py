@@ -190,10 +190,14 @@ def _refined_crossings(ds, others):
     return out
 
 
+NOT_APPLICABLE = schema.ORBIT_STATUS.index("not_applicable")
+
+
 def unstable_intervals(ds):
     """Maximal runs of consecutive values of the continued axis (speed) whose periodic orbit is
     not stable (unstable, or not found), one list entry per run and per combination of the other
-    swept axes.
+    swept axes. Points whose orbit is `not_applicable` (no periodic orbit by design) belong to
+    no interval.
 
     Each entry: the other axes' values, `start`/`end` (the first and last grid value of the
     run), `onset`/`offset` (the refined crossings of the cube's boundary table just below
@@ -210,7 +214,9 @@ def unstable_intervals(ds):
     for values in itertools.product(*(ds[a].values for a in others)):
         where = dict(zip(others, values))
         line = ds.sel(where) if where else ds
-        not_stable = (line["stable"].values != 1) | (line["orbit_status"].values != 0)
+        status = line["orbit_status"].values
+        # a point with no orbit by design (quasi-periodic forcing) lost no stability
+        not_stable = ((line["stable"].values != 1) | (status != 0)) & (status != NOT_APPLICABLE)
         for i0, i1 in _runs(not_stable):
             mu = line["max_abs_multiplier"].values[i0:i1 + 1]
             out.append({

@@ -137,3 +137,17 @@ def test_intervals_table_formats():
     assert table[3].split() == ["2e-05", "10", "20", "-", "-", "2", "no_orbit", "-"]
     assert query.intervals_table([], "json") == "[]"
     assert query.intervals_table([], "table") == "no unstable intervals"
+
+
+def test_not_applicable_points_are_never_unstable_intervals():
+    """Quasi-periodic forcing has no periodic orbit by design: such points end a run and start none
+    (issue 32 item 5)."""
+    ds = tiny_cube()
+    status = ds["orbit_status"].values.copy()
+    speed_axis = ds["orbit_status"].dims.index("speed")
+    na = np.take(status, [0, 1, 2], axis=speed_axis) * 0 + schema.ORBIT_STATUS.index("not_applicable")
+    status[(slice(None),) * speed_axis + (slice(0, 3),)] = na
+    ds["orbit_status"].values = status
+    got = query.unstable_intervals(ds)
+    assert [(g["clearance"], g["start"], g["end"], g["type"]) for g in got] == [
+        (1e-5, 60.0, 80.0, "neimark_sacker"), (2e-5, 50.0, 50.0, "fold")]
