@@ -218,7 +218,7 @@ def unstable_intervals(ds):
         # a point with no orbit by design (quasi-periodic forcing) lost no stability
         not_stable = ((line["stable"].values != 1) | (status != 0)) & (status != NOT_APPLICABLE)
         for i0, i1 in _runs(not_stable):
-            mu = line["max_abs_multiplier"].values[i0:i1 + 1]
+            mu = line["max_abs_multiplier"].values[i0:i1 + 1] if "max_abs_multiplier" in line else np.full(1, np.nan)
             out.append({
                 **{a: float(v) for a, v in where.items()},
                 "start": float(speed[i0]),
@@ -230,6 +230,27 @@ def unstable_intervals(ds):
                 "max_abs_multiplier": float(np.nanmax(mu)) if np.isfinite(mu).any() else float("nan"),
             })
     return out
+
+
+def point_classes(ds):
+    """The one vocabulary of the stability of grid points (the map, the report's header counts
+    and `query --unstable` read it): per point (DataArray over the point dims) "stable" or
+    "not_applicable" (no orbit by design) -- what the grid point is -- or, for a point of an
+    unstable interval, the interval's `type` (fold / period_doubling / neimark_sacker / no_orbit
+    / none): how stability was lost before it (unstable_intervals)."""
+    import xarray as xr
+
+    status = ds["orbit_status"]
+    names = np.where(status.values == NOT_APPLICABLE, "not_applicable",
+                     np.where((status.values == 0) & (ds["stable"].values == 1), "stable", "none")).astype(object)
+    cls = xr.DataArray(names, {d: ds[d].values for d in status.dims}, status.dims)
+    along = schema.continued_axis(ds)
+    for iv in unstable_intervals(ds):
+        sel = {a: iv[a] for a in _other_axes(ds)}
+        grid = cls[along].values
+        inside = (grid >= iv["start"]) & (grid <= iv["end"])
+        cls.loc[{**sel, along: grid[inside]}] = iv["type"]
+    return cls
 
 
 def attractor_label(code, k):
