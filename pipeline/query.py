@@ -237,7 +237,9 @@ def point_classes(ds):
     and `query --unstable` read it): per point (DataArray over the point dims) "stable" or
     "not_applicable" (no orbit by design) -- what the grid point is -- or, for a point of an
     unstable interval, the interval's `type` (fold / period_doubling / neimark_sacker / no_orbit
-    / none): how stability was lost before it (unstable_intervals)."""
+    / none): how stability was lost before it (unstable_intervals). A point without orbit is
+    "no_orbit" wherever it lies; an unstable orbit in an interval that began without orbit has
+    its own bifurcation code's name."""
     import xarray as xr
 
     status = ds["orbit_status"]
@@ -250,6 +252,14 @@ def point_classes(ds):
         grid = cls[along].values
         inside = (grid >= iv["start"]) & (grid <= iv["end"])
         cls.loc[{**sel, along: grid[inside]}] = iv["type"]
+    # a point without orbit is that; an orbit in a run that began without one has no known
+    # loss of stability before it: its own code says how it is unstable
+    own = np.vectorize(lambda k: schema.BIFURCATION[int(k)] if 0 <= k < len(schema.BIFURCATION) else "none",
+                       otypes=[object])(ds["bifurcation"].values)
+    values = cls.values
+    values[(status.values != 0) & (status.values != NOT_APPLICABLE)] = "no_orbit"
+    began_without = (values == "no_orbit") & (status.values == 0)
+    values[began_without] = own[began_without]
     return cls
 
 
