@@ -1,14 +1,14 @@
-"""One orbit, one record: which branches and located points of a continuation are the same closed
-curve, and where distinct stable orbits coexist (issue 32 item 3).
+"""One orbit, one record: which located points of a continuation are the same closed curve, and
+where distinct stable orbits coexist (issue 32 item 3).
 
 A period-k orbit started at s is the same closed curve as the one started at phi_j(s) (phi_j: the
 flow over j forcing periods, j = 0..k-1): a period-k branch has k phase copies, and switching
 at a period doubling met twice on a loop, or at the two period doublings that bound a closed
-period-2k loop, follows the same orbits again. `mark_copies` (in the line's task, where the
-kernel is) tests the located points for this and records, per branch and per event, the first
-record of the same orbit; everything users read (info, the events table, the coexistence table,
-the band map) then counts distinct orbits only, through `coexistence`, the one function that
-says how many distinct stable orbits each piece of a line's parameter range has.
+period-2k loop, follows the same orbits again. In the line's task (where the kernel is),
+`mark_copies` records per located point the first record of the same orbit, and
+`line_coexistence` counts the distinct stable orbits on each piece of the line's parameter
+range (exact orbits compared, not branches). Everything users read (info, the events table, the
+coexistence table, the band map) reads those, through `distinct_events` and `coexistence`.
 """
 import itertools
 import json
