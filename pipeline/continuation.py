@@ -19,6 +19,9 @@ import numpy as np
 import xarray as xr
 
 from pipeline import cluster, compute, result_kinds, results, runlog, schema
+from pipeline.coexistence import (  # noqa: F401 (the continuation result's readers use these names)
+    bistable_intervals, coexistence, distinct_events, event_copy_of, line_coexistence, mark_copies, stability_classes,
+    stable_runs)
 from pipeline.config import ConfigError, continued_axis, range_text, settings_problems
 from rotorkernels import extrema
 from rotorkernels.continuation import arclength as al, solve_orbit, twoparam
@@ -168,6 +171,8 @@ def continue_line(data, where):
             child = al.switch_period_doubling(parent, event, pl.range, pl.settings)
             records.append(branch_record(family, built, child, index))
             queue.append((child, depth + 1, len(records) - 1))
+    records = mark_copies(family, records, pl.settings)
+    records[0]["coexistence"] = line_coexistence(family, records, pl.settings, pl.range)
     return records
 
 
@@ -314,6 +319,24 @@ def _global_parents(lines):
     return np.array(out, "int32")
 
 
+def _global_records(lines, pl):
+    """(event_copy_of, coexistence pieces) over the whole result from the lines' local indices
+    (mark_copies, line_coexistence; a line without them: each event its own first record, no
+    stable orbit)."""
+    events, pieces, b0 = [], {"piece_lo": [], "piece_hi": [], "piece_line": [], "piece_branches": []}, 0
+    for _, recs in lines:
+        e_line = len(events)
+        for r in recs:
+            own = range(len(events) - e_line, len(events) - e_line + len(r["event_type"]))
+            events += [e_line + int(j) for j in r.get("event_copy_of", own)]
+        for lo, hi, orbits in recs[0].get("coexistence", [(*pl.range, [])]):
+            for key, value in zip(pieces, (lo, hi, b0, " ".join(str(b0 + b) for b in orbits))):
+                pieces[key].append(value)
+        b0 += len(recs)
+    return np.array(events, "int32"), {k: np.array(v, {"piece_line": "int32", "piece_branches": object}.get(k, float))
+                                          for k, v in pieces.items()}
+
+
 def to_dataset(data, pl, lines, provenance):
     """The continuation result (schema: result_kinds.CONTINUATION_VARIABLES): lines = [(where,
     [branch records])] in plan order."""
@@ -335,6 +358,8 @@ def to_dataset(data, pl, lines, provenance):
     ev = [(b, r, k) for b, (_, r) in enumerate(records) for k in range(len(r["event_type"]))]
     ev_mult = np.array([r["event_multipliers"][k] for _, r, k in ev]).reshape(len(ev), n)
 
+    copies = _global_records(lines, pl)
+
     def per_event(key, dtype=float, tail=()):
         return np.array([r[key][k] for _, r, k in ev], dtype).reshape((len(ev),) + tail)
     values = {
@@ -345,6 +370,7 @@ def to_dataset(data, pl, lines, provenance):
         "branch_points": np.array([len(r["parameter"]) for _, r in records], "int32"),
         "branch_periods": np.array([r["periods"] for _, r in records], "int32"),
         "branch_parent": _global_parents(lines),
+        "event_copy_of": copies[0], **copies[1],
         "branch_end": np.array([r["end"] for _, r in records], "int8"),
         "branch_detail": np.array([r["detail"] for _, r in records], object),
         "event_type": per_event("event_type", "int8"), "event_branch": np.array([b for b, _, _ in ev], "int32"),
@@ -423,7 +449,8 @@ def describe(ds):
     unit = ds["parameter"].attrs.get("units", "")
     lines = [f"continuation result: scene {ds.attrs.get('scene', '?')}, model {ds.attrs.get('model', '?')}",
              f"parameter {par} [{unit}] over {json.loads(ds.attrs['range'])}",
-             f"{ds.sizes['branch']} branch(es), {ds.sizes.get('event', 0)} located event(s)"]
+             f"{ds.sizes['branch']} branch(es), {len(distinct_events(ds))} distinct located event(s)"
+             f" ({ds.sizes.get('event', 0)} met, copies of one orbit counted once)"]
     for b in range(ds.sizes["branch"]):
         where = ", ".join(f"{c}={float(ds[c].values[b]):g}" for c in ds.coords if ds[c].dims == ("branch",))
         lines.append(f"  branch {b}: period-{int(ds['branch_periods'].values[b])}"
@@ -452,9 +479,10 @@ def _peak_lines(ds, par, unit):
 
 
 def events_table(ds):
-    """The located events as columns (for query's renderer): type, branch, parameter, period,
-    the critical multiplier, max |observable|."""
+    """The located events as columns (for query's renderer), each orbit once (its first record):
+    type, branch, parameter, period, the critical multiplier, max |observable|."""
     par = ds.attrs["parameter"]
+    ds = ds.isel(event=distinct_events(ds))
     mult = ds["event_multiplier_real"].values + 1j * ds["event_multiplier_imag"].values
     kinds = ds["event_type"].values
     targets = np.array([{0: 1.0, 1: -1.0}.get(int(k), np.nan) for k in kinds])
@@ -473,78 +501,3 @@ def events_table(ds):
         cols[f"amplitude_max_{name}"] = ds["event_amplitude_max"].values[:, j].tolist()
         cols[f"amplitude_half_pp_{name}"] = ds["event_amplitude_half_pp"].values[:, j].tolist()
     return cols
-
-
-# --- coexisting stable orbits ---------------------------------------------------------------------
-
-def stable_runs(ds, b):
-    """[(lo, hi)] parameter intervals of branch b's runs of stable orbits; a run's end at a
-    located event (fold, period doubling, ...) is the event's parameter, else the last stable
-    point's."""
-    n = int(ds["branch_points"].values[b])
-    lam = ds["parameter"].values[b, :n]
-    stable = ds["stable"].values[b, :n] == 1
-    located = {int(p): float(v) for br, p, v, k in zip(ds["event_branch"].values, ds["event_point"].values,
-                                                       ds["event_parameter"].values, ds["event_type"].values)
-               if br == b and k != al.PEAK}     # a peak changes no stability
-    runs, start = [], None
-    for i in range(n):
-        if stable[i] and start is None:
-            start = located.get(i - 1, lam[i])
-        if start is not None and (i == n - 1 or not stable[i + 1]):
-            end = located.get(i, lam[i]) if i < n - 1 else lam[i]
-            runs.append((min(start, end), max(start, end)))
-            start = None
-    return runs
-
-
-def bistable_intervals(ds):
-    """Where two stable orbits coexist on one line: [{line values..., lo, hi, branches}], the
-    overlaps of stable runs of the line's branches (a fold pair's outer branches, a stable
-    period-2 orbit beside a stable period-1 one), merged per pair of branches. Overlaps within
-    one period-2k branch are not counted: a switched branch that loops holds both halves of
-    the same orbits (s and its image after k periods)."""
-    keys = [c for c in ds.coords if ds[c].dims == ("branch",)]
-    width = np.ptp(json.loads(ds.attrs["range"]))
-    lines = {}
-    for b in range(ds.sizes["branch"]):
-        lines.setdefault(tuple(float(ds[c].values[b]) for c in keys), []).append(b)
-    found = {}
-    for where, branches in lines.items():
-        runs = [(lo, hi, b) for b in branches for lo, hi in stable_runs(ds, b)]
-        for (lo1, hi1, b1), (lo2, hi2, b2) in itertools.combinations(runs, 2):
-            lo, hi = max(lo1, lo2), min(hi1, hi2)
-            same_orbits = b1 == b2 and ds["branch_periods"].values[b1] > 1
-            if hi - lo > 1e-9 * width and not same_orbits:     # not runs that only touch at an event
-                found.setdefault((where, tuple(sorted({b1, b2}))), []).append((lo, hi))
-    out = []
-    for (where, pair), intervals in found.items():
-        for lo, hi in _merged(intervals):
-            out.append({**dict(zip(keys, where)), "lo": lo, "hi": hi, "branches": list(pair)})
-    return out
-
-
-def _merged(intervals):
-    out = []
-    for lo, hi in sorted(intervals):
-        if out and lo <= out[-1][1]:
-            out[-1] = (out[-1][0], max(out[-1][1], hi))
-        else:
-            out.append((lo, hi))
-    return out
-
-
-def stability_classes(ds):
-    """Per line: [(lo, hi, n)] pieces of the parameter range with n stable orbits on the line's
-    branches (0: none found, 1: stable, 2+: multistable)."""
-    keys = [c for c in ds.coords if ds[c].dims == ("branch",)]
-    lo_r, hi_r = json.loads(ds.attrs["range"])
-    lines = {}
-    for b in range(ds.sizes["branch"]):
-        lines.setdefault(tuple(float(ds[c].values[b]) for c in keys), []).extend(stable_runs(ds, b))
-    out = {}
-    for where, runs in lines.items():
-        edges = sorted({lo_r, hi_r, *(x for run in runs for x in run if lo_r <= x <= hi_r)})
-        pieces = [(a, b, sum(lo <= 0.5 * (a + b) <= hi for lo, hi in runs)) for a, b in zip(edges[:-1], edges[1:])]
-        out[where] = pieces
-    return keys, out

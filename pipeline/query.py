@@ -190,10 +190,14 @@ def _refined_crossings(ds, others):
     return out
 
 
+NOT_APPLICABLE = schema.ORBIT_STATUS.index("not_applicable")
+
+
 def unstable_intervals(ds):
     """Maximal runs of consecutive values of the continued axis (speed) whose periodic orbit is
     not stable (unstable, or not found), one list entry per run and per combination of the other
-    swept axes.
+    swept axes. Points whose orbit is `not_applicable` (no periodic orbit by design) belong to
+    no interval.
 
     Each entry: the other axes' values, `start`/`end` (the first and last grid value of the
     run), `onset`/`offset` (the refined crossings of the cube's boundary table just below
@@ -210,9 +214,11 @@ def unstable_intervals(ds):
     for values in itertools.product(*(ds[a].values for a in others)):
         where = dict(zip(others, values))
         line = ds.sel(where) if where else ds
-        not_stable = (line["stable"].values != 1) | (line["orbit_status"].values != 0)
+        status = line["orbit_status"].values
+        # a point with no orbit by design (quasi-periodic forcing) lost no stability
+        not_stable = ((line["stable"].values != 1) | (status != 0)) & (status != NOT_APPLICABLE)
         for i0, i1 in _runs(not_stable):
-            mu = line["max_abs_multiplier"].values[i0:i1 + 1]
+            mu = line["max_abs_multiplier"].values[i0:i1 + 1] if "max_abs_multiplier" in line else np.full(1, np.nan)
             out.append({
                 **{a: float(v) for a, v in where.items()},
                 "start": float(speed[i0]),
@@ -224,6 +230,37 @@ def unstable_intervals(ds):
                 "max_abs_multiplier": float(np.nanmax(mu)) if np.isfinite(mu).any() else float("nan"),
             })
     return out
+
+
+def point_classes(ds):
+    """The one vocabulary of the stability of grid points (the map, the report's header counts
+    and `query --unstable` read it): per point (DataArray over the point dims) "stable" or
+    "not_applicable" (no orbit by design) -- what the grid point is -- or, for a point of an
+    unstable interval, the interval's `type` (fold / period_doubling / neimark_sacker / no_orbit
+    / none): how stability was lost before it (unstable_intervals). A point without orbit is
+    "no_orbit" wherever it lies; an unstable orbit in an interval that began without orbit has
+    its own bifurcation code's name."""
+    import xarray as xr
+
+    status = ds["orbit_status"]
+    names = np.where(status.values == NOT_APPLICABLE, "not_applicable",
+                     np.where((status.values == 0) & (ds["stable"].values == 1), "stable", "none")).astype(object)
+    cls = xr.DataArray(names, {d: ds[d].values for d in status.dims}, status.dims)
+    along = schema.continued_axis(ds)
+    for iv in unstable_intervals(ds):
+        sel = {a: iv[a] for a in _other_axes(ds)}
+        grid = cls[along].values
+        inside = (grid >= iv["start"]) & (grid <= iv["end"])
+        cls.loc[{**sel, along: grid[inside]}] = iv["type"]
+    # a point without orbit is that; an orbit in a run that began without one has no known
+    # loss of stability before it: its own code says how it is unstable
+    own = np.vectorize(lambda k: schema.BIFURCATION[int(k)] if 0 <= k < len(schema.BIFURCATION) else "none",
+                       otypes=[object])(ds["bifurcation"].values)
+    values = cls.values
+    values[(status.values != 0) & (status.values != NOT_APPLICABLE)] = "no_orbit"
+    began_without = (values == "no_orbit") & (status.values == 0)
+    values[began_without] = own[began_without]
+    return cls
 
 
 def attractor_label(code, k):

@@ -101,6 +101,7 @@ CONTINUATION_VARIABLES = {
     "branch_detail": (("branch",), {"long_name": "how the branch ended, in words"}),
     "event_type": (("event",), {"long_name": "located bifurcation point"}),
     "event_branch": (("event",), {"units": "1", "long_name": "branch index of the event"}),
+    "event_copy_of": (("event",), {"units": "1", "long_name": "event holding the first record of this located orbit (itself: distinct)"}),
     "event_point": (("event",), {"units": "1", "long_name": "branch point just before the event"}),
     "event_parameter": (("event",), {"comment": "located on the branch to the arclength tolerance"}),
     "event_multiplier_real": (("event", "multiplier"), {"units": "1", "long_name": "Floquet multiplier at the event, real part"}),
@@ -108,6 +109,12 @@ CONTINUATION_VARIABLES = {
     "event_state": (("event", "state"), _ORBIT_STATE),
     "event_amplitude_max": (("event", "observable"), {"long_name": "max |observable| over the orbit at the event"}),
     "event_amplitude_half_pp": (("event", "observable"), {"long_name": "half peak-to-peak of the observable over the orbit at the event"}),
+    # how many distinct stable orbits coexist where (pipeline.coexistence.line_coexistence)
+    "piece_lo": (("piece",), {"long_name": "start of a piece of a line's parameter range"}),
+    "piece_hi": (("piece",), {"long_name": "end of a piece of a line's parameter range"}),
+    "piece_line": (("piece",), {"units": "1", "long_name": "first branch index of the piece's line"}),
+    "piece_branches": (("piece",), {"long_name": "one branch per distinct stable orbit at the piece's middle (space-separated)",
+                                   "comment": "phase copies phi_j(s) of one orbit counted once"}),
     # with report.frequency_unit = "omega_l"
     "parameter_over_omega_l": (_BP, {"units": "1"}),
     "event_parameter_over_omega_l": (("event",), {"units": "1"}),

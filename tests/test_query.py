@@ -137,3 +137,37 @@ def test_intervals_table_formats():
     assert table[3].split() == ["2e-05", "10", "20", "-", "-", "2", "no_orbit", "-"]
     assert query.intervals_table([], "json") == "[]"
     assert query.intervals_table([], "table") == "no unstable intervals"
+
+
+def test_not_applicable_points_are_never_unstable_intervals():
+    """Quasi-periodic forcing has no periodic orbit by design: such points end a run and start none
+    (issue 32 item 5)."""
+    ds = tiny_cube()
+    status = ds["orbit_status"].values.copy()
+    speed_axis = ds["orbit_status"].dims.index("speed")
+    na = np.take(status, [0, 1, 2], axis=speed_axis) * 0 + schema.ORBIT_STATUS.index("not_applicable")
+    status[(slice(None),) * speed_axis + (slice(0, 3),)] = na
+    ds["orbit_status"].values = status
+    got = query.unstable_intervals(ds)
+    assert [(g["clearance"], g["start"], g["end"], g["type"]) for g in got] == [
+        (1e-5, 60.0, 80.0, "neimark_sacker"), (2e-5, 50.0, 50.0, "fold")]
+
+
+def test_map_header_and_query_class_every_interval_alike():
+    """One vocabulary (issue 32 item 5): every point of every unstable interval has the
+    interval's type as its map class, and the header counts are those classes' sizes."""
+    from pipeline.report import stability
+
+    ds = tiny_cube()
+    classes = stability.stability_class(ds)
+    dims = ds["orbit_status"].dims
+    for iv in query.unstable_intervals(ds):
+        line = {"clearance": iv["clearance"]}
+        speeds = ds["speed"].values
+        for i in np.flatnonzero((speeds >= iv["start"]) & (speeds <= iv["end"])):
+            idx = tuple(i if d == "speed" else list(ds[d].values).index(line[d]) for d in dims)
+            assert stability.CLASSES[int(classes[idx])].replace(" ", "_").replace("-", "_").lower() in (
+                iv["type"], "no_periodic_orbit" if iv["type"] == "no_orbit" else iv["type"])
+    _, by_class = stability.counts(ds)
+    names = [t for iv in query.unstable_intervals(ds) for t in [iv["type"]] * iv["n_points"]]
+    assert by_class["fold"] == names.count("fold") and by_class["period doubling"] == names.count("period_doubling")

@@ -9,7 +9,7 @@ from pipeline import schema
 from pipeline.report.cubeinfo import (attractor_counts, continued_axis, has_attractor, scene_name,
                                       sweep_labels)
 from pipeline.report.plan import MAX_PANELS, axis_display, fixed_note, where_label
-from pipeline.report.stability import counts
+from pipeline.report.stability import CLASS_MEANING, counts
 from pipeline.report.style import holoviews
 
 _CSS = """<style>
@@ -60,6 +60,7 @@ def header_html(ds, title, plan):
     if has_attractor(ds):
         boxes += _attractor_boxes(ds)
     parts.append('<div style="display:flex;gap:4em">' + "".join(boxes) + "</div>")
+    parts.append(f"<p>Stability classes: {html.escape(CLASS_MEANING)}.</p>")
     if plan["omitted"]:
         om = "; ".join(where_label(ds, c) for c in plan["omitted"])
         parts.append(f"<p><b>Panels omitted</b> (at most {MAX_PANELS} shown): {html.escape(om)}</p>")

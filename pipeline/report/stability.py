@@ -2,7 +2,7 @@
 continued axis with edges at the refined boundaries of the cube's boundary table."""
 import numpy as np
 
-from pipeline import schema
+from pipeline import query, schema
 from pipeline.report.cubeinfo import axis_edges, continued_axis, select
 
 # Stability classes of a grid point, in colour order. Okabe-Ito colours (colour-blind safe) for
@@ -13,19 +13,18 @@ UNCLASSIFIED = "unclassified"   # converged but unstable with no bifurcation cod
 UNCLASSIFIED_COLOUR = "#BBBBBB"
 
 
+# query.point_classes' names -> CLASSES (NaN: unclassified)
+NAME_CLASS = {"stable": 0, "fold": 1, "period_doubling": 2, "neimark_sacker": 3, "no_orbit": 4, "not_applicable": 4}
+CLASS_MEANING = ("stable and no periodic orbit say what the grid point is; fold, period doubling and "
+                 "Neimark-Sacker say how stability was lost at the start of the point's unstable interval "
+                 "(the same class as `rotorsweep query --unstable`)")
+
+
 def stability_class(ds):
-    """Float array over the point dims: index into CLASSES, NaN where unclassifiable."""
-    status = ds["orbit_status"].values
-    stable = ds["stable"].values
-    bif = ds["bifurcation"].values
-    cls = np.full(status.shape, np.nan)
-    converged = status == 0
-    cls[converged & (stable == 1)] = 0
-    unstable = converged & (stable != 1)
-    for code in (1, 2, 3):          # schema.BIFURCATION: fold, period_doubling, neimark_sacker
-        cls[unstable & (bif == code)] = code
-    cls[~converged] = 4
-    return cls
+    """Float array over the point dims (orbit_status' order): index into CLASSES, NaN where
+    unclassifiable; query.point_classes mapped to CLASSES (one vocabulary with the query)."""
+    names = query.point_classes(ds).values
+    return np.vectorize(lambda n: NAME_CLASS.get(n, np.nan), otypes=[float])(names)
 
 
 def class_keys(ds):
@@ -85,9 +84,9 @@ def line_segments(ds, where):
     edges]). class indexes CLASSES (NaN: unclassified). An edge between two runs is the refined
     boundary of the boundary table where it has one for that pair of grid values, else midway
     between them; the outer edges lie half a grid step beyond the grid."""
-    line = select(ds, where)
+    line = select(ds.assign(point_class=(ds["orbit_status"].dims, stability_class(ds))), where)
     grid = line[continued_axis(ds)].values.astype(float)
-    cls = stability_class(line)
+    cls = line["point_class"].values
     code = np.where(np.isnan(cls), -1.0, cls)
     table = refined_edges(ds, where)
     first, last = axis_edges(grid)

@@ -61,7 +61,7 @@ def line_summary(ds):
 
     along = continued_axis(ds)
     others = other_axes(ds)
-    cls = np.moveaxis(stability_class(ds[["orbit_status", "stable", "bifurcation"]].transpose(along, *others)), 0, -1)
+    cls = np.moveaxis(stability_class(ds.transpose(along, *others, ...)), 0, -1)
     grid = ds[along].values.astype(float)
     unstable = cls != 0                                        # NaN (unclassified) counts as not stable
     first = np.argmax(unstable, axis=-1)

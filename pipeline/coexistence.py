@@ -1,0 +1,222 @@
+"""One orbit, one record: which located points of a continuation are the same closed curve, and
+where distinct stable orbits coexist (issue 32 item 3).
+
+A period-k orbit started at s is the same closed curve as the one started at phi_j(s) (phi_j: the
+flow over j forcing periods, j = 0..k-1): a period-k branch has k phase copies, and switching
+at a period doubling met twice on a loop, or at the two period doublings that bound a closed
+period-2k loop, follows the same orbits again. In the line's task (where the kernel is),
+`mark_copies` records per located point the first record of the same orbit, and
+`line_coexistence` counts the distinct stable orbits on each piece of the line's parameter
+range (exact orbits compared, not branches). Everything users read (info, the events table, the
+coexistence table, the band map) reads those, through `distinct_events` and `coexistence`.
+"""
+import itertools
+import json
+
+import numpy as np
+
+from rotorkernels.continuation import arclength as al
+
+# Two located points are the same orbit when, at the same parameter, one's state is within
+# SAME_ORBIT_FACTOR x newton_tol x max(1, |s|) of a phase copy of the other's (the Newton's own
+# residual scaling). The Newton leaves a residual <= newton_tol x max(1, |s|), i.e. a state error
+# of ||(M - I)^-1|| times that (below ~1e2 away from multipliers +1, and located events are
+# pinned by the bordered system where M - I is singular), and the event location along the
+# branch adds its arclength tolerance (1e-11 in the same normalized units); the factor leaves a
+# margin of 10 over both. Distinct orbits at one parameter are O(1) apart in these units (their
+# states differ by the amplitude of a period-k component, which vanishes only AT the period
+# doubling that creates it, where the two are one orbit).
+SAME_ORBIT_FACTOR = 1e3
+
+
+def phase_copies(family, state, lam, periods):
+    """[phi_j(state) for j in 0..periods-1] at lam (phi_0 = state); None if a flow failed."""
+    one = family.with_periods(1)
+    out = [np.asarray(state, float)]
+    for _ in range(int(periods) - 1):
+        r, _, status, _ = one.return_map(out[-1], lam, False)
+        if status != 0:
+            return None
+        out.append(out[-1] + r)
+    return out
+
+
+def same_orbit(copies, state, tol):
+    """Whether `state` is one of the phase copies of an orbit, within the Newton-derived tolerance."""
+    scale = max(1.0, float(np.abs(state).max()))
+    return copies is not None and any(np.abs(c - state).max() <= SAME_ORBIT_FACTOR * tol * scale for c in copies)
+
+
+def mark_copies(family, records, settings):
+    """Set records[b]["event_copy_of"] (per event: the line's flat event index of the first
+    record of the same located orbit) in place. Events match when of one kind and period, at the
+    same parameter (within the same tolerance in mu = lambda / scale) and one state is a phase
+    copy of the other."""
+    events = [(b, k) for b, r in enumerate(records) for k in range(len(r["event_type"]))]
+    first = list(range(len(events)))
+    for i, (b, k) in enumerate(events):
+        r, copies = records[b], None
+        for j in range(i):
+            r2, k2 = records[events[j][0]], events[j][1]
+            if first[j] != j or r2["periods"] != r["periods"] or r2["event_type"][k2] != r["event_type"][k] or \
+                    abs(r2["event_parameter"][k2] - r["event_parameter"][k]) > SAME_ORBIT_FACTOR * settings.tol * family.scale:
+                continue
+            copies = copies or phase_copies(family, r["event_state"][k], r["event_parameter"][k], r["periods"])
+            if same_orbit(copies, r2["event_state"][k2], settings.tol):
+                first[i] = j
+                break
+    offsets = np.cumsum([0] + [len(r["event_type"]) for r in records])
+    for b, r in enumerate(records):
+        r["event_copy_of"] = np.array(first[offsets[b]:offsets[b + 1]], int)
+    return records
+
+
+def line_coexistence(family, records, settings, lam_range):
+    """[(lo, hi, branches)]: the line's parameter range cut at the ends of the branches' stable
+    runs; per piece, one branch per DISTINCT stable orbit at its middle. Whole branches cannot be
+    compared (the Bai rotor's period-4 branches cross at their period doublings and part there),
+    so the orbits are: every stable chord of every branch bracketing the middle, corrected to its
+    exact orbit there (Newton at fixed parameter), kept when it stayed near its chord (`_near`)
+    and is not a phase copy of one kept before."""
+    runs = [(lo, hi) for r in records for lo, hi in record_runs(r)]
+    lo_r, hi_r = lam_range
+    edges = sorted({lo_r, hi_r, *(x for run in runs for x in run if lo_r <= x <= hi_r)})
+    out = []
+    for a, z in zip(edges[:-1], edges[1:]):
+        lam, kept = 0.5 * (a + z), []
+        for b, r in enumerate(records):
+            for state in _stable_orbits_at(family, r, lam, settings):
+                if not any(same_orbit(copies, state, settings.tol) for _, copies in kept):
+                    kept.append((b, phase_copies(family, state, lam, r["periods"])))
+        out.append((a, z, [b for b, _ in kept]))
+    return out
+
+
+def _stable_orbits_at(family, r, lam, settings):
+    """States of the stable orbits of branch record r at lam (one per stable chord bracketing it)."""
+    fam = family.with_periods(r["periods"])
+    p, stable = r["parameter"], np.abs(r["multipliers"]).max(axis=1) < 1.0
+    out = []
+    for i in np.flatnonzero(((p[:-1] - lam) * (p[1:] - lam) <= 0) & (stable[:-1] | stable[1:])):
+        s0, s1 = r["state"][i], r["state"][i + 1]
+        guess = s0 + (lam - p[i]) / (p[i + 1] - p[i]) * (s1 - s0) if p[i + 1] != p[i] else s0
+        point = al.start(fam, lam, guess, 1, settings)
+        if point is not None and _near(point.state, guess, s0, s1, settings) and np.abs(point.multipliers).max() < 1.0:
+            out.append(point.state)
+    return out
+
+
+def _near(state, guess, s0, s1, settings):
+    """The corrected orbit is the chord's: a branch leaves its chord by at most the chord's length
+    x the angle between successive tangents (max_angle; the sagitta of an arc turning by that
+    angle is an eighth of it), plus the Newton-derived tolerance."""
+    return np.abs(state - guess).max() <= settings.max_angle * np.abs(s1 - s0).max() + \
+        SAME_ORBIT_FACTOR * settings.tol * max(1.0, float(np.abs(state).max()))
+
+
+def record_runs(r):
+    """[(lo, hi)] of a branch record's runs of stable orbits, ends at its located events."""
+    stable = np.abs(r["multipliers"]).max(axis=1) < 1.0 if len(r["parameter"]) else np.zeros(0, bool)
+    return runs_of(r["parameter"], stable, dict(zip(r["event_index"].tolist(), r["event_parameter"].tolist())))
+
+
+def runs_of(lam, stable, located):
+    """[(lo, hi)] runs of stable points along a branch (parameter lam); a run's end at a located
+    event (located: {point before it: its parameter}) is the event's parameter, else the last
+    stable point's."""
+    n, runs, start = len(lam), [], None
+    for i in range(n):
+        if stable[i] and start is None:
+            start = located.get(i - 1, lam[i])
+        if start is not None and (i == n - 1 or not stable[i + 1]):
+            end = located.get(i, lam[i]) if i < n - 1 else lam[i]
+            runs.append((min(start, end), max(start, end)))
+            start = None
+    return runs
+
+
+# --- on a result ---------------------------------------------------------------------------------
+
+def event_copy_of(ds):
+    n = ds.sizes.get("event", 0)
+    return ds["event_copy_of"].values if "event_copy_of" in ds else np.arange(n)
+
+
+def distinct_events(ds):
+    """Indices of the located points listed once (the first record of each)."""
+    return np.flatnonzero(event_copy_of(ds) == np.arange(ds.sizes.get("event", 0)))
+
+
+def stable_runs(ds, b):
+    """[(lo, hi)] parameter intervals of branch b's runs of stable orbits (runs_of)."""
+    n = int(ds["branch_points"].values[b])
+    located = {int(p): float(v) for br, p, v, k in zip(ds["event_branch"].values, ds["event_point"].values,
+                                                       ds["event_parameter"].values, ds["event_type"].values)
+               if br == b and k != al.PEAK}     # a peak changes no stability
+    return runs_of(ds["parameter"].values[b, :n], ds["stable"].values[b, :n] == 1, located)
+
+
+def _line_keys(ds):
+    return [c for c in ds.coords if ds[c].dims == ("branch",)]
+
+
+def coexistence(ds):
+    """(line keys, {line values: [(lo, hi, branches)]}): the one answer to how many distinct
+    stable orbits coexist where (the band map, `info` and the coexistence table all read it):
+    each line's parameter range cut where that changes, `branches` one branch per distinct stable
+    orbit (line_coexistence, computed in the line's task). A result written before that was
+    recorded counts stable runs instead (a period-2k branch once: a loop holds s and phi_k(s))."""
+    keys = _line_keys(ds)
+    lines = {}
+    if "piece_lo" in ds:
+        for lo, hi, b, orbits in zip(ds["piece_lo"].values, ds["piece_hi"].values, ds["piece_line"].values,
+                                     ds["piece_branches"].values):
+            where = tuple(float(ds[c].values[b]) for c in keys)
+            lines.setdefault(where, []).append((float(lo), float(hi), [int(x) for x in str(orbits).split()]))
+        return keys, lines
+    lo_r, hi_r = json.loads(ds.attrs["range"])
+    for b in range(ds.sizes["branch"]):
+        lines.setdefault(tuple(float(ds[c].values[b]) for c in keys), []).extend((lo, hi, b) for lo, hi in stable_runs(ds, b))
+    out = {}
+    for where, runs in lines.items():
+        edges = sorted({lo_r, hi_r, *(x for lo, hi, _ in runs for x in (lo, hi) if lo_r <= x <= hi_r)})
+        out[where] = [(a, z, _stable_here(ds, runs, 0.5 * (a + z))) for a, z in zip(edges[:-1], edges[1:])]
+    return keys, out
+
+
+def _stable_here(ds, runs, lam):
+    periods = ds["branch_periods"].values
+    covering = [b for lo, hi, b in runs if lo <= lam <= hi]
+    return sorted(b for b in set(covering) for _ in range(covering.count(b) if periods[b] == 1 else 1))
+
+
+def stability_classes(ds):
+    """Per line: [(lo, hi, n)] pieces with n distinct stable orbits (0: none found, 1: stable,
+    2+: multistable), from `coexistence`."""
+    keys, lines = coexistence(ds)
+    return keys, {w: [(lo, hi, len(bs)) for lo, hi, bs in pieces] for w, pieces in lines.items()}
+
+
+def bistable_intervals(ds):
+    """Where two or more distinct stable orbits coexist on one line: [{line values..., lo, hi,
+    branches}], `coexistence`'s pieces with two or more, neighbours with the same branches merged."""
+    keys, lines = coexistence(ds)
+    width = np.ptp(json.loads(ds.attrs["range"]))
+    out = []
+    for where, pieces in lines.items():
+        multi = [(lo, hi, bs) for lo, hi, bs in pieces if len(bs) >= 2 and hi - lo > 1e-9 * width]
+        for _, group in itertools.groupby(_touching(multi), key=lambda p: p[3]):
+            group = list(group)
+            out.append({**dict(zip(keys, where)), "lo": group[0][0], "hi": group[-1][1],
+                        "branches": sorted(set(group[0][2]))})
+    return out
+
+
+def _touching(pieces):
+    """(lo, hi, branches, run number): consecutive pieces with equal branches share a run number."""
+    run, prev = 0, None
+    for lo, hi, bs in pieces:
+        if prev is not None and (prev[2] != bs or prev[1] != lo):
+            run += 1
+        prev = (lo, hi, bs)
+        yield lo, hi, tuple(bs), run

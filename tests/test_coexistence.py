@@ -1,0 +1,95 @@
+"""One orbit, one record (issue 32 item 3): the Bai 2006 rotor's continuation at 15.2 and 19 um
+lists each located orbit once, claims coexistence only between distinct orbits, and its band
+map, `info` and coexistence table agree."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from pipeline import config, continuation
+from tests.reference import BaiPoint
+
+
+def bai_line(clearance):
+    text = Path("configs/bai2006_fold.toml").read_text().replace(
+        "clearance = [7.6e-6, 19.0e-6]", f"clearance = [{clearance!r}]")
+    data = config.parse_config(text).data
+    pl = continuation.plan(data)
+    records = continuation.continue_line(data, pl.lines[0])
+    return data, continuation.to_dataset(data, pl, [(pl.lines[0], records)], {})
+
+
+@pytest.fixture(scope="module")
+def bai15():
+    return bai_line(15.2e-6)
+
+
+@pytest.fixture(scope="module")
+def bai19():
+    return bai_line(19.0e-6)
+
+
+# samples per forcing period of the reference curves: a point of a curve lies within one sample
+# spacing of its samples, far below the distance between distinct orbits (O(1) scaled units)
+SAMPLES = 600
+
+
+def reference_curve(spec, ds, e, clearance):
+    """The located orbit of event e integrated again with scipy (tests.reference: SI, no kernel
+    code) over its k forcing periods: samples in the kernel's scaled units, and their spacing."""
+    lam, k = float(ds["event_parameter"].values[e]), int(ds["branch_periods"].values[ds["event_branch"].values[e]])
+    ref = BaiPoint(lam, clearance)
+    scale = spec.to_physical(np.ones(spec.n_state), ref.period)
+    t = np.linspace(0.0, k * ref.period, k * SAMPLES + 1)
+    sol = solve_ivp(ref.rhs, (0.0, t[-1]), ds["event_state"].values[e] * scale, method="DOP853", rtol=1e-11,
+                    atol=1e-14, t_eval=t)
+    curve = sol.y.T / scale
+    # closed: the orbit returns to its start after k periods (the located orbit is one)
+    assert np.abs(curve[-1] - curve[0]).max() < 1e-5 * max(1.0, np.abs(curve).max())
+    return k, curve, np.linalg.norm(np.diff(curve, axis=0), axis=1).max()
+
+
+def independent_count(spec, ds, clearance):
+    """Distinct located orbits: events of one kind and period at one parameter (1e-6 Hz: far
+    above the location tolerance, far below the gaps between events) whose curves coincide as
+    closed curves (every sample of one within a sample spacing of the other's) are one."""
+    kept = []
+    for e in range(ds.sizes["event"]):
+        kind, lam = int(ds["event_type"].values[e]), float(ds["event_parameter"].values[e])
+        k, curve, spacing = reference_curve(spec, ds, e, clearance)
+        same = [K for K in kept if K[0] == (kind, k) and abs(K[1] - lam) < 1e-6 and
+                np.linalg.norm(curve[:, None, :] - K[2][None, ::7, :], axis=2).min(axis=0).max() <= 2 * spacing]
+        if not same:
+            kept.append(((kind, k), lam, curve))
+    return len(kept)
+
+
+def test_bai_15um_lists_each_orbit_once_and_claims_no_coexistence_between_copies(bai15):
+    data, ds = bai15
+    distinct = continuation.distinct_events(ds)
+    assert len(distinct) < ds.sizes["event"]         # the period-2 and -4 loops meet their points several times
+    assert len(distinct) == independent_count(continuation.compute.model_of(data), ds, 15.2e-6)
+    assert len(continuation.events_table(ds)["type"]) == len(distinct)
+    # the only coexistence: the period-1 fold pair (31.05-31.15 Hz), both outer arms stable
+    folds = sorted(ds["event_parameter"].values[ds["event_type"].values == continuation.al.FOLD])
+    (iv,) = continuation.bistable_intervals(ds)
+    assert iv["branches"] == [0] and (iv["lo"], iv["hi"]) == pytest.approx(tuple(folds), rel=1e-12)
+
+
+def test_bai_19um_band_map_info_and_table_agree(bai19):
+    _, ds = bai19
+    _, lines = continuation.stability_classes(ds)
+    (pieces,) = lines.values()
+    rows = continuation.bistable_intervals(ds)
+    width = 30.0
+    bands = [(lo, hi) for lo, hi, n in pieces if n >= 2 and hi - lo > 1e-9 * width]
+    covered = lambda ivs, x: any(lo <= x <= hi for lo, hi in ivs)  # noqa: E731
+    for x in np.linspace(20.0, 50.0, 3001):
+        assert covered(bands, x) == covered([(r["lo"], r["hi"]) for r in rows], x)
+    info = continuation.describe(ds)
+    assert info.count("two stable orbits coexist") == len(rows)
+    for r in rows:
+        assert f"{r['lo']:.10g} to {r['hi']:.10g}" in info
+    # the period-4 branch's copies (40.1-41.6 Hz) are one orbit: no band there
+    assert not covered(bands, 41.0)
