@@ -7,14 +7,13 @@ import difflib
 import hashlib
 import json
 import math
-import os
 import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
-from pipeline import units
+from pipeline import gridsize, units
 from rotorkernels import attractor, models
 from rotorkernels.models.spec import Parameter as Key
 
@@ -278,46 +277,6 @@ def _axis_count(v):
     return None
 
 
-# The cube is assembled in the driver's memory: the full-grid arrays, the Dataset's typed copy
-# and netCDF's write buffers hold it about three times over.
-CUBE_COPIES_IN_MEMORY = 3
-ORBIT_BYTES_PER_POINT = 512    # ~20 orbit and Floquet variables, mostly float64, <= 8 multipliers
-ATTRACTOR_BYTES_PER_POINT = 512
-
-
-def bytes_per_point(data):
-    """Rough size of one grid point in the cube: the Poincare samples dominate with attractors."""
-    ana = data["analysis"]
-    if ana["attractor"] is not True:
-        return ORBIT_BYTES_PER_POINT
-    samples = ana["poincare_samples"] if isinstance(ana["poincare_samples"], int) else 4096
-    directions = 2 if ana["sweep_direction"] == "both" else 1
-    return ORBIT_BYTES_PER_POINT + directions * (ATTRACTOR_BYTES_PER_POINT + 2 * 8 * samples)
-
-
-def _memory_bytes():
-    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-
-
-def _grid_size_problem(n, data, allow_large):
-    """(message, may_confirm) when the grid is too large, else None. numerics.max_points is a
-    guard against typos that --yes lifts; the memory cap is not, since such a run could only
-    fail at its end, when the cube is assembled."""
-    per_point = bytes_per_point(data)
-    cap = _memory_bytes() // (CUBE_COPIES_IN_MEMORY * per_point)
-    if n > cap:
-        return (f"sweep: the grid has {n} points; at most {cap} fit in this machine's memory "
-                f"({_memory_bytes() / 2**30:.0f} GiB: the cube needs ~{per_point} bytes per point and "
-                f"is held ~{CUBE_COPIES_IN_MEMORY} times while it is assembled), even with --yes; "
-                "split the sweep into several configs"), False
-    limit = data["numerics"]["max_points"]
-    limit = limit if isinstance(limit, int) else SCHEMA["numerics"]["max_points"].default
-    if n > limit and not allow_large:
-        return (f"sweep: the grid has {n} points, above numerics.max_points = {limit}; raise "
-                "numerics.max_points or pass --yes"), True
-    return None
-
-
 def _range_values(v, errors, where):
     keys = set(v)
     unknown = keys - {"start", "stop", "step", "num"}
@@ -514,7 +473,9 @@ def _check_grid_size(sweep, axis_names, data, allow_large, errors, label):
     (a typo like num = 1e9 must not allocate). grid_points lets a front end ask to confirm when
     max_points is the only problem."""
     n = math.prod(c for c in (_axis_count(sweep.get(name)) for name in axis_names) if c is not None)
-    problem = _grid_size_problem(n, data, allow_large)
+    limit = data["numerics"]["max_points"]
+    limit = limit if isinstance(limit, int) else SCHEMA["numerics"]["max_points"].default
+    problem = gridsize.grid_size_problem(n, data, limit, allow_large)
     if problem:
         message, may_confirm = problem
         raise ConfigError("\n".join(f"{label}: {e}" for e in errors + [message]),

@@ -17,13 +17,12 @@ f_k(speed) - line(speed), to CRITICAL_XTOL relative to the top speed.
 """
 import csv
 import json
-import os
 from typing import NamedTuple
 
 import numpy as np
 from scipy.optimize import brentq
 
-from pipeline import compute, config, fileio
+from pipeline import compute, config, fileio, gridsize
 from pipeline.config import ConfigError
 from rotorkernels import modal
 
@@ -200,15 +199,11 @@ def campbell_speeds(text, spec, data):
         if problem:
             raise ConfigError(f"--campbell {text}: {name} {problem} (the limits of {spec.speed})")
     n_modes = spec.n_position or 1
-    cap = min(_memory_bytes() // (CAMPBELL_COPIES * CAMPBELL_BYTES_PER_ROW * n_modes), data["numerics"]["max_points"])
+    cap = min(gridsize.memory_bytes() // (CAMPBELL_COPIES * CAMPBELL_BYTES_PER_ROW * n_modes), data["numerics"]["max_points"])
     if not 1 <= num <= cap:
         raise ConfigError(f"--campbell {text}: NUM must be 1 to {cap} (numerics.max_points, or what this "
                           f"machine's memory holds at {n_modes} modes per speed); got {num}")
     return np.linspace(start, stop, num)
-
-
-def _memory_bytes():
-    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
 
 
 def at_point(cfg, at):

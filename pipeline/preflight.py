@@ -6,7 +6,7 @@ is not a promise (the disk may fill meanwhile); the writes themselves fail as cl
 import os
 from pathlib import Path
 
-from pipeline import fileio
+from pipeline import fileio, gridsize
 from pipeline.fileio import FileIOError
 
 # Free space asked for where a command's output has no size estimate (a continuation, a
@@ -54,10 +54,8 @@ def check_free_space(path, need_bytes):
 
 
 def sweep_bytes(cfg):
-    """Disk a sweep of cfg needs at its peak: part files and the cube (config's per-point size)."""
-    from pipeline import config
-
-    return SWEEP_COPIES_ON_DISK * cfg.n_points * config.bytes_per_point(cfg.data) + MIN_FREE_BYTES
+    """Disk a sweep of cfg needs at its peak: part files and the cube (gridsize's per-point size)."""
+    return SWEEP_COPIES_ON_DISK * cfg.n_points * gridsize.bytes_per_point(cfg.data) + MIN_FREE_BYTES
 
 
 def check(output, need_bytes=MIN_FREE_BYTES, lock=False, report=None, report_identity=None, overwrite=False):

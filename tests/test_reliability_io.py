@@ -9,7 +9,7 @@ import time
 import numpy as np
 import pytest
 
-from pipeline import cli, config, cube, fileio, sweep
+from pipeline import cli, config, cube, fileio, gridsize, sweep
 from tests.test_cube import AXES4, PROVENANCE, random_results, _write_random_parts
 from tests.test_pipeline import CLI, SMALL, rotorsweep
 
@@ -186,7 +186,7 @@ def test_a_grid_beyond_memory_is_refused_even_with_yes(definition):
 
 
 def test_the_memory_cap_follows_the_bytes_per_point(monkeypatch):
-    monkeypatch.setattr(config, "_memory_bytes", lambda: 3 * 512 * 1000)     # room for 1000 points
+    monkeypatch.setattr(gridsize, "memory_bytes", lambda: 3 * 512 * 1000)     # room for 1000 points
     config.parse_config(_speed_axis("{start = 1.0, stop = 1e3, num = 500}"), allow_large=True)
     with pytest.raises(config.ConfigError, match="at most 1000 fit"):
         config.parse_config(_speed_axis("{start = 1.0, stop = 1e3, num = 501}"), allow_large=True)

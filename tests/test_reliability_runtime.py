@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from pipeline import cli, cluster, cube, fileio, preflight, sweep
+from pipeline import cli, cluster, cube, fileio, gridsize, preflight, sweep
 from tests.test_pipeline import SMALL, rotorsweep
 
 CONFIG = Path(__file__).parents[1] / "configs"
@@ -306,7 +306,7 @@ def test_a_sweep_asks_for_room_for_its_parts_and_its_cube(small_config):
     from pipeline import config
 
     cfg = config.load_config(small_config)
-    assert preflight.sweep_bytes(cfg) == (2 * cfg.n_points * config.bytes_per_point(cfg.data)
+    assert preflight.sweep_bytes(cfg) == (2 * cfg.n_points * gridsize.bytes_per_point(cfg.data)
                                           + preflight.MIN_FREE_BYTES)
 
 
