@@ -237,7 +237,8 @@ def bifurcation(ds, variable="poincare_x", **kwargs):
     column; pass rasterize=True for large cubes, which needs datashader: not installed with rotorsweep)."""
     if not has_attractor(ds):
         raise ValueError("the cube has no attractor diagnostics ([analysis] attractor = true)")
-    return _shown(ds[variable]).hvplot.scatter(x=continued_axis(ds), y=variable, by=_by(ds), groupby=[], size=2, **kwargs)
+    single = [a for a in other_axes(ds) if ds.sizes[a] == 1]      # flattened: its value would be the title
+    return _shown(ds[variable].squeeze(single, drop=True)).hvplot.scatter(x=continued_axis(ds), y=variable, by=_by(ds), groupby=[], size=2, **kwargs)
 
 
 @plotting
