@@ -21,7 +21,6 @@ import os
 from typing import NamedTuple
 
 import numpy as np
-from scipy.optimize import brentq
 
 from pipeline import compute, config, fileio
 from pipeline.config import ConfigError
@@ -100,6 +99,8 @@ def critical_speeds(modes_at, speeds_hz, lines):
     """CriticalSpeed of every crossing of a damped frequency with a line over the speed grid
     `speeds_hz` (ascending, > 0), by speed; modes_at(speed) -> list of LinearMode. A bracket
     where the number of oscillating modes changes (a mode turning overdamped) is skipped."""
+    from scipy.optimize import brentq  # on first use: `import rotorsweep` loads no scipy solvers
+
     speeds = np.asarray(speeds_hz, float)
     table = [[m.frequency for m in modes_at(s)] for s in speeds]
     found = []
