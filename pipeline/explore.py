@@ -194,6 +194,7 @@ def bode(ds, observable=None, **kwargs):
     from pipeline.report import harmonics
     from pipeline.report.figures import bode as figure
     from pipeline.report.points import scene_data
+    from pipeline.report.plan import axis_label
 
     data = scene_data(ds)
     observable = observable or figure.report_observable(data)
@@ -202,7 +203,7 @@ def bode(ds, observable=None, **kwargs):
         xlabel = f"{ds.attrs['parameter']} [{ds['parameter'].attrs.get('units', '')}]"
     else:
         lines = harmonics.sweep_lines(ds, data, observable)
-        xlabel = f"{lines.parameter} [{ds[lines.parameter].attrs.get('units', '')}]"
+        xlabel = axis_label(ds, lines.parameter)       # as the report labels it
     unit = next(o.unit for o in schema.model_of(ds).observables if o.name == observable)
     return figure.fig_bode(lines, observable, unit, xlabel).opts(**kwargs)
 
