@@ -9,6 +9,12 @@ accessor that importing this module (or `rotorsweep`) registers on xarray Datase
     ds.rotorsweep.branches("amplitude_y")                     # stable solid, unstable dashed
     ds, _ = rotorsweep.open_result("out/fold.nc")             # a continuation result
     ds.rotorsweep.branch_diagram()                            # its branches (a backbone result: backbones())
+    ds.rotorsweep.to_frame(["max_abs_multiplier"]).hvplot.scatter(x="speed_Hz", y="max_abs_multiplier")
+
+Plain `ds.hvplot()` flattens every variable over every dimension (seconds and gigabytes on a
+small cube): select a variable first, or take the tidy table of to_frame(). Figures and the
+table show lengths in um (cube: metres) and leave out the dataset's scalar coordinates (which
+hvplot would put in every title).
 
 Swept axes beyond x and `by` become hvplot's widgets. The report draws with HoloViews elements
 where hvplot has no such kind (see pipeline/report/figures/*); its critical-multiplier frequency
@@ -27,7 +33,7 @@ from pipeline import result_kinds, schema
 from pipeline.report.cubeinfo import (branch_observables, branch_values, continued_axis,
                                       default_observable, has_attractor, other_axes)
 from pipeline.report.stability import CLASSES, PALETTE, stability_class
-from pipeline.report.style import holoviews
+from pipeline.report.style import LINE_COLOURS, holoviews
 
 
 def plotting(figure):
@@ -41,6 +47,64 @@ def plotting(figure):
     return draw
 
 
+# display units of the accessor (the cubes store SI): unit -> (factor, shown unit, column suffix)
+_DISPLAY = {"m": (1e6, "µm", "um"), "Hz": (1.0, "Hz", "Hz")}
+
+
+def _shown(obj):
+    """A Dataset or DataArray as the accessor shows it: lengths in µm (values and units
+    attribute), scalar coordinates dropped (hvplot would write them into every title)."""
+    obj = obj.drop_vars([c for c in obj.coords if obj[c].ndim == 0])
+    obj = obj.assign_coords({n: (obj[n].dims, *_scaled(obj[n])) for n in obj.coords if _scales(obj[n])})
+    if isinstance(obj, xr.Dataset):
+        return obj.assign({n: (obj[n].dims, *_scaled(obj[n])) for n in obj.data_vars if _scales(obj[n])})
+    return obj.copy(data=_scaled(obj)[0]).assign_attrs(_scaled(obj)[1]) if _scales(obj) else obj
+
+
+def _scales(da):
+    return da.attrs.get("units") in _DISPLAY
+
+
+def _scaled(da):
+    """(values, attrs) of a variable in display units."""
+    factor, unit, _ = _DISPLAY[da.attrs["units"]]
+    return da.values * factor, {**da.attrs, "units": unit}
+
+
+def row_dims(ds):
+    """The dimensions of one row of to_frame(): the grid points of a sweep cube, the points of
+    a continuation's branches, the amplitudes of a backbone result's lines."""
+    kind = result_kinds.kind_of(ds).name
+    if kind == result_kinds.CONTINUATION:
+        return list(ds["parameter"].dims)
+    if kind == result_kinds.BACKBONE:
+        return list(ds["frequency_continuation"].dims)
+    return schema.point_axes(ds)
+
+
+def to_frame(ds, variables=None):
+    """A tidy pandas DataFrame: one row per grid point (sweep cube), branch point (continuation)
+    or backbone point, the row's coordinates and the `variables` (default: every variable with
+    one value per row) as columns; lengths in um and frequencies in Hz with the unit in the
+    column name (`clearance_um`, `speed_Hz`). Cheap to plot with hvplot, unlike the whole cube."""
+    dims = row_dims(ds)
+    if variables is None:
+        variables = [v for v in ds.data_vars if set(ds[v].dims) == set(dims)]
+    wrong = [v for v in variables if v not in ds.data_vars or set(ds[v].dims) != set(dims)]
+    if wrong:
+        raise ValueError(f"to_frame: {', '.join(map(str, wrong))} not a variable with one value per row "
+                         f"({', '.join(dims)}); select them from the dataset instead")
+    sub = _shown(ds[list(variables)].transpose(*dims))
+    table = sub.to_dataframe().reset_index()
+    return table.rename(columns={n: f"{n}_{_suffix(sub[n])}" for n in table.columns
+                                 if n in sub.variables and _suffix(sub[n])})
+
+
+def _suffix(da):
+    units = da.attrs.get("units")
+    return next((suffix for _, unit, suffix in _DISPLAY.values() if unit == units), None)
+
+
 def _by(ds):
     """The first other swept axis with several values (one line per value), else None."""
     return next((a for a in other_axes(ds) if ds.sizes[a] > 1), None)
@@ -51,6 +115,21 @@ def _point_array(ds, values, name, attrs):
     return xr.DataArray(values, coords={d: ds[d] for d in dims}, dims=dims, name=name, attrs=attrs)
 
 
+def _solid_dashed(solid, dashed):
+    """Stable (solid) lines overlaid by unstable (dashed) ones, the dashed line of each key in
+    the colour of its solid line (hvplot's colour cycle would go on over the dashed lines)."""
+    return _coloured(solid) * _coloured(dashed)
+
+
+def _coloured(lines):
+    hv = holoviews()
+    if not isinstance(lines, hv.NdOverlay):
+        return lines.opts(color=LINE_COLOURS[0])
+    for i, line in enumerate(lines):
+        line.opts(color=LINE_COLOURS[i % len(LINE_COLOURS)])
+    return lines
+
+
 def _limit(y, **style):
     return holoviews().HLine(y).opts(color="#C00000", line_dash="dashed", **style)
 
@@ -59,7 +138,7 @@ def _limit(y, **style):
 def max_multiplier(ds, **kwargs):
     """max |multiplier| along the continued axis, one line per value of the first other axis,
     and the |lambda| = 1 line."""
-    return ds["max_abs_multiplier"].hvplot.line(x=continued_axis(ds), by=_by(ds), **kwargs) * _limit(1.0)
+    return _shown(ds["max_abs_multiplier"]).hvplot.line(x=continued_axis(ds), by=_by(ds), **kwargs) * _limit(1.0)
 
 
 @plotting
@@ -70,8 +149,8 @@ def stability_map(ds, **kwargs):
                        {"long_name": "stability class: " + ", ".join(f"{i} {c}" for i, c in enumerate(CLASSES))})
     x, y = continued_axis(ds), _by(ds)
     if y is None:
-        return cls.hvplot.scatter(x=x, color="stability_class", cmap=list(PALETTE), **kwargs)
-    return cls.hvplot.quadmesh(x=x, y=y, cmap=list(PALETTE), clim=(-0.5, len(CLASSES) - 0.5), **kwargs)
+        return _shown(cls).hvplot.scatter(x=x, color="stability_class", cmap=list(PALETTE), **kwargs)
+    return _shown(cls).hvplot.quadmesh(x=x, y=y, cmap=list(PALETTE), clim=(-0.5, len(CLASSES) - 0.5), **kwargs)
 
 
 @plotting
@@ -84,8 +163,8 @@ def branches(ds, observable=None, **kwargs):
     da = _point_array(ds, branch_values(ds, observable), observable, {"long_name": label, "units": units})
     stable = ds["stable"] == 1
     x, by = continued_axis(ds), _by(ds)
-    return (da.where(stable).hvplot.line(x=x, by=by, **kwargs)
-            * da.where(~stable).hvplot.line(x=x, by=by, line_dash="dashed", **kwargs))
+    return _solid_dashed(_shown(da.where(stable)).hvplot.line(x=x, by=by, **kwargs),
+                         _shown(da.where(~stable)).hvplot.line(x=x, by=by, line_dash="dashed", **kwargs))
 
 
 @plotting
@@ -93,7 +172,7 @@ def response(ds, observable=None, **kwargs):
     """Half peak-to-peak amplitude of an observable (default: the first) along the continued
     axis, one line per value of the first other axis."""
     observable = observable or schema.model_of(ds).observables[0].name
-    return ds[f"amplitude_{observable}"].hvplot.line(x=continued_axis(ds), by=_by(ds), **kwargs)
+    return _shown(ds[f"amplitude_{observable}"]).hvplot.line(x=continued_axis(ds), by=_by(ds), **kwargs)
 
 
 @plotting
@@ -104,7 +183,7 @@ def multiplier_frequency(ds, **kwargs):
 
     speed = ds[continued_axis(ds)].values
     one_x = holoviews().Curve((speed, speed), continued_axis(ds), "frequency", label="1x").opts(line_dash="dashed")
-    return multiplier_frequency_points(ds, _by(ds)).opts(**kwargs) * one_x
+    return multiplier_frequency_points(_shown(ds), _by(ds)).opts(**kwargs) * one_x
 
 
 @plotting
@@ -115,6 +194,7 @@ def bode(ds, observable=None, **kwargs):
     from pipeline.report import harmonics
     from pipeline.report.figures import bode as figure
     from pipeline.report.points import scene_data
+    from pipeline.report.plan import axis_label
 
     data = scene_data(ds)
     observable = observable or figure.report_observable(data)
@@ -123,7 +203,7 @@ def bode(ds, observable=None, **kwargs):
         xlabel = f"{ds.attrs['parameter']} [{ds['parameter'].attrs.get('units', '')}]"
     else:
         lines = harmonics.sweep_lines(ds, data, observable)
-        xlabel = f"{lines.parameter} [{ds[lines.parameter].attrs.get('units', '')}]"
+        xlabel = axis_label(ds, lines.parameter)       # as the report labels it
     unit = next(o.unit for o in schema.model_of(ds).observables if o.name == observable)
     return figure.fig_bode(lines, observable, unit, xlabel).opts(**kwargs)
 
@@ -158,14 +238,15 @@ def bifurcation(ds, variable="poincare_x", **kwargs):
     column; pass rasterize=True for large cubes, which needs datashader: not installed with rotorsweep)."""
     if not has_attractor(ds):
         raise ValueError("the cube has no attractor diagnostics ([analysis] attractor = true)")
-    return ds[variable].hvplot.scatter(x=continued_axis(ds), y=variable, by=_by(ds), groupby=[], size=2, **kwargs)
+    single = [a for a in other_axes(ds) if ds.sizes[a] == 1]      # flattened: its value would be the title
+    return _shown(ds[variable].squeeze(single, drop=True)).hvplot.scatter(x=continued_axis(ds), y=variable, by=_by(ds), groupby=[], size=2, **kwargs)
 
 
 @plotting
 def lle(ds, **kwargs):
     """Largest Lyapunov exponent along the continued axis, one line per value of the first
     other axis, and the zero line."""
-    return ds["lle"].hvplot.line(x=continued_axis(ds), by=_by(ds), **kwargs) * _limit(0.0)
+    return _shown(ds["lle"]).hvplot.line(x=continued_axis(ds), by=_by(ds), **kwargs) * _limit(0.0)
 
 
 @plotting
@@ -176,7 +257,7 @@ def multipliers(ds, where=None, **kwargs):
     t = np.linspace(0, 2 * np.pi, 361)
     circle = holoviews().Curve((np.cos(t), np.sin(t)), "multiplier_real", "multiplier_imag").opts(
         color="#555555", line_dash="dashed")
-    table = line[["multiplier_real", "multiplier_imag"]].to_dataframe().reset_index()
+    table = _shown(line[["multiplier_real", "multiplier_imag"]]).to_dataframe().reset_index()
     pts = table.hvplot.scatter(x="multiplier_real", y="multiplier_imag", c=continued_axis(ds), cmap="viridis",
                                hover_cols=[continued_axis(ds)], frame_width=320, frame_height=320,
                                data_aspect=1, **kwargs)
@@ -189,14 +270,22 @@ def branch_diagram(ds, observable=None, **kwargs):
     result's report observable) over the continued parameter, one colour per branch, stable
     solid and unstable dashed (a NaN ends a line: the other stability's points are gaps)."""
     observable = observable or ds.attrs.get("report_observable") or str(ds["observable"].values[0])
+    shown = _shown(ds[["parameter", "amplitude_half_pp"]].sel(observable=observable))
     table = pd.DataFrame({"branch": np.repeat(np.arange(ds.sizes["branch"]), ds.sizes["point"]),
-                          ds.attrs["parameter"]: ds["parameter"].values.ravel(),
-                          observable: ds["amplitude_half_pp"].sel(observable=observable).values.ravel(),
+                          ds.attrs["parameter"]: shown["parameter"].values.ravel(),
+                          observable: shown["amplitude_half_pp"].values.ravel(),
                           "stable": ds["stable"].values.ravel()})
-    style = {"x": ds.attrs["parameter"], "y": observable, "by": "branch", **kwargs}
+    style = {"x": ds.attrs["parameter"], "y": observable, "by": "branch",
+             "xlabel": _label(ds.attrs["parameter"], shown["parameter"]),
+             "ylabel": _label(f"half peak-to-peak {observable}", shown["amplitude_half_pp"]), **kwargs}
     stable = table.assign(**{observable: table[observable].where(table["stable"] == 1)})
     unstable = table.assign(**{observable: table[observable].where(table["stable"] == 0)})
-    return stable.hvplot.line(**style) * unstable.hvplot.line(line_dash="dashed", **style)
+    return _solid_dashed(stable.hvplot.line(**style), unstable.hvplot.line(line_dash="dashed", **style))
+
+
+def _label(name, da):
+    units = da.attrs.get("units", "")
+    return f"{name} [{units}]" if units not in ("", "1", "various") else name
 
 
 @plotting
@@ -207,11 +296,13 @@ def backbones(ds, where=None, **kwargs):
     line = ds.sel(where) if where else ds.isel({a: 0 for a in ds["axial_approach"].dims})
     modes = line["mode"].values
     table = pd.DataFrame({"mode": np.repeat(modes, line.sizes["amplitude"]),
-                          "amplitude": np.tile(line["amplitude_grid"].values, len(modes)),
+                          "amplitude": np.tile(_shown(line["amplitude_grid"]).values, len(modes)),
                           "continuation": line["frequency_continuation"].values.ravel(),
                           "manifold": line["frequency_manifold"].values.ravel()})
-    style = {"x": "amplitude", "by": "mode", "logx": True, "ylabel": "frequency [Hz]", **kwargs}
-    return table.hvplot.line(y="continuation", **style) * table.hvplot.line(y="manifold", line_dash="dashed", **style)
+    style = {"x": "amplitude", "by": "mode", "logx": True, "ylabel": "frequency [Hz]",
+             "xlabel": _label("master amplitude", _shown(line["amplitude_grid"])), **kwargs}
+    return _solid_dashed(table.hvplot.line(y="continuation", **style),
+                         table.hvplot.line(y="manifold", line_dash="dashed", **style))
 
 
 # the accessor's figures of each result kind (pipeline.result_kinds)
@@ -247,6 +338,10 @@ class CubeAccessor:
             raise ValueError(f"ds.rotorsweep.{figure}() draws {applies}, not {kind.label()}; `rotorsweep report` "
                              "draws its figures, ds.rotorsweep.describe() says what it holds")
         return FIGURES[kind.name][figure](self._ds, *args, **kwargs)
+
+    def to_frame(self, variables=None):
+        """The tidy table of pipeline.explore.to_frame (every result kind)."""
+        return to_frame(self._ds, variables)
 
     def max_multiplier(self, **kwargs):
         return self._draw("max_multiplier", **kwargs)

@@ -20,7 +20,6 @@ import json
 from typing import NamedTuple
 
 import numpy as np
-from scipy.optimize import brentq
 
 from pipeline import compute, config, fileio, gridsize
 from pipeline.config import ConfigError
@@ -99,6 +98,8 @@ def critical_speeds(modes_at, speeds_hz, lines):
     """CriticalSpeed of every crossing of a damped frequency with a line over the speed grid
     `speeds_hz` (ascending, > 0), by speed; modes_at(speed) -> list of LinearMode. A bracket
     where the number of oscillating modes changes (a mode turning overdamped) is skipped."""
+    from scipy.optimize import brentq  # on first use: `import rotorsweep` loads no scipy solvers
+
     speeds = np.asarray(speeds_hz, float)
     table = [[m.frequency for m in modes_at(s)] for s in speeds]
     found = []

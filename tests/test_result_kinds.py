@@ -6,9 +6,10 @@ import holoviews as hv
 import numpy as np
 import pytest
 import xarray as xr
+from bokeh.models import Plot
 
 import rotorsweep
-from pipeline import backbone, cli, cluster, config, continuation, cube, result_kinds, results
+from pipeline import backbone, cli, cluster, config, continuation, cube, explore, result_kinds, results
 from tests.test_backbone_command import scene
 from tests.test_continue_command import DUFFING
 
@@ -152,3 +153,27 @@ def test_an_incomplete_result_is_one_line_naming_what_is_missing(paths, kind, na
         assert cli.main([str(a) for a in args]) == cli.EXIT_USAGE
         err = capsys.readouterr().err
         assert line in err and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+
+
+@pytest.mark.parametrize("kind, figure", [(k, f) for k, figures in explore.FIGURES.items() for f in figures])
+def test_every_figure_of_the_accessor_draws_on_its_kind(paths, kind, figure):
+    ds, _ = rotorsweep.open_result(paths[kind])
+    where = {"where": {a: ds[a].values.flat[0] for a in explore.row_dims(ds)[1:]}} if figure == "multipliers" else {}
+    try:
+        plot = getattr(ds.rotorsweep, figure)(**where)
+    except ValueError as e:                 # a figure the scene's model has no data for says so
+        assert str(e).startswith(f"model {ds.attrs.get('model')}: no ") or "no attractor" in str(e)
+        return
+    state = hv.renderer("bokeh").get_plot(plot).state
+    figures = [state] if hasattr(state, "xaxis") else [f for f in state.select(dict(type=Plot))]
+    for fig in figures:
+        assert "=" not in fig.title.text and not fig.xaxis[0].axis_label.endswith(("(m)", "[m]"))
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_to_frame_has_one_row_per_point_of_every_kind(paths, kind):
+    ds, _ = rotorsweep.open_result(paths[kind])
+    table = ds.rotorsweep.to_frame()
+    dims = explore.row_dims(ds)
+    assert len(table) == int(np.prod([ds.sizes[d] for d in dims])) > 0
+    assert not any(c.endswith("_m") for c in table.columns)

@@ -148,6 +148,10 @@ def test_accessor_draws_bode_and_says_why_no_campbell(linear_cube):
     ds = ds.assign_attrs(config_toml=cfg.source)
     plot = ds.rotorsweep.bode()
     assert isinstance(plot, hv.Layout) and len(plot) == 3
+    from pipeline.report.cubeinfo import continued_axis
+    from pipeline.report.plan import axis_label
+    xlabel = hv.renderer("bokeh").get_plot(plot).state.children[0][0].xaxis[0].axis_label
+    assert xlabel == axis_label(ds, continued_axis(ds))          # the report's label, in display units
     with pytest.raises(ValueError, match="no Campbell diagram"):
         ds.rotorsweep.campbell()
     with pytest.raises(ValueError, match="no mode shapes"):

@@ -21,7 +21,7 @@ FREQUENCY_LABEL = "frequency [Hz]"
 def critical_frequency(ds):
     """|arg(lambda_0)| / 2 pi / T [Hz] of the leading multiplier at every point of a cube (NaN:
     no orbit), as a DataArray named `frequency`."""
-    lead = ds.isel(multiplier=0)
+    lead = ds.isel(multiplier=0, drop=True)        # no scalar `multiplier` coordinate in titles
     angle = np.abs(np.arctan2(lead["multiplier_imag"], lead["multiplier_real"]))
     return (angle / (2 * np.pi) / ds["forcing_period"]).rename("frequency").assign_attrs(
         units="Hz", long_name="frequency of the critical Floquet multiplier")
