@@ -195,7 +195,7 @@ def test_boundary_table_refines_each_stability_change(small_cube):
 PHASES = ("starting 1 local Dask worker (127.0.0.1)", "1 worker; Dask dashboard: http://127.0.0.1:",
           "compiling the kernels of jeffcott_clearance", "kernels ready", "sweeping 2 points in 1 chunk",
           "assembling the cube and its boundary table", "writing the cube", "writing the report into",
-          "drawing the figures (6)")
+          "drawing the figures (7)")
 # the report's last two, in either order (the PNGs drawn in a second process or all before the HTML)
 LAST_PHASES = ["HTML page written", "PNGs written"]
 

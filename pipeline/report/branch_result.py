@@ -202,7 +202,8 @@ def column_units(ds):
     units = {ds.attrs["parameter"]: par_unit, "lo": par_unit, "hi": par_unit, "periods": "1",
              "multiplier_real": "1", "multiplier_imag": "1"}
     units.update({c: ds[c].attrs.get("units", "") for c in ds.coords if ds[c].dims == ("branch",)})
-    units.update({f"amplitude_max_{o.name}": o.unit for o in schema.model_of(ds).observables})
+    units.update({f"{kind}_{o.name}": o.unit for o in schema.model_of(ds).observables
+                  for kind in ("amplitude_max", "amplitude_half_pp")})
     return units
 
 
