@@ -31,11 +31,18 @@ def _half_pp_y_b(built, u0, periods, opts):
     return 0.5 * (y.max() - y.min()), traj[-1]
 
 
+def _without_peaks(rec):
+    """The line record with its located points other than response peaks (peaks are events of
+    their own, issue 32; these tests are about the folds)."""
+    keep = np.asarray(rec["event_type"]) != al.PEAK
+    return {k: (np.asarray(v)[keep] if k.startswith("event_") else v) for k, v in rec.items()}
+
+
 @pytest.fixture(scope="module")
 def fig2a_line():
     cfg = _quick_fig2a()
     (where,) = continuation.plan(cfg.data).lines
-    return cfg, where, continuation.continue_line(cfg.data, where)[0]
+    return cfg, where, _without_peaks(continuation.continue_line(cfg.data, where)[0])
 
 
 def test_fig2a_continuation_passes_the_fold_pair(fig2a_line):
@@ -97,7 +104,7 @@ def test_fig2a_with_the_law_as_printed_turns_at_a_soft_fold_pair():
                                              "speed = {start = 370.0, stop = 430.0, step = 5.0}")
     cfg = config.parse_config(text.replace("nominal_angle = [12, 15, 26, 36, 40]", "nominal_angle = [15]"))
     (where,) = continuation.plan(cfg.data).lines
-    rec = continuation.continue_line(cfg.data, where)[0]
+    rec = _without_peaks(continuation.continue_line(cfg.data, where)[0])
     assert [al.EVENT_LABELS[e] for e in rec["event_type"]] == ["LP", "LP"]
     lower, upper = rec["event_parameter"]
     assert 385.0 < upper < lower < 422.5
