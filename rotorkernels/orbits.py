@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rotorkernels import floquet, integrators as ig, shooting
+from rotorkernels import extrema, floquet, integrators as ig, shooting
 from rotorkernels.models import dispatch
 
 
@@ -112,7 +112,7 @@ def entry_points(spec, opts):
     """(jitted function, example arguments) of each kernel that the orbit problems and their
     continuation call from Python for model `spec` with integrator settings `opts`, with the types
     of those calls, so that a warm-up compiles exactly those (`pipeline.warmup`): a forced model's
-    shooting; a conservative one's backbones neither shoot at a fixed period nor settle a
+    shooting and its orbits' exact extrema; a conservative one's backbones neither shoot at a fixed period nor settle a
     transient, but take the vector field at the period's end and the linear modes at rest."""
     kernel, n = spec.kernel, spec.n_state
     u, p = np.zeros(n), np.zeros(1)
@@ -122,7 +122,8 @@ def entry_points(spec, opts):
         (ig.initial_state, (u, n, False)),       # continuation (the boundaries' refinement)
     ]
     if spec.forced:     # shoot_staged is also `shoot` (plain Newton: an attractor's orbit refined)
-        return calls + [(shooting.shoot_staged, (kernel, u, p, 1.0, opts, opts, 1e-9, 1))]
+        return calls + [(shooting.shoot_staged, (kernel, u, p, 1.0, opts, opts, 1e-9, 1)),
+                        (extrema.orbit_extrema, (kernel, u, p, 1.0, np.zeros((1, n)), opts))]   # amplitudes
     return calls + [
         (ig.derivative, (kernel, 0.0, u, p, False, u, np.zeros((n, n)))),
         (dispatch.jac, (kernel.tag, 0.0, u, p, np.zeros((n, n)))),
