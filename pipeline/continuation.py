@@ -472,11 +472,13 @@ def describe(ds):
              f" ({ds.sizes.get('event', 0)} met, copies of one orbit counted once)"]
     for b in range(ds.sizes["branch"]):
         where = ", ".join(f"{c}={float(ds[c].values[b]):g}" for c in ds.coords if ds[c].dims == ("branch",))
-        lines.append(f"  branch {b}: period-{int(ds['branch_periods'].values[b])}"
+        what = "torus" if "branch_kind" in ds and ds["branch_kind"].values[b] == 1 else \
+            f"period-{int(ds['branch_periods'].values[b])}"
+        lines.append(f"  branch {b}: {what}"
                      f"{f' from branch {int(ds.branch_parent.values[b])}' if ds.branch_parent.values[b] >= 0 else ''}"
                      f"{f' ({where})' if where else ''}, {int(ds['branch_points'].values[b])} points, "
                      f"ended {al.END_REASONS[int(ds['branch_end'].values[b])]}: {ds['branch_detail'].values[b]}")
-    lines += _peak_lines(ds, par, unit)
+    lines += _peak_lines(ds, par, unit) + torus_branches.torus_lines(ds, par, unit)
     for iv in bistable_intervals(ds):
         where = ", ".join(f"{k}={v:g}" for k, v in iv.items() if k not in ("lo", "hi", "branches"))
         lines.append(f"  two stable orbits coexist: {par} {iv['lo']:.10g} to {iv['hi']:.10g} {unit}"

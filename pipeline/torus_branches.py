@@ -150,3 +150,24 @@ def torus_amplitudes(model, family, built, point):
         h, l = extrema.extremes(model, u, p, family.period, family.opts, built(lam).period)
         hi, lo = np.maximum(hi, h), np.minimum(lo, l)
     return np.maximum(hi, -lo), 0.5 * (hi - lo)
+
+
+def torus_lines(ds, par, unit):
+    """`info`'s lines of a continuation result's torus branches: where each is stable, its
+    largest half-swing of the report observable, its largest error estimate."""
+    if "branch_kind" not in ds:
+        return []
+    obs = list(ds["observable"].values)
+    j = obs.index(ds.attrs["report_observable"]) if ds.attrs.get("report_observable") in obs else 0
+    out = []
+    for b in np.flatnonzero(ds["branch_kind"].values == 1):
+        n = int(ds["branch_points"].values[b])
+        if not n:
+            continue
+        lam, status = ds["parameter"].values[b, :n], ds["torus_status"].values[b, :n]
+        counts = ", ".join(f"{(status == code).sum()} {name}" for name, code in TORUS_STATUS.items())
+        out.append(f"  torus branch {b}: {par} {lam.min():.10g} to {lam.max():.10g} {unit}, points {counts}; "
+                   f"half-swing {obs[j]} up to {np.nanmax(ds['amplitude_half_pp'].values[b, :n, j]):.6g} "
+                   f"{ds['amplitude_half_pp'].attrs.get('units', '')}, error estimate up to "
+                   f"{np.nanmax(ds['torus_error'].values[b, :n]):.2g}")
+    return out
