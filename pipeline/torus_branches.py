@@ -170,4 +170,6 @@ def torus_lines(ds, par, unit):
                    f"half-swing {obs[j]} up to {np.nanmax(ds['amplitude_half_pp'].values[b, :n, j]):.6g} "
                    f"{ds['amplitude_half_pp'].attrs.get('units', '')}, error estimate up to "
                    f"{np.nanmax(ds['torus_error'].values[b, :n]):.2g}")
+        out += [f"    stability changes between {par} {lam[i]:.10g} and {lam[i + 1]:.10g} {unit}"
+                for i in np.flatnonzero((status[:-1] != status[1:]) & (status[:-1] < 2) & (status[1:] < 2))]
     return out
