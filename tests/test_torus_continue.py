@@ -18,7 +18,7 @@ def result(tmp_path_factory):
     return d, config.parse_config(text).data
 
 
-def test_the_result_holds_a_torus_branch_with_stability_and_error(result):
+def test_the_result_holds_a_torus_branch_with_stability_and_error(result, capsys):
     d, _ = result
     ds = continuation.open_result(d / "tori.nc")
     assert ds["branch_kind"].values.tolist() == [1]
@@ -26,10 +26,12 @@ def test_the_result_holds_a_torus_branch_with_stability_and_error(result):
     assert n >= 2 and ds["parameter"].values[0, n - 1] == pytest.approx(308.0)
     assert (ds["torus_status"].values[0, :n] == 1).all() and (ds["torus_exponent"].values[0, :n] < 0).all()
     assert (ds["stable"].values[0, :n] == 1).all() and (ds["torus_error"].values[0, :n] < 1e-4).all()
-    kind, _ = result_kinds.open_result(d / "tori.nc")
-    assert "torus branch 0" in continuation.describe(ds) and "branch 0: torus" in continuation.describe(ds)
+    opened, kind = result_kinds.open_result(d / "tori.nc")
+    assert kind.name == result_kinds.CONTINUATION and "torus branch 0" in kind.describe(opened)
+    assert cli.main(["info", str(d / "tori.nc")]) in (0, None)
+    assert "branch 0: torus" in capsys.readouterr().out
     assert cli.main(["report", str(d / "tori.nc"), "-o", str(d / "report")]) in (0, None)
-    assert (d / "report" / "response_y_B.png").exists()
+    assert (d / "report" / "response_y_B.png").exists() and (d / "report" / "torus_exponent.png").exists()
 
 
 def test_a_torus_point_against_a_long_scipy_transient(result):
