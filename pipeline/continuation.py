@@ -408,7 +408,9 @@ def to_dataset(data, pl, lines, provenance):
              **{name: amp for name in ("amplitude_max", "amplitude_half_pp", "event_amplitude_max",
                                        "event_amplitude_half_pp")}}
     rep = data["report"]
-    extras = ([_torus_variables(records, values["stable"])] if any("torus_status" in r for _, r in records) else []) + ([_omega_l_variables(data, pl, values)] if rep["frequency_unit"] == "omega_l" else []) + (
+    tori = any("torus_status" in r for _, r in records)
+    extras = ([_torus_variables(records, values["stable"])] if tori else []) + (
+        [_omega_l_variables(data, pl, values)] if rep["frequency_unit"] == "omega_l" else []) + (
         [_curve_variables(spec, pl, [c for _, r in records for c in r.get("curves", [])], par_attrs)] if pl.second else [])
     for more_values, more_attrs in extras:
         values.update(more_values)
