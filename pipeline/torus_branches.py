@@ -12,8 +12,10 @@ Per point: the half-swing (half peak-to-peak) and max |o| of each observable ove
 the torus error estimate, the normal stability and its largest exponent. The amplitudes are the
 exact extrema (rotorkernels.extrema) of the trajectories over one period T from AMPLITUDE_PHASES
 equally spaced phases of the circle: exact along each trajectory, sampled in the phase, so the
-sup of the smooth swing over the phase is underestimated by at most ~ (pi / AMPLITUDE_PHASES)^2 / 2
-~ 3e-4 of its variation's curvature scale (a parabola's drop at half the phase spacing).
+sup over the phase of each trajectory's extremum is low by at most its curvature in the phase
+times (pi / AMPLITUDE_PHASES)^2 / 2 (a parabola's drop at half the phase spacing): ~1.2e-3
+relative for a swing varying over the phase by O(1) of itself, less for weak phase dependence
+(tests/test_torus_continue.py: 1e-4 against a long DOP853 transient).
 """
 import numpy as np
 
@@ -106,7 +108,7 @@ def continue_torus_line(data, pl, where):
 def torus_record(model, family, built, run, n_rhs):
     """One torus branch as plain arrays: the orbit record's keys (multipliers NaN, orbit_state
     the circle at phase 0, period T) and torus_error, torus_exponent [1/s], torus_status."""
-    spec_n = family.kernel.n_state
+    n_state = family.kernel.n_state
     pts = run.points
     amp = np.array([torus_amplitudes(model, family, built, p) for p in pts]).reshape(len(pts), 2, -1)
     X = np.array([p.X for p in pts]).reshape(len(pts), -1)
@@ -115,12 +117,12 @@ def torus_record(model, family, built, run, n_rhs):
     none = np.zeros(0)
     return {
         "parameter": np.array([p.lam for p in pts]), "arclength": np.concatenate(([0.0], np.cumsum(steps)))[:len(pts)],
-        "state": np.array([family.nodes(p.X)[0] for p in pts]).reshape(len(pts), spec_n),
-        "multipliers": np.full((len(pts), spec_n), np.nan + 0j),
+        "state": np.array([family.nodes(p.X)[0] for p in pts]).reshape(len(pts), n_state),
+        "multipliers": np.full((len(pts), n_state), np.nan + 0j),
         "amplitude_max": amp[:, 0], "amplitude_half_pp": amp[:, 1], "period": periods,
         "periods": 1, "parent": -1, "end": int(run.end), "detail": run.detail, "n_rhs": int(n_rhs),
         "event_type": none.astype(int), "event_parameter": none, "event_index": none.astype(int),
-        "event_state": np.zeros((0, spec_n)), "event_multipliers": np.zeros((0, spec_n), complex),
+        "event_state": np.zeros((0, n_state)), "event_multipliers": np.zeros((0, n_state), complex),
         "event_amplitude_max": np.zeros((0, amp.shape[2])), "event_amplitude_half_pp": np.zeros((0, amp.shape[2])),
         "torus_error": np.array([torus_error(family, p) for p in pts]),
         "torus_exponent": np.array([p.stability.exponents[0] for p in pts]) / periods if len(pts) else none,
