@@ -110,8 +110,9 @@ def torus_record(model, family, built, run, n_rhs):
     the circle at phase 0, period T) and torus_error, torus_exponent [1/s], torus_status."""
     n_state = family.kernel.n_state
     pts = run.points
-    amp = np.array([torus_amplitudes(model, family, built, p) for p in pts]).reshape(len(pts), 2, -1)
-    X = np.array([p.X for p in pts]).reshape(len(pts), -1)
+    amp = np.array([torus_amplitudes(model, family, built, p) for p in pts]).reshape(
+        len(pts), 2, len(model.observables))
+    X = np.array([p.X for p in pts]).reshape(len(pts), family.n_nodes * n_state + 1)
     steps = np.linalg.norm(np.diff(X, axis=0), axis=1) if len(pts) > 1 else np.zeros(0)
     periods = np.array([built(p.lam).period for p in pts])
     none = np.zeros(0)

@@ -68,3 +68,17 @@ def test_a_torus_point_against_a_long_scipy_transient(result):
     y = spec.observe(sol.y.T, b.period)[:, j]
     half_swing = 0.5 * (y.max() - y.min())
     assert ds["amplitude_half_pp"].values[0, k, j] == pytest.approx(half_swing, rel=1e-3)
+
+
+def test_a_torus_line_that_does_not_start_is_an_empty_branch_with_a_reason(result):
+    """A failed start is data: an empty branch ending start_failed, written like any other."""
+    from rotorkernels.continuation import engine
+
+    _, data = result
+    pl = continuation.plan(data)
+    fam, built = torus_branches.torus_family(data, pl, pl.lines[0], 15)
+    run = engine.Run([], [], engine.START_FAILED, "no torus")
+    rec = torus_branches.torus_record(compute.model_of(data), fam, built, run, 0)
+    ds = continuation.to_dataset(data, pl, [(pl.lines[0], [rec])], {})
+    assert ds["branch_points"].values.tolist() == [0] and ds["branch_end"].values.tolist() == [engine.START_FAILED]
+    assert "no torus" in continuation.describe(ds)
