@@ -102,7 +102,23 @@ def continue_torus_line(data, pl, where):
         run = engine.Run([], [], engine.START_FAILED, f"the torus start did not converge at {pl.start!r}")
     else:
         run = tori.follow_tori(family, first, pl.range, pl.settings, counter)
-    return [torus_record(spec, family, built, run, counter.n)]
+    record = torus_record(spec, family, built, run, counter.n)
+    record["coexistence"] = stable_pieces(record, pl.range)
+    return [record]
+
+
+def stable_pieces(record, lam_range):
+    """The line's coexistence pieces (pipeline.coexistence's (lo, hi, stable branches)): between
+    two consecutive points the torus branch (0) is stable where both ends are; outside the
+    points nothing is known stable."""
+    lam, stable = record["parameter"], record["torus_status"] == TORUS_STATUS[tr.STABLE]
+    if len(lam) < 2:
+        return [(*lam_range, [])]
+    pieces = [(min(a, b), max(a, b), [0] if sa and sb else [])
+              for a, b, sa, sb in zip(lam[:-1], lam[1:], stable[:-1], stable[1:])]
+    lo, hi = lam.min(), lam.max()
+    return ([(lam_range[0], lo, [])] if lo > lam_range[0] else []) + sorted(pieces) + (
+        [(hi, lam_range[1], [])] if hi < lam_range[1] else [])
 
 
 def torus_record(model, family, built, run, n_rhs):

@@ -26,6 +26,7 @@ def test_the_result_holds_a_torus_branch_with_stability_and_error(result, capsys
     assert n >= 2 and ds["parameter"].values[0, n - 1] == pytest.approx(308.0)
     assert (ds["torus_status"].values[0, :n] == 1).all() and (ds["torus_exponent"].values[0, :n] < 0).all()
     assert (ds["stable"].values[0, :n] == 1).all() and (ds["torus_error"].values[0, :n] < 1e-4).all()
+    assert ds["piece_branches"].values.tolist() == ["0"] * (n - 1)     # the stability bands: stable throughout
     opened, kind = result_kinds.open_result(d / "tori.nc")
     assert kind.name == result_kinds.CONTINUATION and "torus branch 0" in kind.describe(opened)
     assert cli.main(["info", str(d / "tori.nc")]) in (0, None)
