@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from pipeline import cluster, compute, result_kinds, results, runlog, schema
+from pipeline import cluster, compute, result_kinds, results, runlog, schema, torus_branches
 from pipeline.coexistence import (  # noqa: F401 (the continuation result's readers use these names)
     bistable_intervals, coexistence, distinct_events, event_copy_of, line_coexistence, mark_copies, stability_classes,
     stable_runs)
@@ -84,7 +84,8 @@ def plan(data):
                           f"{', '.join(a for a in sweep if a != name and len(sweep[a]) > 1) or 'none'}")
     others = [a for a in sweep if a != name]
     lines = tuple(dict(zip(others, map(float, combo))) for combo in itertools.product(*(sweep[a] for a in others)))
-    problem = _period_problem(data, name, start, stop, lines[0])
+    problem = "" if torus_branches.is_torus_line(data, name, start, lines[0]) else \
+        _period_problem(data, name, start, stop, lines[0])
     if problem:
         raise ConfigError(f"continuation.parameter: {problem}")
     if data["report"]["frequency_unit"] == "omega_l" and par.unit != "Hz":
@@ -148,6 +149,8 @@ def _plotted(model, data):
 def continue_line(data, where):
     """The branches of one line (a Dask task): a list of dicts of numpy arrays (branch_record)."""
     pl = plan(data)
+    if torus_branches.is_torus_line(data, pl.parameter, pl.start, where):
+        return torus_branches.continue_torus_line(data, pl, where)
     family, built = line_family(data, pl, where)
     model = family.model
     sol = solve_orbit(model, family.params(pl.start), family.opts, periods=pl.periods,
@@ -297,6 +300,22 @@ def _curve_variables(spec, pl, curves, par_attrs):
     return values, attrs
 
 
+def _torus_variables(records, stable):
+    """(values, run-time attrs) of the torus branches (pipeline.torus_branches): their points'
+    error estimate, normal stability and largest exponent; `stable` is 1 where a torus is stable."""
+    def pad(key, fill, dtype):
+        out = np.full(stable.shape, fill, dtype)
+        for b, (_, r) in enumerate(records):
+            out[b, :len(r.get(key, ()))] = r.get(key, ())
+        return out
+    status = pad("torus_status", -1, "int8")
+    torus = status >= 0
+    return ({"branch_kind": np.array([int("torus_status" in r) for _, r in records], "int8"),
+             "torus_status": status, "torus_error": pad("torus_error", np.nan, float),
+             "torus_exponent": pad("torus_exponent", np.nan, float),
+             "stable": np.where(torus, status == torus_branches.TORUS_STATUS["stable"], stable).astype("int8")}, {})
+
+
 def _omega_l_variables(data, pl, values):
     """(values, run-time attrs) of the continued frequency and the events' over omega_l
     (pipeline.modes.omega_l): the paper's nondimensional frequency, a coordinate the report draws
@@ -389,7 +408,9 @@ def to_dataset(data, pl, lines, provenance):
              **{name: amp for name in ("amplitude_max", "amplitude_half_pp", "event_amplitude_max",
                                        "event_amplitude_half_pp")}}
     rep = data["report"]
-    extras = ([_omega_l_variables(data, pl, values)] if rep["frequency_unit"] == "omega_l" else []) + (
+    tori = any("torus_status" in r for _, r in records)
+    extras = ([_torus_variables(records, values["stable"])] if tori else []) + (
+        [_omega_l_variables(data, pl, values)] if rep["frequency_unit"] == "omega_l" else []) + (
         [_curve_variables(spec, pl, [c for _, r in records for c in r.get("curves", [])], par_attrs)] if pl.second else [])
     for more_values, more_attrs in extras:
         values.update(more_values)
@@ -453,11 +474,13 @@ def describe(ds):
              f" ({ds.sizes.get('event', 0)} met, copies of one orbit counted once)"]
     for b in range(ds.sizes["branch"]):
         where = ", ".join(f"{c}={float(ds[c].values[b]):g}" for c in ds.coords if ds[c].dims == ("branch",))
-        lines.append(f"  branch {b}: period-{int(ds['branch_periods'].values[b])}"
+        what = "torus" if "branch_kind" in ds and ds["branch_kind"].values[b] == 1 else \
+            f"period-{int(ds['branch_periods'].values[b])}"
+        lines.append(f"  branch {b}: {what}"
                      f"{f' from branch {int(ds.branch_parent.values[b])}' if ds.branch_parent.values[b] >= 0 else ''}"
                      f"{f' ({where})' if where else ''}, {int(ds['branch_points'].values[b])} points, "
                      f"ended {al.END_REASONS[int(ds['branch_end'].values[b])]}: {ds['branch_detail'].values[b]}")
-    lines += _peak_lines(ds, par, unit)
+    lines += _peak_lines(ds, par, unit) + torus_branches.torus_lines(ds, par, unit)
     for iv in bistable_intervals(ds):
         where = ", ".join(f"{k}={v:g}" for k, v in iv.items() if k not in ("lo", "hi", "branches"))
         lines.append(f"  two stable orbits coexist: {par} {iv['lo']:.10g} to {iv['hi']:.10g} {unit}"

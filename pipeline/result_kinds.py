@@ -115,6 +115,18 @@ CONTINUATION_VARIABLES = {
     "piece_line": (("piece",), {"units": "1", "long_name": "first branch index of the piece's line"}),
     "piece_branches": (("piece",), {"long_name": "one branch per distinct stable orbit at the piece's middle (space-separated)",
                                    "comment": "phase copies phi_j(s) of one orbit counted once"}),
+    # where the forcing is quasi-periodic: torus branches (pipeline.torus_branches); an orbit
+    # branch's points hold NaN / -1 here
+    "branch_kind": (("branch",), {"long_name": "what the branch follows",
+                                  "flag_values": np.array([0, 1], "int8"), "flag_meanings": "periodic_orbit torus"}),
+    "torus_status": (_BP, {"long_name": "normal stability of the invariant torus",
+                           "flag_values": np.array([-1, 0, 1, 2], "int8"),
+                           "flag_meanings": "no_torus unstable stable undecided"}),
+    "torus_error": (_BP, {"units": "1", "long_name": "error estimate of the invariant circle (scaled state units)",
+                          "comment": "distance bound of the computed circle from the invariant one: the invariance "
+                                     "defect between nodes times ||dR/dU^-1||, not below the Fourier tail"}),
+    "torus_exponent": (_BP, {"units": "s-1", "long_name": "largest normal Lyapunov exponent of the torus",
+                             "comment": "< 0: attracting (stable)"}),
     # with report.frequency_unit = "omega_l"
     "parameter_over_omega_l": (_BP, {"units": "1"}),
     "event_parameter_over_omega_l": (("event",), {"units": "1"}),
@@ -131,7 +143,7 @@ CONTINUATION_VARIABLES = {
 
 # variables only some continuation results have: with report.frequency_unit = "omega_l", with
 # continuation.curves_in
-CONTINUATION_OPTIONAL = ("parameter_over_omega_l", "event_parameter_over_omega_l", "curve_parameter", "curve_second",
+CONTINUATION_OPTIONAL = ("branch_kind", "torus_status", "torus_error", "torus_exponent", "parameter_over_omega_l", "event_parameter_over_omega_l", "curve_parameter", "curve_second",
                          "curve_critical_real", "curve_critical_imag", "curve_type", "curve_points", "curve_end",
                          "curve_detail")
 

@@ -24,7 +24,8 @@ def _branch_label(ds, b):
     where = ", ".join("{} = {:.4g} {}".format(c, *_shown(float(ds[c].values[b]), ds[c].attrs.get("units", "")))
                       for c in ds.coords if ds[c].dims == ("branch",))
     k = int(ds["branch_periods"].values[b])
-    return f"period-{k}" + (f" ({where})" if where else "")
+    torus = "branch_kind" in ds and ds["branch_kind"].values[b] == 1
+    return ("torus" if torus else f"period-{k}") + (f" ({where})" if where else "")
 
 
 def parameter_axis(ds):
@@ -68,8 +69,8 @@ def _values(ds, yname, kind):
     """(branch, point) values of a plotted quantity: max |multiplier| or an observable's
     amplitude (kind: amplitude_max, max |o| over the orbit, or amplitude_half_pp), in the units
     the report shows."""
-    if yname == "max_abs_multiplier":
-        return ds["max_abs_multiplier"].values
+    if yname in ("max_abs_multiplier", "torus_exponent"):
+        return ds[yname].values
     j = list(ds["observable"].values).index(yname)
     return _shown(ds[kind].values[:, :, j], ds[kind].attrs.get("units"))[0]
 
@@ -78,8 +79,8 @@ def _event_values(ds, yname, kind):
     """The events' values of the plotted quantity (NaN: not in the result, one written before
     event_amplitude_half_pp existed)."""
     n = ds.sizes.get("event", 0)
-    if yname == "max_abs_multiplier":
-        return np.ones(n)
+    if yname in ("max_abs_multiplier", "torus_exponent"):
+        return np.ones(n) if yname == "max_abs_multiplier" else np.full(n, np.nan)
     name = "event_" + kind
     if name not in ds:
         return np.full(n, np.nan)
@@ -171,10 +172,15 @@ def figures(ds, backend):
     if "curve" in ds.dims and ds.sizes["curve"]:
         out.insert(2, (f"Stability boundary curves in ({ds.attrs['parameter']}, {ds.attrs['curves_in']})",
                        "boundary_curves.png", _curves_map(hv, ds, backend)))
-    out.insert(2, (f"Bode and polar plots: first harmonic of {main} along the branches (stable solid, unstable "
-                   "dashed)", "bode.png", _bode(ds, main, backend)))
-    out.append(("Largest Floquet multiplier modulus along the branches", "branch_max_multiplier.png",
-                _panel(hv, ds, "max_abs_multiplier", "max |multiplier|", backend, ref_one=True)))
+    tori = ds["branch_kind"].values == 1 if "branch_kind" in ds else np.zeros(ds.sizes["branch"], bool)
+    if not tori.all():      # a torus has no first harmonic nor Floquet multipliers
+        out.insert(2, (f"Bode and polar plots: first harmonic of {main} along the branches (stable solid, unstable "
+                       "dashed)", "bode.png", _bode(ds, main, backend)))
+        out.append(("Largest Floquet multiplier modulus along the branches", "branch_max_multiplier.png",
+                    _panel(hv, ds, "max_abs_multiplier", "max |multiplier|", backend, ref_one=True)))
+    if tori.any():
+        out.append(("Tori: largest normal Lyapunov exponent (< 0: stable)", "torus_exponent.png",
+                    _panel(hv, ds, "torus_exponent", "largest normal exponent [1/s]", backend)))
     if mode_campbell.has_linear_analysis(ds):
         out.append((mode_campbell.CAPTION, "mode_campbell.png", mode_campbell.result_figure(ds, backend)))
     if mode_shapes.has_stations(ds):

@@ -9,7 +9,7 @@ With gamma = 0 it is linear and its quasi-periodic response is the sum of two pe
 import numpy as np
 from numba import njit
 
-from rotorkernels.models.spec import VALIDATION_GROUP, Built, ModelSpec, Parameter
+from rotorkernels.models.spec import VALIDATION_GROUP, Built, ModelSpec, Observable, Parameter
 from rotorkernels.models.velocity import upper_rows, velocity_rows
 
 P_K, P_C, P_GAMMA, P_F1, P_F2, P_W2, P_PHASE = range(7)
@@ -46,4 +46,5 @@ SPEC = ModelSpec(
     description="validation: Duffing oscillator under two-frequency forcing (scaled time)",
     parameters=tuple(Parameter(name=k, default=0.0) for k in NAMES), build=build,
     cold_guess=lambda p: np.zeros(2), length_scale=1.0, kernel_group=VALIDATION_GROUP,
+    observables=(Observable("x", (1.0,), "1", "displacement"),), torus_forcing=(P_PHASE, P_W2, {}),
 )

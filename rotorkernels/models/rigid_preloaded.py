@@ -566,5 +566,6 @@ SPEC = ModelSpec(
     check=check,
     equilibrium=static_equilibrium, linearization=linearization, speed="speed", omega_l=omega_l,
     support_frequency="support_frequency",
+    torus_forcing=(P_PHASE, P_WS, {"max_denominator": 0}),   # 0: no ratio shot as periodic, tau one shaft turn
     derived_axes={"contact_angle": "derived from the preload solve per point, see contact_angle_used"},
 )

@@ -134,6 +134,9 @@ class ModelSpec:
     #                                                    given nor swept ("derived from X ...")
     amplitude_bound: str = ""       # a Built.derived value [m] the amplitudes must stay below (the
     #                                 series law's axial approach); "": no bound
+    torus_forcing: tuple = ()       # (phase slot, frequency slot, values): a second forcing whose phase is
+    #                                 p[phase slot] and frequency p[frequency slot] [rad per unit tau]; the build
+    #                                 at {**values, ...} keeps tau one first-forcing period (tori: pipeline.tori)
     invariant_subspaces: dict = field(default_factory=dict)   # name -> basis (n_state x k) of an invariant
     #                                 subspace in which a repeated linear frequency is simple (backbones)
 

@@ -1,0 +1,194 @@
+"""The torus line of `rotorsweep continue`: where the scene's forcing is quasi-periodic (two
+frequencies, the model's `torus_forcing`), the response is an invariant 2-torus, followed along
+the parameter by rotorkernels.continuation.tori instead of a periodic orbit.
+
+The first torus comes from a settled transient: the stroboscopic map (one first-forcing period
+T, the second forcing's phase advancing by rho) iterated SETTLE_PERIODS times from the model's
+cold guess, then FIT_PERIODS samples fitted by a trigonometric interpolant (torus.fitted_guess)
+and solved (torus.solve_torus, nodes grown until the Fourier tail is below DECAY_TOL). The
+branch keeps that node count; it ends `torus_breakdown` where the tail exceeds BREAKDOWN_TOL.
+
+Per point: the half-swing (half peak-to-peak) and max |o| of each observable over the torus,
+the torus error estimate, the normal stability and its largest exponent. The amplitudes are the
+exact extrema (rotorkernels.extrema) of the trajectories over one period T from AMPLITUDE_PHASES
+equally spaced phases of the circle: exact along each trajectory, sampled in the phase, so the
+sup over the phase of each trajectory's extremum is low by at most its curvature in the phase
+times (pi / AMPLITUDE_PHASES)^2 / 2 (a parabola's drop at half the phase spacing): ~1.2e-3
+relative for a swing varying over the phase by O(1) of itself, less for weak phase dependence
+(tests/test_torus_continue.py: 1e-4 against a long DOP853 transient).
+"""
+import numpy as np
+
+from pipeline import compute
+from rotorkernels import extrema, torus as tr
+from rotorkernels.continuation import engine, tori
+
+SETTLE_PERIODS = 400
+FIT_PERIODS = 120
+FIRST_NODES = 15
+MAX_NODES = 63
+DECAY_TOL = 1e-9        # the first torus's Fourier tail (node count grown to reach it)
+BREAKDOWN_TOL = 1e-7    # a branch point's tail above it: the circle is no longer resolved
+AMPLITUDE_PHASES = 64
+TORUS_STATUS = {tr.UNSTABLE: 0, tr.STABLE: 1, tr.UNDECIDED: 2}
+
+
+def is_torus_line(data, parameter, start, where):
+    """Whether the line's forcing at the start is quasi-periodic (a torus, not an orbit)."""
+    spec = compute.model_of(data)
+    if not spec.torus_forcing:
+        return False
+    return not _builder(data, where, parameter)(start).periodic
+
+
+def _builder(data, where, parameter):
+    """lambda -> Built with the model's torus values (tau: one first-forcing period)."""
+    build = compute.builder(data)
+    values = {**compute.fixed_values(data), **where, **compute.model_of(data).torus_forcing[2]}
+    return lambda lam: build({**values, parameter: lam})
+
+
+def torus_family(data, pl, where, n_nodes):
+    spec = compute.model_of(data)
+    phase, freq, _ = spec.torus_forcing
+    built = _builder(data, where, pl.parameter)
+    return tori.TorusFamily(spec.kernel, lambda lam: built(lam).p, lambda lam: float(built(lam).p[freq]), phase,
+                            compute.integrator_settings(data), n_nodes, scale=pl.range[1] - pl.range[0],
+                            decay_tol=BREAKDOWN_TOL), built
+
+
+def settled_samples(kernel, state, p, phase_index, rho, opts):
+    """(samples (FIT_PERIODS, n), their phases, ok) of the stroboscopic map after SETTLE_PERIODS."""
+    samples, phases, theta = [], [], 0.0
+    for k in range(SETTLE_PERIODS + FIT_PERIODS):
+        if k >= SETTLE_PERIODS:
+            samples.append(state.copy())
+            phases.append(theta)
+        ends, _, ok, _ = tr.node_maps(kernel, state[None, :], [theta], p, phase_index, 1.0, opts, False)
+        if not ok:
+            return None, None, False
+        state, theta = ends[0], (theta + rho) % (2.0 * np.pi)
+    return np.array(samples), np.array(phases), True
+
+
+def first_torus(data, pl, where):
+    """(the first torus at the start, the family sized to it, built); the torus's status says
+    whether it converged."""
+    spec = compute.model_of(data)
+    phase, freq, _ = spec.torus_forcing
+    family, built = torus_family(data, pl, where, FIRST_NODES)
+    p = built(pl.start).p
+    samples, phases, ok = settled_samples(spec.kernel, spec.cold_guess(p), p, phase, p[freq], family.opts)
+    if not ok:
+        return None, family, built
+    guess = tr.fitted_guess(samples, phases, FIRST_NODES)
+    circle = tr.solve_torus(spec.kernel, guess, p, phase, p[freq], family.opts, tol=pl.settings.tol,
+                            decay_tol=DECAY_TOL, max_nodes=MAX_NODES)
+    return circle, family._replace(n_nodes=circle.nodes.shape[0]), built
+
+
+def continue_torus_line(data, pl, where):
+    """The torus branch of one line as a one-record list (branch_record's keys plus torus_*)."""
+    spec = compute.model_of(data)
+    circle, family, built = first_torus(data, pl, where)
+    direction = 1 if pl.stop > pl.start else -1
+    if circle is None or circle.status != tr.CONVERGED:
+        why = "the transient failed" if circle is None else f"the torus solve ended {circle.status}"
+        return [torus_record(spec, family, built, engine.Run([], [], engine.START_FAILED,
+                                                       f"no torus at {pl.parameter} = {pl.start!r}: {why}"), 0)]
+    counter = engine.Counter()
+    first = tori.start(family, pl.start, circle.nodes, direction, pl.settings, counter)
+    if first is None:
+        run = engine.Run([], [], engine.START_FAILED, f"the torus start did not converge at {pl.start!r}")
+    else:
+        run = tori.follow_tori(family, first, pl.range, pl.settings, counter)
+    record = torus_record(spec, family, built, run, counter.n)
+    record["coexistence"] = stable_pieces(record, pl.range)
+    return [record]
+
+
+def stable_pieces(record, lam_range):
+    """The line's coexistence pieces (pipeline.coexistence's (lo, hi, stable branches)): between
+    two consecutive points the torus branch (0) is stable where both ends are; outside the
+    points nothing is known stable."""
+    lam, stable = record["parameter"], record["torus_status"] == TORUS_STATUS[tr.STABLE]
+    if len(lam) < 2:
+        return [(*lam_range, [])]
+    pieces = [(min(a, b), max(a, b), [0] if sa and sb else [])
+              for a, b, sa, sb in zip(lam[:-1], lam[1:], stable[:-1], stable[1:])]
+    lo, hi = lam.min(), lam.max()
+    return ([(lam_range[0], lo, [])] if lo > lam_range[0] else []) + sorted(pieces) + (
+        [(hi, lam_range[1], [])] if hi < lam_range[1] else [])
+
+
+def torus_record(model, family, built, run, n_rhs):
+    """One torus branch as plain arrays: the orbit record's keys (multipliers NaN, orbit_state
+    the circle at phase 0, period T) and torus_error, torus_exponent [1/s], torus_status."""
+    n_state = family.kernel.n_state
+    pts = run.points
+    amp = np.array([torus_amplitudes(model, family, built, p) for p in pts]).reshape(
+        len(pts), 2, len(model.observables))
+    X = np.array([p.X for p in pts]).reshape(len(pts), family.n_nodes * n_state + 1)
+    steps = np.linalg.norm(np.diff(X, axis=0), axis=1) if len(pts) > 1 else np.zeros(0)
+    periods = np.array([built(p.lam).period for p in pts])
+    none = np.zeros(0)
+    return {
+        "parameter": np.array([p.lam for p in pts]), "arclength": np.concatenate(([0.0], np.cumsum(steps)))[:len(pts)],
+        "state": np.array([family.nodes(p.X)[0] for p in pts]).reshape(len(pts), n_state),
+        "multipliers": np.full((len(pts), n_state), np.nan + 0j),
+        "amplitude_max": amp[:, 0], "amplitude_half_pp": amp[:, 1], "period": periods,
+        "periods": 1, "parent": -1, "end": int(run.end), "detail": run.detail, "n_rhs": int(n_rhs),
+        "event_type": none.astype(int), "event_parameter": none, "event_index": none.astype(int),
+        "event_state": np.zeros((0, n_state)), "event_multipliers": np.zeros((0, n_state), complex),
+        "event_amplitude_max": np.zeros((0, amp.shape[2])), "event_amplitude_half_pp": np.zeros((0, amp.shape[2])),
+        "torus_error": np.array([torus_error(family, p) for p in pts]),
+        "torus_exponent": np.array([p.stability.exponents[0] for p in pts]) / periods if len(pts) else none,
+        "torus_status": np.array([TORUS_STATUS[p.stability.status] for p in pts], int),
+    }
+
+
+def torus_error(family, point):
+    """The point's error estimate (torus.error_estimate; inf where its shots failed)."""
+    lam = family.lam(point.X)
+    nodes = family.nodes(point.X)
+    _, jac, _, _, _ = family.residual(point.X, True)
+    err, ok, _ = tr.error_estimate(family.kernel, nodes, jac, family.params(lam), family.phase_index,
+                                   family.rotation(lam), family.period, family.opts, point.tail)
+    return err if ok else np.inf
+
+
+def torus_amplitudes(model, family, built, point):
+    """(max |o|, half peak-to-peak of o) over the torus for each observable, SI (module docstring)."""
+    lam = family.lam(point.X)
+    phases = tr.node_phases(AMPLITUDE_PHASES)
+    starts = family.torus(point).at(phases)
+    p = np.array(family.params(lam), float)
+    hi, lo = np.full(len(model.observables), -np.inf), np.full(len(model.observables), np.inf)
+    for theta, u in zip(phases, starts):
+        p[family.phase_index] = theta
+        h, l = extrema.extremes(model, u, p, family.period, family.opts, built(lam).period)
+        hi, lo = np.maximum(hi, h), np.minimum(lo, l)
+    return np.maximum(hi, -lo), 0.5 * (hi - lo)
+
+
+def torus_lines(ds, par, unit):
+    """`info`'s lines of a continuation result's torus branches: where each is stable, its
+    largest half-swing of the report observable, its largest error estimate."""
+    if "branch_kind" not in ds:
+        return []
+    obs = list(ds["observable"].values)
+    j = obs.index(ds.attrs["report_observable"]) if ds.attrs.get("report_observable") in obs else 0
+    out = []
+    for b in np.flatnonzero(ds["branch_kind"].values == 1):
+        n = int(ds["branch_points"].values[b])
+        if not n:
+            continue
+        lam, status = ds["parameter"].values[b, :n], ds["torus_status"].values[b, :n]
+        counts = ", ".join(f"{(status == code).sum()} {name}" for name, code in TORUS_STATUS.items())
+        out.append(f"  torus branch {b}: {par} {lam.min():.10g} to {lam.max():.10g} {unit}, points {counts}; "
+                   f"half-swing {obs[j]} up to {np.nanmax(ds['amplitude_half_pp'].values[b, :n, j]):.6g} "
+                   f"{ds['amplitude_half_pp'].attrs.get('units', '')}, error estimate up to "
+                   f"{np.nanmax(ds['torus_error'].values[b, :n]):.2g}")
+        out += [f"    stability changes between {par} {lam[i]:.10g} and {lam[i + 1]:.10g} {unit}"
+                for i in np.flatnonzero((status[:-1] != status[1:]) & (status[:-1] < 2) & (status[1:] < 2))]
+    return out

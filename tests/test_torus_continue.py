@@ -1,0 +1,85 @@
+"""`rotorsweep continue` with quasi-periodic forcing (both forcings of rigid_preloaded on): the
+torus branch end to end, in-process, and one point checked against iterates of the stroboscopic
+map from its circle (a second method: the map iterated, not the collocation solved)."""
+import numpy as np
+import pytest
+
+from pipeline import cli, compute, config, continuation, result_kinds, torus_branches
+
+SCENE = "configs/filipkovsky2016_fig2b_tori.toml"
+
+
+@pytest.fixture(scope="module")
+def result(tmp_path_factory):
+    d = tmp_path_factory.mktemp("tori")
+    text = open(SCENE).read().replace("stop = 315.0", "stop = 308.0")
+    (d / "tori.toml").write_text(text)
+    assert cli.main(["continue", str(d / "tori.toml"), "-o", str(d / "tori.nc"), "--workers", "0"]) in (0, None)
+    return d, config.parse_config(text).data
+
+
+def test_the_result_holds_a_torus_branch_with_stability_and_error(result, capsys):
+    d, _ = result
+    ds = continuation.open_result(d / "tori.nc")
+    assert ds["branch_kind"].values.tolist() == [1]
+    n = int(ds["branch_points"].values[0])
+    assert n >= 2 and ds["parameter"].values[0, n - 1] == pytest.approx(308.0)
+    assert (ds["torus_status"].values[0, :n] == 1).all() and (ds["torus_exponent"].values[0, :n] < 0).all()
+    assert (ds["stable"].values[0, :n] == 1).all() and (ds["torus_error"].values[0, :n] < 1e-4).all()
+    assert ds["piece_branches"].values.tolist() == ["0"] * (n - 1)     # the stability bands: stable throughout
+    opened, kind = result_kinds.open_result(d / "tori.nc")
+    assert kind.name == result_kinds.CONTINUATION and "torus branch 0" in kind.describe(opened)
+    assert cli.main(["info", str(d / "tori.nc")]) in (0, None)
+    assert "branch 0: torus" in capsys.readouterr().out
+    assert cli.main(["report", str(d / "tori.nc"), "-o", str(d / "report")]) in (0, None)
+    assert (d / "report" / "response_y_B.png").exists() and (d / "report" / "torus_exponent.png").exists()
+
+
+def test_a_torus_point_against_a_long_scipy_transient(result):
+    """From the result's state on the circle (orbit_state: u at phase 0), a DOP853 run (rtol
+    1e-10) over TRANSIENT shaft turns stays on the torus and covers it densely (irrational
+    rotation): its half-swing of y_B, sampled 256 times per turn, is the torus's. Both sample the
+    sup from below: the result's in the forcing phase (64 phases, torus_branches docstring), the
+    transient in time and phase; a swing varying smoothly over the torus is missed by each by
+    ~(pi / 64)^2 / 2 ~ 1e-3 relative at most, hence the tolerance."""
+    from scipy.integrate import solve_ivp
+
+    from rotorkernels.models import rigid_preloaded as rp
+
+    d, data = result
+    ds = continuation.open_result(d / "tori.nc")
+    spec = compute.model_of(data)
+    pl = continuation.plan(data)
+    _, built = torus_branches.torus_family(data, pl, pl.lines[0], 1)
+    k = 1
+    lam = float(ds["parameter"].values[0, k])
+    b = built(lam)
+    p = b.p.copy()
+
+    def f(tau, u):
+        du = np.empty_like(u)
+        rp.rhs(tau, u, p, du)
+        return du
+    turns = 150
+    t = np.linspace(0.0, turns, 256 * turns + 1)
+    sol = solve_ivp(f, (0.0, turns), ds["orbit_state"].values[0, k], method="DOP853", rtol=1e-10, atol=1e-12,
+                    t_eval=t)
+    assert sol.success
+    j = list(ds["observable"].values).index("y_B")
+    y = spec.observe(sol.y.T, b.period)[:, j]
+    half_swing = 0.5 * (y.max() - y.min())
+    assert ds["amplitude_half_pp"].values[0, k, j] == pytest.approx(half_swing, rel=1e-3)
+
+
+def test_a_torus_line_that_does_not_start_is_an_empty_branch_with_a_reason(result):
+    """A failed start is data: an empty branch ending start_failed, written like any other."""
+    from rotorkernels.continuation import engine
+
+    _, data = result
+    pl = continuation.plan(data)
+    fam, built = torus_branches.torus_family(data, pl, pl.lines[0], 15)
+    run = engine.Run([], [], engine.START_FAILED, "no torus")
+    rec = torus_branches.torus_record(compute.model_of(data), fam, built, run, 0)
+    ds = continuation.to_dataset(data, pl, [(pl.lines[0], [rec])], {})
+    assert ds["branch_points"].values.tolist() == [0] and ds["branch_end"].values.tolist() == [engine.START_FAILED]
+    assert "no torus" in continuation.describe(ds)
