@@ -263,7 +263,8 @@ def point_classes(ds):
     unstable interval, the interval's `type` (fold / period_doubling / neimark_sacker / no_orbit
     / none): how stability was lost before it (unstable_intervals). A point without orbit is
     "no_orbit" wherever it lies; an unstable orbit in an interval that began without orbit has
-    its own bifurcation code's name."""
+    its own bifurcation code's name. A stable point inside a bistable interval
+    (bistable_intervals: another stable orbit coexists there) is "bistable"."""
     import xarray as xr
 
     status = ds["orbit_status"]
@@ -284,6 +285,12 @@ def point_classes(ds):
     values[(status.values != 0) & (status.values != NOT_APPLICABLE)] = "no_orbit"
     began_without = (values == "no_orbit") & (status.values == 0)
     values[began_without] = own[began_without]
+    for iv in bistable_intervals(ds):
+        sel = {a: iv[a] for a in _other_axes(ds)}
+        grid = cls[along].values
+        inside = grid[(grid >= iv["start"]) & (grid <= iv["end"])]
+        line = cls.loc[{**sel, along: inside}]
+        cls.loc[{**sel, along: inside}] = np.where(line.values == "stable", "bistable", line.values)
     return cls
 
 

@@ -102,3 +102,16 @@ def test_smooth_branches_make_no_jump():
     assert b.i == 5 and b.grid == (grid[5], grid[6])
     # without a multiplier near +1 the same step is not a jump over a fold
     assert boundaries.jump_brackets((), grid, pos, status, stable, jumped, np.full(11, 0.9)) == []
+
+
+def test_the_map_draws_the_bistable_band_as_its_own_class(jump_sweep):
+    from pipeline.report import stability
+
+    _, ds, _ = jump_sweep
+    (iv,) = query.bistable_intervals(ds)
+    grid = ds["speed"].values
+    classes = query.point_classes(ds).values.ravel()
+    inside = (grid >= iv["start"]) & (grid <= iv["end"])
+    assert inside.any() and (classes[inside] == "bistable").all() and (classes[~inside] == "stable").all()
+    cls = stability.stability_class(ds).ravel()
+    assert stability.CLASSES[int(cls[inside][0])] == "bistable"
