@@ -103,13 +103,16 @@ JUMP_SETTINGS = arclength.Settings(ds=0.1, ds_max=0.5, max_steps=300)
 
 def jump_brackets(line, grid, pos, status, stable, states, near):
     """The jump Brackets of one line from the per-point arrays of its points at grid indices
-    `pos` (increasing; gaps allowed: a pair is tested only where both are neighbours on the grid)."""
+    `pos` (increasing; gaps allowed): a pair of neighbours on the grid is tested where the steps
+    before and after it are known too."""
     pos = np.asarray(pos, int)
     step = np.linalg.norm(np.diff(states, axis=0), axis=1)
     adjacent = (np.diff(pos) == 1) & (status[:-1] == 0) & (status[1:] == 0)
     step = np.where(adjacent, step, np.nan)
     pad = np.array([np.nan])
-    predicted = np.fmax(np.concatenate((pad, step[:-1])), np.concatenate((step[1:], pad)))
+    # both neighbouring steps are needed: a chunk tests only the pairs inside it that the whole
+    # line would test alike (its edge pairs are left to the driver), so chunking changes nothing
+    predicted = np.maximum(np.concatenate((pad, step[:-1])), np.concatenate((step[1:], pad)))
     with np.errstate(invalid="ignore"):
         hit = ((step > JUMP_RATIO * predicted) & (stable[:-1] == stable[1:])
                & (np.minimum(near[:-1], near[1:]) < NEAR_ONE))

@@ -115,3 +115,24 @@ def test_the_map_draws_the_bistable_band_as_its_own_class(jump_sweep):
     assert inside.any() and (classes[inside] == "bistable").all() and (classes[~inside] == "stable").all()
     cls = stability.stability_class(ds).ravel()
     assert stability.CLASSES[int(cls[inside][0])] == "bistable"
+
+
+@pytest.mark.parametrize("start, stop, step, clearance, kind", [
+    (28.2, 28.6, 0.05, 19.0e-6, "fold"),                # the lower branch's fold at 28.40159 Hz
+    (32.2, 32.6, 0.1, 15.2e-6, "period_doubling"),      # the period-1 orbit's first doubling above the jump
+])
+def test_stability_changes_next_to_jumps_are_unchanged(tmp_path, start, stop, step, clearance, kind):
+    """A stability change is refined as before (one row, its own type, at the continuation's
+    event) and no jump is reported there: the 19 um fold ends the branch the sweep was on (its
+    jump is the stability change's bracket), and a period doubling is no jump at all."""
+    cfg = config.parse_config(BAI.format(start=start, stop=stop, clearance=clearance).replace(
+        "step = 0.05", f"step = {step}"))
+    sweep.run(cfg, str(tmp_path / "c.nc"), workers=0)
+    ds = cube.open_cube(str(tmp_path / "c.nc"))
+    (row,) = boundaries.boundary_frame(ds)
+    assert schema.BIFURCATION[row["type"]] == kind and row["direction"] == 0 and row["status"] == 0
+    assert query.bistable_intervals(ds) == []
+    (first, *_) = continuation.continue_line(cfg.data, {"clearance": clearance})
+    code = al.FOLD if kind == "fold" else al.PERIOD_DOUBLING
+    (reference,) = first["event_parameter"][first["event_type"] == code][:1]
+    assert row["speed"] == pytest.approx(reference, rel=1e-8)
