@@ -161,12 +161,17 @@ def chunk_jumps(axes, axis, index, results):
     return found
 
 
+def key_of(bracket, k=0):
+    """A refined row's key: (line, i) for a stability change, (line, i, k) for the k-th fold of a
+    jump's pair."""
+    return (bracket.line, bracket.i) if bracket.jump is None else (bracket.line, bracket.i, k)
+
+
 def entries(bracket, refined):
-    """[(key, row)] of a refined bracket: (line, i) for a stability change, (line, i, k) for the
-    k-th fold of a jump's pair."""
+    """[(key, row)] of a refined bracket (refine_brackets' row, or a jump's list of two)."""
     if bracket.jump is None:
-        return [((bracket.line, bracket.i), refined)]
-    return [((bracket.line, bracket.i, k), row) for k, row in enumerate(refined)]
+        return [(key_of(bracket), refined)]
+    return [(key_of(bracket, k), row) for k, row in enumerate(refined)]
 
 
 def refine_brackets(data, axis, items):
@@ -188,8 +193,7 @@ def refine_within(data, axes, axis, index, results):
     grid `index` and `results`), in plain JSON types: a chunk's task refines them with its points,
     and its part file keeps them, so a resumed sweep does not refine them again."""
     found = Tracker(axes, axis).add(index, results)
-    found += [(where, b) for where, b in chunk_jumps(axes, axis, index, results) if b.i not in
-              {s.i for _, s in found if s.line == b.line}]
+    found += chunk_jumps(axes, axis, index, results)
     rows = refine_brackets(data, axis, found)
     return [[list(key[0]), *key[1:], {k: v.item() if isinstance(v, np.generic) else v for k, v in row.items()}]
             for (_, b), refined in zip(found, rows) for key, row in entries(b, refined)]
@@ -209,11 +213,8 @@ def boundary_rows(data, ds, map_tasks=None, done=None):
     axis = schema.continued_axis(ds)
     done = dict(done or {})
     todo = {}
-    stability_changes = {(b.line, b.i) for _, b in cube_brackets(ds, axis) if b.jump is None}
     for where, b in cube_brackets(ds, axis):
-        if b.jump is not None and (b.line, b.i) in stability_changes:
-            continue        # a stability change's refinement locates its fold
-        if entries(b, [None, None])[0][0] not in done:
+        if key_of(b) not in done:
             todo.setdefault(b.line, []).append((where, b))
     tasks = list(todo.values())
     for task, rows in zip(tasks, (map_tasks or refine_serially)(data, axis, tasks)):

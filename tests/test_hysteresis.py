@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from pipeline import boundaries, config, continuation, cube, query, result_kinds, schema, sweep
+from pipeline import boundaries, cli, config, continuation, cube, query, schema, sweep
 from rotorkernels.continuation import arclength as al
 
 # Bai 2006 (configs/bai2006_fold.toml): the natural sweep jumps over a fold pair near 40.8 Hz at
@@ -75,14 +75,14 @@ def test_both_folds_of_a_jump_are_in_the_boundary_table(jump_sweep):
     assert reference[0] < high and low < reference[1]
 
 
-def test_query_bistable_lists_the_interval_between_the_folds(jump_sweep):
+def test_query_bistable_lists_the_interval_between_the_folds(jump_sweep, capsys):
     cfg, ds, clearance = jump_sweep
     (iv,) = query.bistable_intervals(ds)
     reference = _reference_folds(cfg, clearance)
     np.testing.assert_allclose([iv["start"], iv["end"]], reference, rtol=1e-8)
     assert iv["clearance"] == clearance
-    kind = result_kinds.KINDS[result_kinds.SWEEP]
-    (row,) = json.loads(kind.query(ds, "json", bistable=True))
+    assert cli.main(["query", ds.encoding["source"], "--bistable", "--format", "json"]) == 0
+    (row,) = json.loads(capsys.readouterr().out)
     assert row["start"] == iv["start"] and row["end"] == iv["end"]
     # the unstable-interval view is unaffected: every grid point here is stable
     assert query.unstable_intervals(ds) == []
