@@ -10,6 +10,12 @@ accurately as a period doubling or a Neimark-Sacker point. (Brent's method on ma
 between the two grid points cannot locate a fold: there is no continuous function to bracket.)
 Only if the branch shows no such event within a grid step beyond the bracket does Brent's
 method on the grid's natural continuation (rotorkernels.continuation.events) refine it.
+
+A jump (hysteresis) is a pair of neighbouring points, both stable or both unstable, that lie on
+different branches (`jump_brackets` says how it is told from a steep smooth branch): the branch of
+the point next to the fold is followed through a window around the gap until it has turned at
+both folds of the pair, and both become rows typed fold, with the directions enters_bistable /
+leaves_bistable (the bistable interval lies between them).
 """
 import itertools
 from collections import namedtuple
@@ -52,7 +58,9 @@ def axis_solver(data, values, axis):
 
 # One stability change between grid points i and i + 1 of a line (`line`: the other axes' grid
 # indices): what its refinement reads, a few hundred bytes (shipped to the workers as is).
-Bracket = namedtuple("Bracket", "line i grid stable states lead")
+# jump: None for a stability change; for a jump, the side (0: grid[0], 1: grid[1]) whose multiplier
+# lies nearest +1, where the branch through the fold pair is started.
+Bracket = namedtuple("Bracket", "line i grid stable states lead jump", defaults=(None,))
 
 
 def brackets(line, grid, status, stable, states, lead, candidates=None):
@@ -71,6 +79,49 @@ def _lead(real, imag):
     return real[..., 0] + 1j * imag[..., 0]
 
 
+def _near_one(real, imag):
+    """Per point, the distance of the multiplier nearest +1 from +1."""
+    return np.min(np.abs(real + 1j * imag - 1.0), axis=-1)
+
+
+# The jump criterion. Between grid points i and i + 1 of one branch the state moves by about the
+# tangent-predicted step |x'| h, which varies smoothly: the neighbouring steps (i - 1 -> i and
+# i + 1 -> i + 2) predict it. Where the state moves more than JUMP_RATIO times the larger of them,
+# the two points are not on one branch. The steepest smooth case is a branch that ends in a fold
+# x ~ sqrt(lambda_f - lambda) exactly at a grid point: its last step is (sqrt(2) - 1)^-1 = 2.41
+# times the one before, below 3. A jump over a fold also has a multiplier approaching +1 on the
+# side that ends there: at least one of the two points has a multiplier within NEAR_ONE of +1 (the
+# Bai rotor's jumps with 0.05 Hz steps: 0.14 at 7.6 um, 0.02 at 15.2 um, and their jumps are
+# 7.7 and 4.0 times the larger neighbouring step). Both conditions read arrays the chunk holds.
+JUMP_RATIO = 3.0
+NEAR_ONE = 0.5
+# The fold pair is looked for this many grid steps either side of the gap, in continuation steps
+# of a fraction of the grid step; the branch is started at the near-fold side.
+JUMP_WINDOW = 10
+JUMP_SETTINGS = arclength.Settings(ds=0.1, ds_max=0.5, max_steps=300)
+
+
+def jump_brackets(line, grid, pos, status, stable, states, near):
+    """The jump Brackets of one line from the per-point arrays of its points at grid indices
+    `pos` (increasing; gaps allowed): a pair of neighbours on the grid is tested where the steps
+    before and after it are known too."""
+    pos = np.asarray(pos, int)
+    step = np.linalg.norm(np.diff(states, axis=0), axis=1)
+    adjacent = (np.diff(pos) == 1) & (status[:-1] == 0) & (status[1:] == 0)
+    step = np.where(adjacent, step, np.nan)
+    pad = np.array([np.nan])
+    # both neighbouring steps are needed: a chunk tests only the pairs inside it that the whole
+    # line would test alike (its edge pairs are left to the driver), so chunking changes nothing
+    predicted = np.maximum(np.concatenate((pad, step[:-1])), np.concatenate((step[1:], pad)))
+    with np.errstate(invalid="ignore"):
+        hit = ((step > JUMP_RATIO * predicted) & (stable[:-1] == stable[1:])
+               & (np.minimum(near[:-1], near[1:]) < NEAR_ONE))
+    return [Bracket(line, int(pos[j]), (float(grid[pos[j]]), float(grid[pos[j] + 1])),
+                    (int(stable[j]), int(stable[j + 1])), (states[j], states[j + 1]), complex(np.nan),
+                    0 if near[j] <= near[j + 1] else 1)
+            for j in np.flatnonzero(hit)]
+
+
 # What the brackets of a cube are built from.
 _LINE_VARS = ("orbit_status", "stable", "orbit_state", "multiplier_real", "multiplier_imag")
 
@@ -82,23 +133,58 @@ def cube_brackets(ds, axis):
     keep = ds[[v for v in _LINE_VARS if v in ds]].transpose(*others, axis, ...)
     arrays = {v: keep[v].values for v in keep.data_vars}
     lead = _lead(arrays["multiplier_real"], arrays["multiplier_imag"])
+    near = _near_one(arrays["multiplier_real"], arrays["multiplier_imag"])
     out = []
     for line in itertools.product(*(range(ds.sizes[a]) for a in others)):
         where = {a: float(ds[a].values[k]) for a, k in zip(others, line)}
-        out += [(where, b) for b in brackets(line, grid, arrays["orbit_status"][line], arrays["stable"][line],
-                                             arrays["orbit_state"][line], lead[line])]
+        status, stable, states = arrays["orbit_status"][line], arrays["stable"][line], arrays["orbit_state"][line]
+        out += [(where, b) for b in brackets(line, grid, status, stable, states, lead[line])]
+        out += [(where, b) for b in jump_brackets(line, grid, np.arange(len(grid)), status, stable, states,
+                                                  near[line])]
     return out
 
 
+def chunk_jumps(axes, axis, index, results):
+    """(where, Bracket) of the jumps between neighbouring points of one chunk (grid `index`)."""
+    names = list(axes)
+    at, others = names.index(axis), [k for k, a in enumerate(names) if a != axis]
+    index = np.asarray(index)
+    near = _near_one(results["multiplier_real"], results["multiplier_imag"])
+    found = []
+    for key in sorted({tuple(int(v) for v in row) for row in index[:, others]}):
+        rows = np.flatnonzero(np.all(index[:, others] == key, axis=1)) if others else np.arange(len(index))
+        rows = rows[np.argsort(index[rows, at])]
+        where = {names[k]: float(axes[names[k]][v]) for k, v in zip(others, key)}
+        found += [(where, b) for b in jump_brackets(key, np.asarray(axes[axis], float), index[rows, at],
+                                                    results["orbit_status"][rows], results["stable"][rows],
+                                                    results["orbit_state"][rows], near[rows])]
+    return found
+
+
+def key_of(bracket, k=0):
+    """A refined row's key: (line, i) for a stability change, (line, i, k) for the k-th fold of a
+    jump's pair."""
+    return (bracket.line, bracket.i) if bracket.jump is None else (bracket.line, bracket.i, k)
+
+
+def entries(bracket, refined):
+    """[(key, row)] of a refined bracket (refine_brackets' row, or a jump's list of two)."""
+    if bracket.jump is None:
+        return [(key_of(bracket), refined)]
+    return [(key_of(bracket, k), row) for k, row in enumerate(refined)]
+
+
 def refine_brackets(data, axis, items):
-    """The refined row of each (where, Bracket) in items (one solver per line): a worker task."""
+    """The refined row of each (where, Bracket) in items (one solver per line), for a jump the
+    list of its two fold rows: a worker task."""
     solvers = {}
     rows = []
     for where, bracket in items:
         key = tuple(sorted(where.items()))
         if key not in solvers:
             solvers[key] = axis_solver(data, {**compute.fixed_values(data), **where}, axis)
-        rows.append(_refine(solvers[key], axis, bracket))
+        refine = _refine if bracket.jump is None else _refine_jump
+        rows.append(refine(solvers[key], axis, bracket))
     return rows
 
 
@@ -107,14 +193,16 @@ def refine_within(data, axes, axis, index, results):
     grid `index` and `results`), in plain JSON types: a chunk's task refines them with its points,
     and its part file keeps them, so a resumed sweep does not refine them again."""
     found = Tracker(axes, axis).add(index, results)
+    found += chunk_jumps(axes, axis, index, results)
     rows = refine_brackets(data, axis, found)
-    return [[list(b.line), b.i, {k: v.item() if isinstance(v, np.generic) else v for k, v in row.items()}]
-            for (_, b), row in zip(found, rows)]
+    return [[list(key[0]), *key[1:], {k: v.item() if isinstance(v, np.generic) else v for k, v in row.items()}]
+            for (_, b), refined in zip(found, rows) for key, row in entries(b, refined)]
 
 
-def keyed(entries):
-    """refine_within's entries as {(line, i): row}, boundary_rows' `done`."""
-    return {(tuple(line), int(i)): row for line, i, row in entries}
+def keyed(items):
+    """refine_within's entries ([line, i, row], or [line, i, k, row] for a jump's k-th fold) as
+    {(line, i[, k]): row}, boundary_rows' `done`."""
+    return {(tuple(e[0]), *(int(v) for v in e[1:-1])): e[-1] for e in items}
 
 
 def boundary_rows(data, ds, map_tasks=None, done=None):
@@ -126,14 +214,15 @@ def boundary_rows(data, ds, map_tasks=None, done=None):
     done = dict(done or {})
     todo = {}
     for where, b in cube_brackets(ds, axis):
-        if (b.line, b.i) not in done:
+        if key_of(b) not in done:
             todo.setdefault(b.line, []).append((where, b))
     tasks = list(todo.values())
     for task, rows in zip(tasks, (map_tasks or refine_serially)(data, axis, tasks)):
-        done.update({(b.line, b.i): row for (_, b), row in zip(task, rows)})
+        for (_, b), refined in zip(task, rows):
+            done.update(entries(b, refined))
     others = _others(ds, axis)
-    return [{**{f"boundary_{a}": float(ds[a].values[k]) for a, k in zip(others, line)}, **done[line, i]}
-            for line, i in sorted(done)]
+    return [{**{f"boundary_{a}": float(ds[a].values[k]) for a, k in zip(others, key[0])}, **done[key]}
+            for key in sorted(done)]
 
 
 def refine_serially(data, axis, tasks):
@@ -155,6 +244,24 @@ def _refine(solvers, axis, bracket):
         return {**row, name: np.nan, "boundary_status": 1, "boundary_type": floquet.crossing_type(bracket.lead)}
     return {**row, name: found.value, "boundary_status": 0,
             "boundary_type": floquet.crossing_type(found.solution.multipliers[0])}
+
+
+def _refine_jump(solvers, axis, bracket):
+    """The two fold rows of a jump: the branch of its near-fold side followed towards the other
+    side through the window, its first two folds (not refined, NaN, where it has not both)."""
+    _, family = solvers
+    (a, b), k = bracket.grid, bracket.jump
+    span = b - a
+    branch = arclength.continue_orbit(family(span), bracket.grid[k], bracket.states[k],
+                                      (a - JUMP_WINDOW * span, b + JUMP_WINDOW * span), JUMP_SETTINGS,
+                                      direction=1 if k == 0 else -1)
+    folds = sorted([e.point.lam for e in branch.events if e.kind == arclength.FOLD][:2])
+    status = 0 if len(folds) == 2 else 1
+    folds = folds if status == 0 else [np.nan, np.nan]
+    return [{"boundary_grid_low": a, "boundary_grid_high": b, f"boundary_{axis}": value,
+             "boundary_status": status, "boundary_type": floquet.FOLD,
+             "boundary_direction": schema.BOUNDARY_DIRECTION.index(direction)}
+            for value, direction in zip(folds, ("enters_bistable", "leaves_bistable"))]
 
 
 def _first_event_on_branch(family, bracket):

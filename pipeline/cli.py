@@ -253,7 +253,8 @@ def cmd_query(args):
     from pipeline import result_kinds
 
     ds, kind = result_kinds.open_result(args.cube)
-    options = {"where": args.where, "var": args.var, "unstable": args.unstable, "attractors": args.attractors}
+    options = {"where": args.where, "var": args.var, "unstable": args.unstable, "attractors": args.attractors,
+               "bistable": args.bistable}
     result_kinds.refuse_options(kind, options, "query_options")
     print(kind.query(ds, args.format, **{k: v for k, v in options.items() if k in kind.query_options}))
     return 0
@@ -401,6 +402,8 @@ def build_parser():
                    help="speed=80:120 (range), clearance=3.8e-6 (value, m), preload=0,100 (list); repeatable")
     q.add_argument("--var", action="append", metavar="NAME", help="variable to print; repeatable")
     q.add_argument("--unstable", action="store_true", help="print the unstable speed intervals")
+    q.add_argument("--bistable", action="store_true",
+                   help="print the bistable speed intervals: between the fold pair of each jump of the sweep")
     q.add_argument("--attractors", nargs="?", const="up", choices=["up", "down"],
                    help="print the speed intervals of constant attractor class and period "
                         "(the up sweep, or the down sweep of a sweep_direction = \"both\" cube)")

@@ -128,10 +128,10 @@ def _flag_names(var):
     return names.get
 
 
-def intervals_table(intervals, fmt="table"):
-    """unstable_intervals(ds) in one of FORMATS."""
+def intervals_table(intervals, fmt="table", kind="unstable"):
+    """unstable_intervals(ds) (or another `kind` of intervals) in one of FORMATS."""
     if not intervals:
-        return {"table": "no unstable intervals", "csv": "", "json": "[]"}[_check_format(fmt)]
+        return {"table": f"no {kind} intervals", "csv": "", "json": "[]"}[_check_format(fmt)]
     return render({k: [row[k] for row in intervals] for k in intervals[0]}, fmt)
 
 
@@ -182,6 +182,8 @@ def _refined_crossings(ds, others):
         return {}
     out = {}
     for k in range(ds.sizes["boundary"]):
+        if int(ds["boundary_direction"].values[k]) >= ENTERS_BISTABLE:
+            continue        # a jump's fold pair bounds no unstable run
         key = tuple(ds[f"boundary_{a}"].values[k] for a in others)
         losing = int(ds["boundary_direction"].values[k]) == 0
         unstable_side = ds["boundary_grid_high" if losing else "boundary_grid_low"].values[k]
@@ -191,6 +193,28 @@ def _refined_crossings(ds, others):
 
 
 NOT_APPLICABLE = schema.ORBIT_STATUS.index("not_applicable")
+ENTERS_BISTABLE = schema.BOUNDARY_DIRECTION.index("enters_bistable")
+
+
+def bistable_intervals(ds):
+    """The bistable intervals of a cube: one per jump of the sweep (two neighbouring points on
+    different branches), between the fold pair its boundary table holds (pipeline.boundaries).
+
+    Each entry: the other axes' values, `start`/`end` (the lower and upper fold; NaN where the
+    pair could not be located), `grid_low`/`grid_high` (the grid points either side of the jump)."""
+    along = schema.continued_axis(ds)
+    others = _other_axes(ds)
+    name = f"boundary_{along}"
+    if name not in ds:
+        return []
+    pairs = {}
+    for k in np.flatnonzero(ds["boundary_direction"].values >= ENTERS_BISTABLE):
+        key = (*(float(ds[f"boundary_{a}"].values[k]) for a in others),
+               float(ds["boundary_grid_low"].values[k]), float(ds["boundary_grid_high"].values[k]))
+        end = "start" if int(ds["boundary_direction"].values[k]) == ENTERS_BISTABLE else "end"
+        pairs.setdefault(key, {})[end] = float(ds[name].values[k])
+    return [{**dict(zip(others, key[:-2])), "start": fold.get("start", np.nan), "end": fold.get("end", np.nan),
+             "grid_low": key[-2], "grid_high": key[-1]} for key, fold in sorted(pairs.items())]
 
 
 def unstable_intervals(ds):
@@ -239,7 +263,8 @@ def point_classes(ds):
     unstable interval, the interval's `type` (fold / period_doubling / neimark_sacker / no_orbit
     / none): how stability was lost before it (unstable_intervals). A point without orbit is
     "no_orbit" wherever it lies; an unstable orbit in an interval that began without orbit has
-    its own bifurcation code's name."""
+    its own bifurcation code's name. A stable point inside a bistable interval
+    (bistable_intervals: another stable orbit coexists there) is "bistable"."""
     import xarray as xr
 
     status = ds["orbit_status"]
@@ -260,6 +285,12 @@ def point_classes(ds):
     values[(status.values != 0) & (status.values != NOT_APPLICABLE)] = "no_orbit"
     began_without = (values == "no_orbit") & (status.values == 0)
     values[began_without] = own[began_without]
+    for iv in bistable_intervals(ds):
+        sel = {a: iv[a] for a in _other_axes(ds)}
+        grid = cls[along].values
+        inside = grid[(grid >= iv["start"]) & (grid <= iv["end"])]
+        line = cls.loc[{**sel, along: inside}]
+        cls.loc[{**sel, along: inside}] = np.where(line.values == "stable", "bistable", line.values)
     return cls
 
 

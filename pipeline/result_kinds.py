@@ -270,9 +270,11 @@ def _describe_backbone(ds):
     return backbone.describe(ds)
 
 
-def _query_cube(ds, fmt, where=None, var=None, unstable=False, attractors=None):
+def _query_cube(ds, fmt, where=None, var=None, unstable=False, attractors=None, bistable=False):
     from pipeline import query
     ds = query.select(ds, query.parse_where(where or []))
+    if bistable:
+        return query.intervals_table(query.bistable_intervals(ds), fmt=fmt, kind="bistable")
     if unstable:
         return query.intervals_table(query.unstable_intervals(ds), fmt=fmt)
     if attractors:
@@ -307,7 +309,7 @@ def _report_backbone(ds, out_dir, points=None, forced=None, say=None):
 
 KINDS = {kind.name: kind for kind in (
     ResultKind(SWEEP, "run", "a sweep cube", "rotorsweep result cube", None, cube.check_cube, _describe_cube, _query_cube, _report_cube,
-               query_options=("where", "var", "unstable", "attractors"), report_options=("point",)),
+               query_options=("where", "var", "unstable", "attractors", "bistable"), report_options=("point",)),
     ResultKind(CONTINUATION, "continue", "a continuation result", "rotorsweep continuation", CONTINUATION_VARIABLES, None,
                _describe_continuation, _query_continuation, _report_continuation,
                optional=CONTINUATION_OPTIONAL, coords=("observable",), attrs=("parameter", "range")),

@@ -165,7 +165,9 @@ def variables_of(spec):
 # continued axis on a line, refined far below the grid step (dimension `boundary`; the other
 # axes' values are stored as boundary_<axis>).
 BOUNDARY_STATUS = ("refined", "not_refined")
-BOUNDARY_DIRECTION = ("loses_stability", "regains_stability")  # with increasing axis value
+# with increasing axis value; a jump's fold pair: where a second stable orbit appears (the lower
+# fold) and where one ends (the upper), the bistable interval between them
+BOUNDARY_DIRECTION = ("loses_stability", "regains_stability", "enters_bistable", "leaves_bistable")
 
 
 def boundary_variables(axis, units, long_name):
