@@ -143,9 +143,12 @@ CONTINUATION_VARIABLES = {
 
 # variables only some continuation results have: with report.frequency_unit = "omega_l", with
 # continuation.curves_in
-CONTINUATION_OPTIONAL = ("branch_kind", "torus_status", "torus_error", "torus_exponent", "parameter_over_omega_l", "event_parameter_over_omega_l", "curve_parameter", "curve_second",
-                         "curve_critical_real", "curve_critical_imag", "curve_type", "curve_points", "curve_end",
-                         "curve_detail")
+# (piece_*: written since the coexistence counts distinct orbits; a file without them is read by
+# counting stable runs, pipeline.coexistence.coexistence)
+CONTINUATION_OPTIONAL = ("branch_kind", "torus_status", "torus_error", "torus_exponent", "parameter_over_omega_l",
+                         "event_parameter_over_omega_l", "curve_parameter", "curve_second", "curve_critical_real",
+                         "curve_critical_imag", "curve_type", "curve_points", "curve_end", "curve_detail",
+                         "piece_lo", "piece_hi", "piece_line", "piece_branches", "event_copy_of")
 
 # CF has one unit per variable; the manifold's coefficients have one per element, stated as a rule.
 MIXED_UNITS = ("no units attribute: the units differ from element to element (SI); P is the unit of "

@@ -115,14 +115,22 @@ def test_fig2a_with_the_law_as_printed_turns_at_a_soft_fold_pair():
     assert derived["axial_approach"] == pytest.approx(92.69e-6, rel=1e-3)
 
 
-def test_continuing_a_frequency_with_both_forcings_on_is_rejected_before_work():
-    """Unbalance and support vibration together: the common period jumps with either
-    frequency, so `rotorsweep continue` refuses, naming the key and the way out."""
+def test_continuing_a_frequency_with_both_forcings_on_follows_tori():
+    """Unbalance and support vibration together: the common period jumps with either frequency,
+    so no periodic orbit can be continued; `rotorsweep continue` follows the invariant torus
+    instead (issue 38; it refused such a scene before). Without the unbalance the line stays a
+    periodic-orbit line."""
+    from pipeline import torus_branches
+
     text = FIG2B.read_text().replace("eccentricity = 0.0", "eccentricity = 0.2e-6")
-    cfg = config.parse_config(text)
-    with pytest.raises(config.ConfigError, match="continuation.parameter: continuing support_frequency is ill-posed"):
-        continuation.plan(cfg.data)
-    assert continuation.plan(config.parse_config(FIG2B.read_text()).data).parameter == "support_frequency"
+    both = config.parse_config(text).data
+    pl = continuation.plan(both)
+    assert pl.parameter == "support_frequency"
+    assert torus_branches.is_torus_line(both, pl.parameter, pl.start, pl.lines[0])
+    alone = config.parse_config(FIG2B.read_text()).data
+    pl = continuation.plan(alone)
+    assert pl.parameter == "support_frequency"
+    assert not torus_branches.is_torus_line(alone, pl.parameter, pl.start, pl.lines[0])
 
 
 # --- balls unloading -------------------------------------------------------------------------
