@@ -11,6 +11,7 @@ import pytest
 
 from pipeline import cli, config, cube, fileio, gridsize, sweep
 from tests.test_cube import AXES4, PROVENANCE, random_results, _write_random_parts
+from tests.faults import disk_full_after_one_part
 from tests.test_pipeline import CLI, SMALL, rotorsweep
 
 
@@ -126,16 +127,7 @@ def test_a_read_only_output_directory_is_one_line(small_config, tmp_path, monkey
 def test_a_full_disk_keeps_the_finished_chunks_and_resume_finishes(small_config, tmp_path, monkeypatch, capsys):
     out = tmp_path / "full.nc"
     args = ("run", small_config, "-o", out, "--workers", "1", "--chunk-points", "8", "-q")
-    write_part = cube.write_part
-    written = []
-
-    def full_after_one(parts_dir, chunk_id, *rest):
-        if written:
-            raise OSError(28, "No space left on device", str(parts_dir / f"{chunk_id}.npz"))
-        written.append(chunk_id)
-        return write_part(parts_dir, chunk_id, *rest)
-
-    monkeypatch.setattr(cube, "write_part", full_after_one)
+    disk_full_after_one_part(monkeypatch)
     rc, err = run_cli(capsys, *args)
     assert rc == 2 and "No space left on device" in err and "the 1 finished chunk(s) are kept" in err, err
     assert "--resume" in err and len(err.strip().splitlines()) == 1

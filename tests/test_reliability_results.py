@@ -9,6 +9,7 @@ import pytest
 import xarray as xr
 
 from pipeline import cli, cube, results
+from tests.faults import disk_full_after_one_part
 from tests.test_pipeline import CLI
 from tests.test_reliability import wait_for_parts
 
@@ -81,16 +82,7 @@ def test_a_full_disk_keeps_the_finished_lines_and_resume_gives_the_uninterrupted
         lines_config, reference, tmp_path, monkeypatch, capsys):
     out = tmp_path / "full.nc"
     args = ("continue", lines_config, "-o", out, "--workers", "1", "-q")
-    write_part = cube.write_part
-    written = []
-
-    def full_after_one(parts_dir, chunk_id, *rest):
-        if written:
-            raise OSError(28, "No space left on device", str(parts_dir / f"{chunk_id}.npz"))
-        written.append(chunk_id)
-        return write_part(parts_dir, chunk_id, *rest)
-
-    monkeypatch.setattr(cube, "write_part", full_after_one)
+    disk_full_after_one_part(monkeypatch)
     rc, err = run_cli(capsys, *args)
     assert rc == 2 and "No space left on device" in err and "the 1 finished line(s) are kept" in err, err
     assert str(cube.parts_dir(out)) in err and "--resume" in err and len(err.strip().splitlines()) == 1
