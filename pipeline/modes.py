@@ -136,16 +136,31 @@ def scene_critical_speeds(spec, values, speeds_hz=None):
                            excitation_lines(spec, values))
 
 
-def station_shapes(mode, coordinates):
+DISK_STATION = "disc"
+
+
+def station_shapes(mode, coordinates, disk=None):
     """{station: (X, Y)}: the complex transverse amplitudes of each station of a mode (a journal
     or bearing centre: the coordinates "x1", "y1" make station "1"); its orbit over one period is
-    x = Re(X e^{i theta}), y = Re(Y e^{i theta}), theta in [0, 2 pi)."""
+    x = Re(X e^{i theta}), y = Re(Y e^{i theta}), theta in [0, 2 pi). With `disk` = (xi_D, l) of a
+    rigid rotor (`ModelSpec.disk_position`), also the disc's station DISK_STATION: a rigid shaft's
+    section at xi_D moves as (1 - xi_D / l) times the first station plus xi_D / l times the second."""
     kinds = modal.kinds_from_names(coordinates) or ()
     found = {}
     for value, (axis, station) in zip(mode.shape, kinds):
         if axis in ("x", "y"):
             found.setdefault(station, {})[axis] = complex(value)
-    return {station: (c["x"], c["y"]) for station, c in found.items() if len(c) == 2}
+    shapes = {station: (c["x"], c["y"]) for station, c in found.items() if len(c) == 2}
+    if disk is not None and len(shapes) >= 2:
+        s = disk[0] / disk[1]
+        (xa, ya), (xb, yb) = list(shapes.values())[:2]
+        shapes[DISK_STATION] = ((1 - s) * xa + s * xb, (1 - s) * ya + s * yb)
+    return shapes
+
+
+def disk_of(spec, values):
+    """(xi_D, l) [m] of the model's disc at `values`, or None for a model that names none."""
+    return spec.disk_position(values) if spec.disk_position is not None else None
 
 
 def omega_l(data):
@@ -233,6 +248,7 @@ def records(spec, values):
     """The static state and the modes at one point as plain data (what `modes --json` prints)."""
     eq, system = spec.linear_system(values)
     found = modes(spec, values, eq)
+    disk = disk_of(spec, values)
     return {
         "model": spec.name,
         "speed_hz": float(values[spec.speed]) if spec.speed else None,
@@ -241,9 +257,17 @@ def records(spec, values):
         "modes": [{"damped_frequency_hz": m.frequency, "undamped_frequency_hz": float(m.undamped_frequency),
                    "damping_ratio": m.damping_ratio, "log_decrement": float(log_decrement(m.damping_ratio)),
                    "whirl": m.whirl, "label": m.label,
-                   "shape_real": m.shape.real.tolist(), "shape_imag": m.shape.imag.tolist()} for m in found],
+                   "shape_real": m.shape.real.tolist(), "shape_imag": m.shape.imag.tolist(),
+                   "stations": station_records(m, system.coordinates, disk)} for m in found],
+        **({"disk_position_m": disk[0], "bearing_span_m": disk[1]} if disk is not None else {}),
         **(critical_records(spec, values, eq) if spec.speed else {}),
     }
+
+
+def station_records(mode, coordinates, disk):
+    """{station: {"x_real", "x_imag", "y_real", "y_imag"}}: station_shapes as plain numbers."""
+    return {str(name): {"x_real": x.real, "x_imag": x.imag, "y_real": y.real, "y_imag": y.imag}
+            for name, (x, y) in station_shapes(mode, coordinates, disk).items()}
 
 
 def critical_records(spec, values, equilibrium):
@@ -270,9 +294,25 @@ def summary(spec, values):
         zeta = m["damping_ratio"] if abs(m["damping_ratio"]) > ZETA_ROUNDING else 0.0
         lines.append(f"{k:>2} {m['damped_frequency_hz']:>14.6g} {m['undamped_frequency_hz']:>14.6g} "
                      f"{zeta:>8.4f} {m['whirl']:>9} {m['label']:>12}")
+    lines += shape_lines(rec)
     if "critical_speeds" in rec:
         lines += critical_lines(rec)
     return "\n".join(lines)
+
+
+def shape_lines(rec):
+    """Text lines of the mode shapes in a records() dict: per mode, each station's |X| and |Y|
+    (the largest coordinate amplitude of the mode is 1)."""
+    if not any(m["stations"] for m in rec["modes"]):
+        return []
+    disk = (f"; disc at {rec['disk_position_m']:g} m of the {rec['bearing_span_m']:g} m span"
+            if "disk_position_m" in rec else "")
+    lines = [f"mode shapes: |x|, |y| amplitude of each station (largest coordinate 1){disk}"]
+    for k, m in enumerate(rec["modes"]):
+        cells = [f"{name} ({abs(complex(c['x_real'], c['x_imag'])):.3f}, {abs(complex(c['y_real'], c['y_imag'])):.3f})"
+                 for name, c in m["stations"].items()]
+        lines.append(f"{k:>2} " + "  ".join(cells))
+    return lines
 
 
 def critical_lines(rec):

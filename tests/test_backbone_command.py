@@ -55,13 +55,28 @@ def test_manifold_and_continuation_agree_at_fourth_order(axial_result):
     O(A^6), is (A / z0)^2 <= 1e-3 relative to it."""
     ds = backbone.open_result(axial_result[0]).isel(speed=0)
     a = ds["amplitude_grid"].values
-    d = np.abs(ds["relative_difference"].values[0])
-    assert np.all(np.isfinite(d)) and d.min() > 1e-14
+    signed = ds["relative_difference"].values[0]
+    d = np.abs(signed)
+    assert np.all(np.isfinite(d)) and d.max() > 0
     start = a[np.argmax(d >= 1e-12)]
     fitted = (a >= start) & (a <= start * 10 * (1 + 1e-9))
     assert fitted.sum() >= 8 and start < 1e-6
     slope = np.polyfit(np.log(a[fitted]), np.log(d[fitted]), 1)[0]
     assert slope == pytest.approx(4.0, abs=0.1)
+    # Below the fitted decade d is the quartic term C A^4 (< 1e-12) plus the noise of the two
+    # frequencies relative to their scale f0: the continuation's ~1e-14 (measured above: 8.5e-15) and
+    # the manifold's rounding (a few eps), so |d - C A^4| <= NOISE there, whatever its sign makes of
+    # d (with E = 2e11 the smallest d is 8.7e-16: the quartic term and the noise nearly cancel). C
+    # from the fitted decade with the slope 4 of the theory: its O(A^6) part (<= 1e-3 relative) and
+    # the 1 % noise at the decade's start move C A^4 by < 1e-14 below it (signed: the noise may flip
+    # the sign of a difference below it). The check fails when the
+    # small-amplitude frequencies part by more than that noise (a continuation that drifts, or a
+    # manifold whose linear frequency is off), which a floor on d.min() could not see.
+    noise = 2.5e-14
+    c = np.median(signed[fitted] / a[fitted] ** 4)
+    below = a < start
+    assert below.sum() >= 5
+    assert np.abs(signed[below] - c * a[below] ** 4).max() <= noise
     # the linear limit: both backbones start at the eigenfrequency of the polynomial form
     f0 = float(ds["linear_frequency"].values[0])
     assert ds["frequency_manifold"].values[0, 0] == pytest.approx(f0, rel=1e-6)

@@ -186,10 +186,11 @@ def test_given_values_are_used_and_recorded_as_given():
     geom = rp.table_geometry(preloaded_pair.bearing_inputs(values(table="filipkovsky2010")))
     assert (geom.youngs_modulus, geom.outer_race_radius) == (2e11, 27.53e-3)
     assert state.static_thrust == pytest.approx(300.0, rel=1e-12)
-    # hertz keeps the row's label as its free angle unless told otherwise (the older scenes' numbers)
-    assert SPEC.build(values(preload_law="hertz")).derived["free_contact_angle"] == pytest.approx(15.0, rel=1e-15)
-    assert SPEC.build(values(preload_law="hertz", free_angle="geometry")).derived["free_contact_angle"] == \
+    # hertz, too, takes the free angle from the table's geometry; the row's label only when told
+    assert SPEC.build(values(preload_law="hertz")).derived["free_contact_angle"] == \
         pytest.approx(derived_free(15), rel=1e-12)
+    assert SPEC.build(values(preload_law="hertz", free_angle="nominal")).derived["free_contact_angle"] == \
+        pytest.approx(15.0, rel=1e-15)
 
 
 def derived_free(angle):

@@ -36,11 +36,12 @@ def rhs_jac(tau, u, p, du, out):
 
 
 def disk_position(v):
-    return v["disk_position"]
+    """(xi_D, l) [m]: the axial paper, section 2: "l_1 = 0,125 м" from support A (the rotor key)."""
+    return v["disk_position"], v["length"]
 
 
 def polynomial(v):
-    return sr.polynomial_system(v, N_POS, disk_position(v))
+    return sr.polynomial_system(v, N_POS, disk_position(v)[0])
 
 
 SPEC = ModelSpec(
@@ -51,7 +52,8 @@ SPEC = ModelSpec(
         # the axial paper, section 2: "l_1 = 0,125 м" from support A
         Parameter(default=0.125, name="disk_position", section="rotor", lo=0, unit="m",
                   help="disk position l1 from bearing A (paper: 0.125 m)"),) + sr.BEARING_PARAMETERS,
-    build=sr.build_for(N_POS, disk_position), cold_guess=lambda p: np.zeros(2 * N_POS),
+    build=sr.build_for(N_POS, lambda v: disk_position(v)[0]), cold_guess=lambda p: np.zeros(2 * N_POS),
     length_scale=sr.LENGTH_SCALE, observables=sr.observables(N_POS), derived=sr.DERIVED, check=sr.check,
     references=sr.REFERENCES, polynomial=polynomial, speed="speed", amplitude_bound="axial_approach",
+    disk_position=disk_position,
 )

@@ -5,7 +5,8 @@ keys, and the static state of each bearing (`bearing.PreloadState`) they give.
 What a scene may give and what is derived (the cube records which: BEARING_DERIVED):
 
 * the table row (`table`, `nominal_angle` a label) and any geometry value (R1, R2, R_K, d, E, nu);
-* the free contact angle: from the groove geometry (eq. 10 at zero load) or the row's label;
+* the free contact angle: from the groove geometry (eq. 10 at zero load; the default, under both
+  preload laws), or the row's label (`free_angle = "nominal"`, explicit);
 * the loaded contact angle: from the preload (eqs. 8-10), or imposed (`contact_angle`);
 * z0 and K: from the preload law (`preload_law`: "hertz", the consistent Hertz model, or
   "as_printed", the papers' eqs. 6-10), or given (`axial_approach`, `contact_constant`);
@@ -26,8 +27,6 @@ FREE_ANGLES = ("geometry", "nominal")
 # Sign s of the axial coordinate in each bearing: bearing A is shifted by s z, B by -s z.
 ARRANGEMENTS = {"back_to_back": 1.0, "face_to_face": -1.0}
 GEOMETRY_KEYS = bearing.GEOMETRY_OVERRIDES
-# Keys that move the groove geometry, so that the free angle can only come from it.
-_GROOVE_KEYS = ("inner_race_radius", "outer_race_radius", "groove_radius", "ball_diameter")
 REMOVED_STIFFNESS = (
     "bearing.stiffness: removed. \"hertz\" is now bearing.preload_law = \"hertz\" (the default); "
     "\"paper\" was the Hertz model with K x 1.5 (z0 the Hertz approach w / sin a), which no longer "
@@ -77,15 +76,10 @@ def geometry(nominal_angle, table=DEFAULT_TABLE):
 
 
 def free_angle_source(inputs):
-    """Where the free contact angle comes from: "geometry" (R1, R2, R_K, d by eq. 10 at zero load)
-    or "nominal" (the row's label taken as the free angle). Unset: geometry for the law as
-    printed, for a table without labels and when a groove dimension is given; else nominal (the
-    Hertz scenes' reading before the table was taken as printed, kept so their numbers stay)."""
-    if inputs.free_angle is not None:
-        return inputs.free_angle
-    labelled = None not in bearing.ANGULAR_TABLES[inputs.table].outer_race_radius
-    groove = any(getattr(inputs, k) is not None for k in _GROOVE_KEYS)
-    return "nominal" if inputs.preload_law == "hertz" and labelled and not groove else "geometry"
+    """Where the free contact angle comes from: "geometry" (R1, R2, R_K, d by eq. 10 at zero load:
+    what the papers' tables mean, under either preload law) unless the scene asks for "nominal"
+    (the row's label taken as the free angle, an explicit departure from the table)."""
+    return inputs.free_angle or "geometry"
 
 
 def free_angle(inputs):
@@ -120,6 +114,18 @@ def preload_of(nominal_angle, preload, preload_law="hertz", **given):
                                       **given))
 
 
+# What a scene may give in place of a table row's value or of what derives from it: replacing the
+# row, all of them are unset, so that each is derived again from the new row.
+ROW_VALUES = ("contact_angle", "contact_constant", "axial_approach") + GEOMETRY_KEYS
+
+
+def with_row(v, nominal_angle):
+    """Values `v` with the bearing replaced by a table row as printed (label `nominal_angle`):
+    its geometry and material, and the loaded angle, K and z0 derived from them under the scene's
+    preload, preload law, free-angle source and arrangement (which stay)."""
+    return {**v, "nominal_angle": nominal_angle, **{k: None for k in ROW_VALUES}}
+
+
 def bearing_state(v):
     """bearing.PreloadState of each bearing at a point's values."""
     return preload_from(bearing_inputs(v))
@@ -133,11 +139,29 @@ def arrangement_of(v):
     return v.get("arrangement") or "back_to_back"
 
 
+# The table values a scene may override: (attribute of bearing.BearingGeometry, unit, long name).
+GEOMETRY_VALUES = {
+    "inner_race_radius": ("inner_race_radius", "m", "inner groove-bottom radius R1"),
+    "outer_race_radius": ("outer_race_radius", "m", "outer groove-bottom radius R2"),
+    "groove_radius": ("inner_groove_radius", "m", "groove radius R_K of both rings"),
+    "ball_diameter": ("ball_diameter", "m", "ball diameter d"),
+    "youngs_modulus": ("youngs_modulus", "Pa", "Young's modulus E"),
+    "poisson_ratio": ("poisson_ratio", "1", "Poisson ratio"),
+}
+
+
 def bearing_derived(v, state):
-    """The bearing's per-point values for the cube, and which of them the scene gave (1) or the
-    model derived (0): the free angle, loaded angle, z0, K, Hertz approach and static thrust."""
+    """The bearing's per-point values for the cube, and for each whether the scene gave it (1) or
+    the model derived it (0: from the table row, or from the preload law): the table's geometry
+    and material, the free angle, loaded angle, z0, K, Hertz approach and static thrust."""
     inputs = bearing_inputs(v)
+    geom = table_geometry(inputs)
+    table = {}
+    for key, (attribute, _, _) in GEOMETRY_VALUES.items():
+        table[f"bearing_{key}"] = float(getattr(geom, attribute))
+        table[f"bearing_{key}_given"] = float(getattr(inputs, key) is not None)
     return {
+        **table,
         "free_contact_angle": math.degrees(free_angle(inputs)),
         "free_angle_from_geometry": float(free_angle_source(inputs) == "geometry"),
         "contact_angle_used": math.degrees(state.contact_angle),
@@ -151,17 +175,28 @@ def bearing_derived(v, state):
     }
 
 
+def _geometry_variables():
+    out = {}
+    for key, (_, unit, long_name) in GEOMETRY_VALUES.items():
+        out[f"bearing_{key}"] = (unit, f"bearing {long_name} used")
+        out[f"bearing_{key}_given"] = ("1", f"1: {long_name} given by the scene; 0: the table row's")
+    return out
+
+
 BEARING_DERIVED = {
+    **_geometry_variables(),
     "free_contact_angle": ("degree", "free (unloaded) contact angle: from R1, R2, R_K, d, or the nominal angle"),
-    "free_angle_from_geometry": ("1", "1: free angle from R1, R2, R_K, d (eq. 10 at zero load); 0: the nominal angle"),
+    "free_angle_from_geometry": ("1", "1: free angle derived from R1, R2, R_K, d (eq. 10 at zero load); 0: the "
+                                 "nominal angle given as the free angle (bearing.free_angle = nominal)"),
     "contact_angle_used": ("degree", "contact angle in the force law (loaded, or imposed)"),
-    "contact_angle_imposed": ("1", "1: contact angle imposed by the scene; 0: from the preload solve"),
+    "contact_angle_imposed": ("1", "1: contact angle given by the scene (imposed); 0: derived from the preload solve"),
     "axial_approach": ("m", "axial approach z0 of each bearing in the force law"),
     "axial_approach_given": ("1", "1: z0 given by the scene; 0: derived (hertz: equilibrium, as_printed: eq. 7)"),
     "contact_constant": ("N m-1.5", "ball contact constant K"),
     "contact_constant_given": ("1", "1: K given by the scene; 0: derived (hertz: Hertz theory, as_printed: eq. 6)"),
-    "hertz_approach": ("m", "Hertz approach w = w1 + w2 of each ball under the preload"),
-    "static_thrust": ("N", "axial force of one bearing's force law at rest (hertz: P0; as printed: 1.5 P0)"),
+    "hertz_approach": ("m", "Hertz approach w = w1 + w2 of each ball under the preload (always derived)"),
+    "static_thrust": ("N", "axial force of one bearing's force law at rest (hertz: P0; as printed: 1.5 P0; "
+                      "always derived)"),
 }
 
 
@@ -189,6 +224,9 @@ def bearing_problems(data, axes):
             return [f"{where}.nominal_angle: must be one of {', '.join(map(str, rows))} deg (the paper's "
                     f"bearing table; got {odd[0]:g})"]
     errors = []
+    if len(set(angles)) > 1 and b.get("outer_race_radius") is not None:
+        errors.append("bearing.outer_race_radius: replaces the R2 of every row of sweep.nominal_angle, whose rows "
+                      "would then differ only in their label: sweep the rows or give R2, not both")
     if b.get("preload_law") == "hertz" and b.get("contact_constant") is not None \
             and b.get("axial_approach") is not None:
         errors.append("bearing.axial_approach: preload_law \"hertz\" derives z0 from K and the preload (or K "
@@ -219,8 +257,8 @@ BEARING_KEYS = (
                  "eq. 7, K = 3 P0 / (2N) z0^-1.5 sin^-2.5 a; static thrust 1.5 P0)", "choice", "hertz",
                  PRELOAD_LAWS),
     _bearing_key("free_angle", "1", "free contact angle from: geometry (R1, R2, R_K, d; eq. 10 at zero "
-                 "load) or nominal (the row's label); unset: geometry, except nominal for the hertz law "
-                 "on the 2016 table without groove overrides", "choice", None, FREE_ANGLES),
+                 "load; the default, as the papers' tables mean it) or nominal (the row's label taken as the "
+                 "free angle)", "choice", "geometry", FREE_ANGLES),
     _bearing_key("arrangement", "1", "back_to_back: +z (toward bearing B) compresses A and relieves B; "
                  "face_to_face: +z compresses B", "choice", "back_to_back", tuple(ARRANGEMENTS)),
     _bearing_key("contact_constant", "N m-1.5", "ball contact constant K given (unset: derived)"),

@@ -53,7 +53,7 @@ from rotorkernels.models.spec import Built, Equilibrium, LinearSystem, ModelSpec
 from rotorkernels.models.preloaded_pair import (  # noqa: F401 (the pair's API, read as rp.*)
     ARRANGEMENTS, BEARING_DERIVED, BEARING_KEYS, DEFAULT_NOMINAL_ANGLE, NOMINAL_ANGLES,
     arrangement_of, bearing_derived, bearing_problems, bearing_state, geometry, n_balls_of, preload_of,
-    table_geometry)
+    table_geometry, with_row)
 from rotorkernels.models.velocity import upper_rows, velocity_rows
 
 LENGTH_SCALE = 1e-6
@@ -447,11 +447,16 @@ def linearization(v, equilibrium):
                         2.0 * np.pi * v["speed"] * gyroscopic_matrix(rotor), stiffness, COORDINATES)
 
 
+def disk_position(v):
+    """(xi_D, l) [m]: the disc from bearing A and the bearing span (paper values: the spec's rotor keys)."""
+    return float(v["disk_position"]), float(v["length"])
+
+
 def omega_l(v):
     """omega_l [Hz]: the lowest damped natural frequency at `v` with its bearing replaced by the
-    paper's 15 deg row (loaded angle from the preload solve, no imposed angle or R2). With the
-    paper's rotor it is the axial mode, which the shaft speed does not move."""
-    v = {**v, "nominal_angle": OMEGA_L_ANGLE, "contact_angle": None, "outer_race_radius": None}
+    paper's 15 deg row as printed (`with_row`: its geometry, and the loaded angle, K and z0 derived
+    again from it). With the paper's rotor it is the axial mode, which the shaft speed does not move."""
+    v = with_row(v, OMEGA_L_ANGLE)
     system = linearization(v, static_equilibrium(v))
     return modal.modes_of(system.M, system.C, system.G, system.K, modal.kinds_from_names(COORDINATES))[0].frequency
 
@@ -565,6 +570,7 @@ SPEC = ModelSpec(
     },
     check=check,
     equilibrium=static_equilibrium, linearization=linearization, speed="speed", omega_l=omega_l,
+    disk_position=disk_position,
     support_frequency="support_frequency",
     torus_forcing=(P_PHASE, P_WS, {"max_denominator": 0}),   # 0: no ratio shot as periodic, tau one shaft turn
     derived_axes={"contact_angle": "derived from the preload solve per point, see contact_angle_used"},

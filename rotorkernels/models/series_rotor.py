@@ -27,12 +27,9 @@ Choices where the papers are ambiguous or inconsistent:
 * Bearings: `rigid_preloaded`'s pair (`preloaded_pair`): back-to-back by default, +z compresses A
   and relieves B (the papers write one z; with equal signs the two static preload forces would add
   instead of cancel); `bearing.arrangement = "face_to_face"` flips it.
-* Bearing constants: `bearing.table = "filipkovsky2010"` is these papers' bearing as printed
-  (section 2 of both: R1 = 16.00, R2 = 27.53, R_K = 5.93, d = 11.51 mm, N = 7, E = 2e11 Pa,
-  sigma = 0.3, Q = 300 N). The model's default table stays the 2016 paper's (E = 2.1e11 Pa, the
-  15 deg row), and configs/filipkovsky2010_*.toml take only R2 from the 2010 papers, so that the
-  scenes and their backbone numbers stay; E = 2e11 gives a 3.3 % softer c_r, 1.6 % lower
-  frequencies.
+* Bearing constants: `bearing.table = "filipkovsky2010"` (the default here) is these papers'
+  bearing as printed (section 2 of both: R1 = 16.00, R2 = 27.53, R_K = 5.93, d = 11.51 mm, N = 7,
+  E = 2e11 Pa, sigma = 0.3, Q = 300 N; free angle 19.5 deg from the groove geometry by eq. 10).
 * Rotor constants (ROTOR_PARAMETERS) as both papers print them in section 2: l = 0.5 m,
   l1 = 0.125 m (axial paper), d = 0.025 m, m0 = 10 kg, I1 = 0.1, I0 = 0.2 kg m^2,
   omega = 628.3 rad/s. The density is not printed: steel, 7800 kg/m^3 (ours).
@@ -41,6 +38,7 @@ Kernel: tau = t / T with T = 2 pi / (the lowest linear natural frequency at the 
 in units of L = 1 um; u = (q / L, dq/dtau / L). The right-hand side does not depend on tau.
 """
 import math
+from dataclasses import replace
 
 import numpy as np
 from numba import njit
@@ -216,8 +214,10 @@ def _rotor(name, default, unit, help):
     return Parameter(default=default, name=name, section="rotor", lo=0, lo_open=True, unit=unit, help=help)
 
 
+# The 2010 papers' bearing (their section 2, `bearing.ANGULAR_TABLES["filipkovsky2010"]`) is these
+# models' default table; the other keys are rigid_preloaded's.
 BEARING_PARAMETERS = tuple(rp.SPEC.parameter(k) for k in ("nominal_angle", "contact_angle", "preload")) \
-    + rp.BEARING_KEYS
+    + tuple(replace(k, default="filipkovsky2010") if k.name == "table" else k for k in rp.BEARING_KEYS)
 ROTOR_PARAMETERS = (
     Parameter(name="speed", unit="Hz", long_name="shaft speed", axis=True, lo=0, hi=1e5,
               unset=628.3 / (2 * math.pi), help="shaft speed [Hz] (papers: 628.3 rad/s = 100.0 Hz); a sweep axis"),

@@ -130,6 +130,8 @@ class ModelSpec:
     support_frequency: str = ""     # the parameter that is a support excitation frequency [Hz] (where > 0: a
     #                                 horizontal line of Campbell diagrams, its crossings critical speeds)
     omega_l: Callable = None        # omega_l(values) -> [Hz]: the reports' frequency unit (None: Hz only)
+    disk_position: Callable = None  # disk_position(values) -> (xi_D, l) [m]: a rigid rotor's disc at xi_D from
+    #                                 bearing A, l between the bearings (its motion is interpolated from theirs)
     derived_axes: dict = field(default_factory=dict)   # axis -> how it is derived per point when neither
     #                                                    given nor swept ("derived from X ...")
     amplitude_bound: str = ""       # a Built.derived value [m] the amplitudes must stay below (the

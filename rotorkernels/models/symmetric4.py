@@ -49,19 +49,21 @@ PLANAR_SUBSPACES = {"cylindrical_x": _planar(0), "cylindrical_y": _planar(1)}
 
 
 def disk_position(v):
-    return v["length"] / 2
+    """(xi_D, l) [m]: the symmetric paper, section 1: "диск закреплен посередине между опорами"
+    (the disc is fixed midway between the supports)."""
+    return v["length"] / 2, v["length"]
 
 
 def polynomial(v):
-    return sr.polynomial_system(v, N_POS, disk_position(v))
+    return sr.polynomial_system(v, N_POS, disk_position(v)[0])
 
 
 SPEC = ModelSpec(
     name="symmetric4", id=5, module=__name__, n_position=N_POS, forced=False, continuation=("speed",),
     description="Filipkovsky 2010: symmetric 4-DOF rotor on preloaded ball bearings, cubic series law, conservative",
     parameters=sr.ROTOR_PARAMETERS + sr.BEARING_PARAMETERS,
-    build=sr.build_for(N_POS, disk_position), cold_guess=lambda p: np.zeros(2 * N_POS),
+    build=sr.build_for(N_POS, lambda v: disk_position(v)[0]), cold_guess=lambda p: np.zeros(2 * N_POS),
     length_scale=sr.LENGTH_SCALE, observables=sr.observables(N_POS), derived=sr.DERIVED, check=sr.check,
     references=sr.REFERENCES, polynomial=polynomial, speed="speed", amplitude_bound="axial_approach",
-    invariant_subspaces=PLANAR_SUBSPACES,
+    invariant_subspaces=PLANAR_SUBSPACES, disk_position=disk_position,
 )
