@@ -27,7 +27,7 @@ def scene(**backbone_keys):
 
 @pytest.fixture(scope="module")
 def axial_result(tmp_path_factory):
-    """Mode 1 (axial, 395 Hz) over two decades of amplitude, one local worker, with its report
+    """Mode 1 (axial, 390 Hz) over two decades of amplitude, one local worker, with its report
     (whose manifold figure shows mode 2, a whirl: the axial mode moves alone, its manifold is flat)."""
     out = tmp_path_factory.mktemp("bb")
     path = out / "scene.toml"
