@@ -281,7 +281,16 @@ def _describe_variable(name, var, axes):
     text = f"  {name:<20} {var.attrs.get('long_name', '')}{extra}"
     if "flag_meanings" in var.attrs:
         return f"{text}  flags: {var.attrs['flag_meanings']}"
-    return f"{text}  [{var.attrs.get('units', '')}]"
+    return f"{text}  [{var.attrs.get('units', '')}]{_same_everywhere(var, axes)}"
+
+
+def _same_everywhere(var, axes):
+    """" = value" for a per-point number equal at every point (a scene's constant, e.g. a bearing
+    value used and whether the scene gave it), else ""."""
+    if set(var.dims) - set(axes) or var.dtype.kind not in "fiu" or var.size == 0:
+        return ""
+    values = np.asarray(var.values).ravel()
+    return f" = {values[0]:g}" if np.isfinite(values[0]) and (values == values[0]).all() else ""
 
 
 def _flag_counts(var):

@@ -184,3 +184,23 @@ def test_modes_json_and_text_carry_the_disc(capsys):
     assert cli.main(["modes", "configs/filipkovsky2016_quick.toml"]) == 0
     text = capsys.readouterr().out
     assert "mode shapes:" in text and "disc at 0.125 m of the 0.5 m span" in text and " disc (" in text
+
+
+def test_info_shows_each_bearing_value_and_whether_it_was_given():
+    """A cube of two points holding the model's derived values (as a sweep writes them):
+    `rotorsweep info` prints each value used and its given flag where they are the same at
+    every point."""
+    from pipeline import cube
+    points = [SPEC.build(values(speed=s, groove_radius=5.94e-3)).derived for s in (250.0, 260.0)]
+    results = {name: np.array([p[name] for p in points]) for name in points[0]}
+    ds = cube.build_dataset({"speed": [250.0, 260.0]}, {}, results, {"model": "rigid_preloaded"})
+    lines = cube.describe(ds).splitlines()
+
+    def line(name):
+        return next(x for x in lines if x.split()[:1] == [name])
+
+    assert line("bearing_groove_radius").endswith("[m] = 0.00594")
+    assert line("bearing_groove_radius_given").endswith("= 1")
+    assert line("bearing_youngs_modulus").endswith("[Pa] = 2.1e+11")
+    assert line("bearing_youngs_modulus_given").endswith("= 0")
+    assert line("contact_constant_given").endswith("= 0")
