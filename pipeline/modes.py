@@ -311,7 +311,7 @@ def shape_lines(rec):
     for k, m in enumerate(rec["modes"]):
         cells = [f"{name} ({abs(complex(c['x_real'], c['x_imag'])):.3f}, {abs(complex(c['y_real'], c['y_imag'])):.3f})"
                  for name, c in m["stations"].items()]
-        lines.append(f"{k:>2} " + "  ".join(cells))
+        lines.append(f"  mode {k}: " + "  ".join(cells))
     return lines
 
 

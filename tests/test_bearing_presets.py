@@ -183,7 +183,7 @@ def test_modes_json_and_text_carry_the_disc(capsys):
         np.testing.assert_allclose(got, want, rtol=0, atol=8 * np.finfo(float).eps)
     assert cli.main(["modes", "configs/filipkovsky2016_quick.toml"]) == 0
     text = capsys.readouterr().out
-    assert "mode shapes:" in text and "disc at 0.125 m of the 0.5 m span" in text and " disc (" in text
+    assert "mode shapes:" in text and "disc at 0.125 m of the 0.5 m span" in text and " disc (" in text and "  mode 0: 1 (" in text
 
 
 def test_info_shows_each_bearing_value_and_whether_it_was_given():

@@ -45,7 +45,8 @@ def polynomial(v):
 
 
 SPEC = ModelSpec(
-    name="asymmetric5", id=6, module=__name__, n_position=N_POS, forced=False, continuation=("speed",),
+    name="asymmetric5", id=6, module=__name__, version="2",   # 2: the 2010 papers' bearing (E = 2e11 Pa) by default
+    n_position=N_POS, forced=False, continuation=("speed",),
     description="Filipkovsky 2010: asymmetric 5-DOF rotor (transverse-axial coupling) on preloaded ball "
                 "bearings, cubic series law, conservative",
     parameters=sr.ROTOR_PARAMETERS + (

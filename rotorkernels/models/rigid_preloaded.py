@@ -503,6 +503,7 @@ def _rotor(name, default, unit, help):
 SPEC = ModelSpec(
     name="rigid_preloaded",
     id=4,
+    version="2",    # 2: the table rows' free angle from their groove geometry under both preload laws
     module=__name__,
     n_position=N_POS,
     description="Filipkovsky 2016: 5-DOF rigid rotor on two preloaded angular-contact ball bearings",
