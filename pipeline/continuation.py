@@ -313,6 +313,8 @@ def _torus_variables(records, stable):
     return ({"branch_kind": np.array([int("torus_status" in r) for _, r in records], "int8"),
              "torus_status": status, "torus_error": pad("torus_error", np.nan, float),
              "torus_exponent": pad("torus_exponent", np.nan, float),
+             "event_note": np.array([note for _, r in records for note in r.get("event_note", [""] * len(r["event_type"]))],
+                                    object),
              "stable": np.where(torus, status == torus_branches.TORUS_STATUS["stable"], stable).astype("int8")}, {})
 
 
@@ -520,6 +522,8 @@ def events_table(ds):
         if ds[c].dims == ("branch",):
             cols[c] = ds[c].values[branch].tolist() if len(branch) else []
     cols["stable"] = [int(np.abs(m).max() < 1.0) for m in mult]
+    if "event_note" in ds:      # torus branches' events (pipeline.torus_events) in words
+        cols["note"] = [str(v) for v in ds["event_note"].values]
     for j, name in enumerate(ds["observable"].values):
         cols[f"amplitude_max_{name}"] = ds["event_amplitude_max"].values[:, j].tolist()
         cols[f"amplitude_half_pp_{name}"] = ds["event_amplitude_half_pp"].values[:, j].tolist()
