@@ -123,7 +123,8 @@ def stable_pieces(record, lam_range):
 
 def torus_record(model, family, built, run, n_rhs):
     """One torus branch as plain arrays: the orbit record's keys (multipliers NaN, orbit_state
-    the circle at phase 0, period T), torus_error, torus_exponent [1/s], torus_status, and the
+    the circle at phase 0, period T), torus_error, torus_exponent [1/s], torus_status, torus_nodes
+    (points, N, n: the circle's node values, scaled state, at phases 2 pi j / N), and the
     branch's events (pipeline.torus_events: flags and locked ratios, with event_note)."""
     n_state = family.kernel.n_state
     pts = run.points
@@ -142,6 +143,7 @@ def torus_record(model, family, built, run, n_rhs):
         "torus_error": np.array([torus_error(family, p) for p in pts]),
         "torus_exponent": np.array([p.stability.exponents[0] for p in pts]) / periods if len(pts) else none,
         "torus_status": np.array([TORUS_STATUS[p.stability.status] for p in pts], int),
+        "torus_nodes": np.array([family.nodes(p.X) for p in pts]).reshape(len(pts), family.n_nodes, n_state),
     }
 
 

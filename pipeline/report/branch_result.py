@@ -12,7 +12,7 @@ import numpy as np
 
 from pipeline import compute, continuation, query, schema
 from pipeline.report import branches, harmonics, page, style
-from pipeline.report.figures import bode, mode_campbell, mode_shapes
+from pipeline.report.figures import bode, mode_campbell, mode_shapes, torus_detail
 from rotorkernels.continuation import arclength as al
 
 def _shown(value, units):
@@ -181,6 +181,8 @@ def figures(ds, backend):
     if tori.any():
         out.append(("Tori: largest normal Lyapunov exponent (< 0: stable)", "torus_exponent.png",
                     _panel(hv, ds, "torus_exponent", "largest normal exponent [1/s]", backend)))
+        if torus_detail.has_torus_detail(ds):
+            out.append((torus_detail.CAPTION, "torus_detail.png", torus_detail.result_figure(ds, backend)))
     if mode_campbell.has_linear_analysis(ds):
         out.append((mode_campbell.CAPTION, "mode_campbell.png", mode_campbell.result_figure(ds, backend)))
     if mode_shapes.has_stations(ds):
