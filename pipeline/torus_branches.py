@@ -30,6 +30,7 @@ MAX_NODES = 63
 DECAY_TOL = 1e-9        # the first torus's Fourier tail (node count grown to reach it)
 BREAKDOWN_TOL = 1e-7    # a branch point's tail above it: the circle is no longer resolved
 AMPLITUDE_PHASES = 64
+POLISH_TOL = 1e-12      # each stored circle's residual, relative to max(1, max |U|) (tori.polish)
 TORUS_STATUS = {tr.UNSTABLE: 0, tr.STABLE: 1, tr.UNDECIDED: 2}
 
 
@@ -101,10 +102,20 @@ def continue_torus_line(data, pl, where):
     if first is None:
         run = engine.Run([], [], engine.START_FAILED, f"the torus start did not converge at {pl.start!r}")
     else:
-        run = tori.follow_tori(family, first, pl.range, pl.settings, counter, torus_events.LOCK_DENOMINATOR)
+        run = polished(family, tori.follow_tori(family, first, pl.range, pl.settings, counter,
+                                                torus_events.LOCK_DENOMINATOR))
     record = torus_record(spec, family, built, run, counter.n)
     record["coexistence"] = stable_pieces(record, pl.range)
     return [record]
+
+
+def polished(family, run):
+    """The run with each point's and located event's circle refined to POLISH_TOL at its lambda
+    (tori.polish: what the result stores, its amplitudes and error estimate, is then solved far
+    below the continuation's corrector tolerance; docs/guide/continue.md, "error estimate")."""
+    def refine(point):
+        return None if point is None else tori.polish(family, point, POLISH_TOL)
+    return run._replace(points=[refine(p) for p in run.points], found=[f._replace(point=refine(f.point)) for f in run.found])
 
 
 def stable_pieces(record, lam_range):

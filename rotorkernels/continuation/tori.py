@@ -142,6 +142,24 @@ class TorusFamily(NamedTuple):
         return True
 
 
+def polish(family, point, tol, max_iter=3):
+    """The point with its circle refined by Newton at its fixed lambda until max |R| <= tol max(1,
+    max |U|) (at most max_iter steps; the point as it was where a step fails). The corrector stops
+    at the continuation's tolerance, relative to the largest node value, so its absolute residual
+    varies from point to point by orders of magnitude (quadratic convergence lands anywhere below
+    it), and the circle's distance from the invariant one is that residual times ||dR/dU^-1||."""
+    X = point.X.copy()
+    for _ in range(max_iter):
+        r, jac, _, ok, _ = family.residual(X, True)
+        if not ok or np.abs(r).max() <= tol * max(1.0, np.abs(X[:-1]).max()):
+            break
+        try:
+            X[:-1] += np.linalg.solve(jac, -r.ravel())
+        except np.linalg.LinAlgError:
+            break
+    return point._replace(X=X, tail=tr.fourier_tail(family.nodes(X)))
+
+
 def _bordered(jac, col, c):
     m = col.size
     A = np.empty((m + 1, m + 1))
