@@ -533,7 +533,7 @@ def events_table(ds):
     for c in ds.coords:
         if ds[c].dims == ("branch",):
             cols[c] = ds[c].values[branch].tolist() if len(branch) else []
-    cols["stable"] = [int(np.abs(m).max() < 1.0) for m in mult]
+    cols["stable"] = [-1 if np.isnan(m).all() else int(np.abs(m).max() < 1.0) for m in mult]   # -1: a torus flag
     if "event_note" in ds:      # torus branches' events (pipeline.torus_events) in words
         cols["note"] = [str(v) for v in ds["event_note"].values]
     for j, name in enumerate(ds["observable"].values):

@@ -240,7 +240,8 @@ def _header_html(ds, title):
     items = "".join(f"<li>{html.escape(s.strip())}</li>" for s in lines[2:])
     return (f"<h1>{html.escape(title)}</h1><p>{html.escape(lines[0])}<br>{html.escape(lines[1])}</p><ul>{items}</ul>"
             "<p>Stable branches solid, unstable dashed; LP: fold (limit point), PD: period doubling, "
-            "NS: Neimark-Sacker, BP: branch point.</p>")
+            "NS: Neimark-Sacker, BP: branch point; on torus branches TS: the normal stability changes, TF: a fold "
+            "of tori, locked: a ratio p/q of the forcings with its periodic orbit (the table's note).</p>")
 
 
 def make_report(ds, out_dir, title=None):
