@@ -78,6 +78,7 @@ def _locked_row(model, family, built, found):
                 f"{head}; shooting over {event.q} shaft turns from the circle {why}: no orbit linked")
     mult = floquet.multipliers(orbit.monodromy)
     hi, half = extrema.amplitudes(model, orbit.state, p, event.q * family.period, family.opts, built(point.lam).period)
-    note = (f"{head}; periodic orbit of {event.q} shaft turns linked, {distance:.2g} from the circle, "
+    note = (f"{head}; periodic orbit of {event.q} shaft turns linked, {distance:.2g} from the circle "
+            f"(shooting residual {orbit.residual:.2g} after {orbit.iterations} Newton steps), "
             f"max |multiplier| {np.abs(mult).max():.6g}")
     return point.lam, orbit.state, mult, hi, half, note
