@@ -116,6 +116,9 @@ SCHEMA = {
         "frequency_unit": Key("choice", default="Hz", choices=FREQUENCY_UNITS,
                               help="Hz, or omega_l: frequencies over the lowest linear natural frequency at a 15 deg "
                                    "contact angle (Filipkovsky 2016's nondimensional frequency; rigid_preloaded)"),
+        "torus_detail": _num(default=None, help="the continued parameter's value of the torus the continuation "
+                                                "report draws in detail (the nearest point; default: the torus of "
+                                                "the largest half-swing)"),
     },
     "numerics": {
         "integrator": Key("choice", default="dop853", choices=("dop853", "rk4"), help="DOP853, or RK4 (rk4_steps per period)"),

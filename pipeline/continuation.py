@@ -312,8 +312,22 @@ def _torus_variables(records, stable):
     torus = status >= 0
     return ({"branch_kind": np.array([int("torus_status" in r) for _, r in records], "int8"),
              "torus_status": status, "torus_error": pad("torus_error", np.nan, float),
-             "torus_exponent": pad("torus_exponent", np.nan, float),
+             "torus_exponent": pad("torus_exponent", np.nan, float), "torus_nodes": _torus_nodes(records, stable.shape),
+             "event_note": np.array([note for _, r in records for note in r.get("event_note", [""] * len(r["event_type"]))],
+                                    object),
              "stable": np.where(torus, status == torus_branches.TORUS_STATUS["stable"], stable).astype("int8")}, {})
+
+
+def _torus_nodes(records, shape):
+    """(branch, point, torus_node, state) node values of the tori's circles, NaN-padded (each
+    torus branch keeps its node count; orbit branches hold NaN)."""
+    held = [r["torus_nodes"] for _, r in records if "torus_nodes" in r]
+    n_nodes = max([h.shape[1] for h in held] + [1])
+    out = np.full(shape + (n_nodes, held[0].shape[2] if held else 1), np.nan)
+    for b, (_, r) in enumerate(records):
+        if "torus_nodes" in r:
+            out[b, :len(r["torus_nodes"]), :r["torus_nodes"].shape[1]] = r["torus_nodes"]
+    return out
 
 
 def _omega_l_variables(data, pl, values):
@@ -519,7 +533,9 @@ def events_table(ds):
     for c in ds.coords:
         if ds[c].dims == ("branch",):
             cols[c] = ds[c].values[branch].tolist() if len(branch) else []
-    cols["stable"] = [int(np.abs(m).max() < 1.0) for m in mult]
+    cols["stable"] = [-1 if np.isnan(m).all() else int(np.abs(m).max() < 1.0) for m in mult]   # -1: a torus flag
+    if "event_note" in ds:      # torus branches' events (pipeline.torus_events) in words
+        cols["note"] = [str(v) for v in ds["event_note"].values]
     for j, name in enumerate(ds["observable"].values):
         cols[f"amplitude_max_{name}"] = ds["event_amplitude_max"].values[:, j].tolist()
         cols[f"amplitude_half_pp_{name}"] = ds["event_amplitude_half_pp"].values[:, j].tolist()

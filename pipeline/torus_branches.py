@@ -19,9 +19,9 @@ relative for a swing varying over the phase by O(1) of itself, less for weak pha
 """
 import numpy as np
 
-from pipeline import compute
+from pipeline import compute, torus_events
 from rotorkernels import extrema, torus as tr
-from rotorkernels.continuation import engine, tori
+from rotorkernels.continuation import engine, events as ev, tori
 
 SETTLE_PERIODS = 400
 FIT_PERIODS = 120
@@ -30,6 +30,7 @@ MAX_NODES = 63
 DECAY_TOL = 1e-9        # the first torus's Fourier tail (node count grown to reach it)
 BREAKDOWN_TOL = 1e-7    # a branch point's tail above it: the circle is no longer resolved
 AMPLITUDE_PHASES = 64
+POLISH_TOL = 1e-12      # each stored circle's residual, relative to max(1, max |U|) (tori.polish)
 TORUS_STATUS = {tr.UNSTABLE: 0, tr.STABLE: 1, tr.UNDECIDED: 2}
 
 
@@ -101,10 +102,20 @@ def continue_torus_line(data, pl, where):
     if first is None:
         run = engine.Run([], [], engine.START_FAILED, f"the torus start did not converge at {pl.start!r}")
     else:
-        run = tori.follow_tori(family, first, pl.range, pl.settings, counter)
+        run = polished(family, tori.follow_tori(family, first, pl.range, pl.settings, counter,
+                                                torus_events.LOCK_DENOMINATOR))
     record = torus_record(spec, family, built, run, counter.n)
     record["coexistence"] = stable_pieces(record, pl.range)
     return [record]
+
+
+def polished(family, run):
+    """The run with each point's and located event's circle refined to POLISH_TOL at its lambda
+    (tori.polish: what the result stores, its amplitudes and error estimate, is then solved far
+    below the continuation's corrector tolerance; docs/guide/continue.md, "error estimate")."""
+    def refine(point):
+        return None if point is None else tori.polish(family, point, POLISH_TOL)
+    return run._replace(points=[refine(p) for p in run.points], found=[f._replace(point=refine(f.point)) for f in run.found])
 
 
 def stable_pieces(record, lam_range):
@@ -123,7 +134,9 @@ def stable_pieces(record, lam_range):
 
 def torus_record(model, family, built, run, n_rhs):
     """One torus branch as plain arrays: the orbit record's keys (multipliers NaN, orbit_state
-    the circle at phase 0, period T) and torus_error, torus_exponent [1/s], torus_status."""
+    the circle at phase 0, period T), torus_error, torus_exponent [1/s], torus_status, torus_nodes
+    (points, N, n: the circle's node values, scaled state, at phases 2 pi j / N), and the
+    branch's events (pipeline.torus_events: flags and locked ratios, with event_note)."""
     n_state = family.kernel.n_state
     pts = run.points
     amp = np.array([torus_amplitudes(model, family, built, p) for p in pts]).reshape(
@@ -132,18 +145,16 @@ def torus_record(model, family, built, run, n_rhs):
     steps = np.linalg.norm(np.diff(X, axis=0), axis=1) if len(pts) > 1 else np.zeros(0)
     periods = np.array([built(p.lam).period for p in pts])
     none = np.zeros(0)
-    return {
+    return {**torus_events.event_rows(model, family, built, run, amp),
         "parameter": np.array([p.lam for p in pts]), "arclength": np.concatenate(([0.0], np.cumsum(steps)))[:len(pts)],
         "state": np.array([family.nodes(p.X)[0] for p in pts]).reshape(len(pts), n_state),
         "multipliers": np.full((len(pts), n_state), np.nan + 0j),
         "amplitude_max": amp[:, 0], "amplitude_half_pp": amp[:, 1], "period": periods,
         "periods": 1, "parent": -1, "end": int(run.end), "detail": run.detail, "n_rhs": int(n_rhs),
-        "event_type": none.astype(int), "event_parameter": none, "event_index": none.astype(int),
-        "event_state": np.zeros((0, n_state)), "event_multipliers": np.zeros((0, n_state), complex),
-        "event_amplitude_max": np.zeros((0, amp.shape[2])), "event_amplitude_half_pp": np.zeros((0, amp.shape[2])),
         "torus_error": np.array([torus_error(family, p) for p in pts]),
         "torus_exponent": np.array([p.stability.exponents[0] for p in pts]) / periods if len(pts) else none,
         "torus_status": np.array([TORUS_STATUS[p.stability.status] for p in pts], int),
+        "torus_nodes": np.array([family.nodes(p.X) for p in pts]).reshape(len(pts), family.n_nodes, n_state),
     }
 
 
@@ -191,4 +202,7 @@ def torus_lines(ds, par, unit):
                    f"{np.nanmax(ds['torus_error'].values[b, :n]):.2g}")
         out += [f"    stability changes between {par} {lam[i]:.10g} and {lam[i + 1]:.10g} {unit}"
                 for i in np.flatnonzero((status[:-1] != status[1:]) & (status[:-1] < 2) & (status[1:] < 2))]
+        out += [f"    {ev.EVENT_LABELS[int(ds['event_type'].values[k])]} at {par} {ds['event_parameter'].values[k]:.10g} "
+                f"{unit}: {ds['event_note'].values[k]}"
+                for k in np.flatnonzero(ds["event_branch"].values == b)] if "event_note" in ds else []
     return out

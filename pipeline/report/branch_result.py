@@ -12,7 +12,7 @@ import numpy as np
 
 from pipeline import compute, continuation, query, schema
 from pipeline.report import branches, harmonics, page, style
-from pipeline.report.figures import bode, mode_campbell, mode_shapes
+from pipeline.report.figures import bode, mode_campbell, mode_shapes, torus_detail
 from rotorkernels.continuation import arclength as al
 
 def _shown(value, units):
@@ -181,6 +181,8 @@ def figures(ds, backend):
     if tori.any():
         out.append(("Tori: largest normal Lyapunov exponent (< 0: stable)", "torus_exponent.png",
                     _panel(hv, ds, "torus_exponent", "largest normal exponent [1/s]", backend)))
+        if torus_detail.has_torus_detail(ds):
+            out.append((torus_detail.CAPTION, "torus_detail.png", torus_detail.result_figure(ds, backend)))
     if mode_campbell.has_linear_analysis(ds):
         out.append((mode_campbell.CAPTION, "mode_campbell.png", mode_campbell.result_figure(ds, backend)))
     if mode_shapes.has_stations(ds):
@@ -238,7 +240,8 @@ def _header_html(ds, title):
     items = "".join(f"<li>{html.escape(s.strip())}</li>" for s in lines[2:])
     return (f"<h1>{html.escape(title)}</h1><p>{html.escape(lines[0])}<br>{html.escape(lines[1])}</p><ul>{items}</ul>"
             "<p>Stable branches solid, unstable dashed; LP: fold (limit point), PD: period doubling, "
-            "NS: Neimark-Sacker, BP: branch point.</p>")
+            "NS: Neimark-Sacker, BP: branch point; on torus branches TS: the normal stability changes, TF: a fold "
+            "of tori, locked: a ratio p/q of the forcings with its periodic orbit (the table's note).</p>")
 
 
 def make_report(ds, out_dir, title=None):

@@ -27,9 +27,12 @@ from rotorkernels.continuation import engine
 from rotorkernels.roots import NotConverged, brent_root
 
 # The bifurcations of orbits located on a branch (the codes a branch's events record).
-EVENT_TYPES = ("fold", "period_doubling", "neimark_sacker", "branch_point", "peak")
-FOLD, PERIOD_DOUBLING, NEIMARK_SACKER, BRANCH_POINT, PEAK = range(5)
-EVENT_LABELS = ("LP", "PD", "NS", "BP", "PK")
+# The last three are events of torus branches (continuation.tori): a change of normal stability, a
+# fold of tori (flags between two points) and a locked ratio (a periodic orbit on the torus).
+EVENT_TYPES = ("fold", "period_doubling", "neimark_sacker", "branch_point", "peak",
+               "torus_stability", "torus_fold", "locked")
+FOLD, PERIOD_DOUBLING, NEIMARK_SACKER, BRANCH_POINT, PEAK, TORUS_STABILITY, TORUS_FOLD, LOCKED = range(8)
+EVENT_LABELS = ("LP", "PD", "NS", "BP", "PK", "TS", "TF", "locked")
 
 Boundary = namedtuple("Boundary", "value solution evaluations")
 

@@ -12,8 +12,11 @@ The imposed forcing phase is the torus coordinate, so a rational ratio omega / O
 no special point: there the circle is the union of the q-periodic orbits' stroboscopic points
 over the forcing phases, and the branch passes through it. A branch ends with
 `torus_breakdown` where the circle's Fourier tail exceeds the decay tolerance at the branch's N
-(it is losing smoothness: N no longer resolves it), and flags a change of normal stability
-(`TS`: the largest normal Lyapunov exponent changes sign).
+(it is losing smoothness: N no longer resolves it), flags a change of normal stability
+(`TS`: the largest normal Lyapunov exponent changes sign) and a fold of tori (`TF`: the branch
+turns back in lambda), and solves the torus exactly where the rotation is 2 pi p / q with small q
+(`Locked`: there the circle consists of q-periodic points, which the caller links to the
+periodic-orbit solver's orbits).
 """
 from dataclasses import replace
 from typing import Callable, NamedTuple
@@ -23,6 +26,7 @@ import numpy as np
 from rotorkernels import torus as tr
 from rotorkernels.continuation import engine, events as ev
 from rotorkernels.continuation.engine import INTEGRATION_FAILED, NEWTON_FAILED, START_NEWTON, TORUS_BREAKDOWN
+from rotorkernels.roots import brent_root
 
 
 class Solution(NamedTuple):
@@ -138,6 +142,24 @@ class TorusFamily(NamedTuple):
         return True
 
 
+def polish(family, point, tol, max_iter=3):
+    """The point with its circle refined by Newton at its fixed lambda until max |R| <= tol max(1,
+    max |U|) (at most max_iter steps; the point as it was where a step fails). The corrector stops
+    at the continuation's tolerance, relative to the largest node value, so its absolute residual
+    varies from point to point by orders of magnitude (quadratic convergence lands anywhere below
+    it), and the circle's distance from the invariant one is that residual times ||dR/dU^-1||."""
+    X = point.X.copy()
+    for _ in range(max_iter):
+        r, jac, _, ok, _ = family.residual(X, True)
+        if not ok or np.abs(r).max() <= tol * max(1.0, np.abs(X[:-1]).max()):
+            break
+        try:
+            X[:-1] += np.linalg.solve(jac, -r.ravel())
+        except np.linalg.LinAlgError:
+            break
+    return point._replace(X=X, tail=tr.fourier_tail(family.nodes(X)))
+
+
 def _bordered(jac, col, c):
     m = col.size
     A = np.empty((m + 1, m + 1))
@@ -162,12 +184,49 @@ class Breakdown(ev.BranchEvent):
 class StabilityChange(ev.BranchEvent):
     """The largest normal Lyapunov exponent changes sign (a fold of tori or a loss of normal
     hyperbolicity); a flag between two points, undecided stabilities never flag."""
-    label, code, locates, end = "TS", "torus_stability", False, None
+    label, code, locates, end = ev.EVENT_LABELS[ev.TORUS_STABILITY], ev.TORUS_STABILITY, False, None
 
     def detect(self, problem, a, b):
         decided = (tr.STABLE, tr.UNSTABLE)
         return a.stability.status in decided and b.stability.status in decided and \
             a.stability.status != b.stability.status
+
+
+class Fold(ev.BranchEvent):
+    """A fold of tori: the tangent's parameter component changes sign (the branch turns back in
+    lambda); a flag between two points."""
+    label, code, locates, end = ev.EVENT_LABELS[ev.TORUS_FOLD], ev.TORUS_FOLD, False, None
+
+    def detect(self, problem, a, b):
+        return a.tangent[-1] * b.tangent[-1] < 0
+
+
+class Locked(ev.Level):
+    """Where the rotation is 2 pi p / q (a locked ratio of the two forcings): the torus solved
+    exactly there. Its circle is then made of q-periodic points (P_theta^q(u(theta)) = u(theta +
+    2 pi p) = u(theta)), each the periodic orbit of the forcing with that phase."""
+    code = ev.LOCKED
+
+    def __init__(self, level, p, q):
+        super().__init__(level)
+        self.p, self.q = p, q
+        self.label = f"{ev.EVENT_LABELS[ev.LOCKED]} {p}/{q}"
+
+
+def locked_ratios(family, lam_range, max_q):
+    """The Locked events within lam_range: each ratio p / q (q <= max_q, lowest terms) that the
+    rotation rho(lambda) / 2 pi takes there, at the lambda where it does (Brent on rho, which is
+    monotone in lambda when lambda is either forcing frequency)."""
+    lo, hi = sorted(lam_range)
+    r_lo, r_hi = sorted(family.rotation(v) / (2.0 * np.pi) for v in (lo, hi))
+    out = []
+    for q in range(1, max_q + 1):
+        for p in range(int(np.ceil(r_lo * q)), int(np.floor(r_hi * q)) + 1):
+            if np.gcd(p, q) == 1 and p > 0:
+                target = 2.0 * np.pi * p / q
+                lam = brent_root(lambda v: family.rotation(v) - target, lo, hi, xtol=1e-13 * max(abs(lo), abs(hi)))
+                out.append(Locked(lam, p, q))
+    return sorted(out, key=lambda e: e.level)
 
 
 def start(family, lam0, guess, direction=1, settings=engine.Settings(), counter=None):
@@ -182,6 +241,8 @@ def start(family, lam0, guess, direction=1, settings=engine.Settings(), counter=
     return None if failure is not None else family.point(sol, seed, settings, counter)
 
 
-def follow_tori(family, first, lam_range, settings=engine.Settings(), counter=None):
-    """engine.follow from `first` within lam_range with the torus events (Breakdown, StabilityChange): a Run."""
-    return engine.follow(family, first, [tuple(lam_range)], settings, (Breakdown(), StabilityChange()), counter)
+def follow_tori(family, first, lam_range, settings=engine.Settings(), counter=None, max_q=0):
+    """engine.follow from `first` within lam_range with the torus events (Breakdown, StabilityChange,
+    Fold, and Locked at each ratio p / q with q <= max_q): a Run."""
+    events = (Breakdown(), StabilityChange(), Fold(), *locked_ratios(family, lam_range, max_q))
+    return engine.follow(family, first, [tuple(lam_range)], settings, events, counter)

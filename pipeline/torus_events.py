@@ -1,0 +1,84 @@
+"""The events of a torus branch (pipeline.torus_branches) as the continuation result's event rows:
+the flags of rotorkernels.continuation.tori (TS: the normal stability changes, TF: a fold of
+tori) between two points, and each locked ratio omega / Omega = p / q (q <= LOCK_DENOMINATOR)
+the branch passes, linked to the periodic-orbit solver.
+
+At a locked ratio the branch's torus is solved exactly there (tori.Locked); its circle then
+consists of q-periodic points of the stroboscopic map (one per phase of the support forcing). The
+one at phase 0, the phase of the scene's forcing, is the start of Newton shooting over q shaft
+turns (rotorkernels.shooting, the solver of the periodic points): the orbit it converges to is
+linked (its state, Floquet multipliers over q turns and amplitudes in the event row) when it lies
+within LINK_TOL of the circle; otherwise the row keeps the circle's point, NaN multipliers, and a
+note saying why. Each row's `note` says it in words.
+"""
+import numpy as np
+
+from rotorkernels import extrema, floquet, shooting
+from rotorkernels.continuation import events as ev
+
+LOCK_DENOMINATOR = 8    # the largest q recognized as a locked ratio on a torus branch
+SHOOT_TOL = 1e-11       # the shooting's residual (scaled state: um and um per shaft turn)
+# A linked orbit's distance from the circle, relative to max(1, |u|): the circle is solved to the
+# branch's Newton tolerance (1e-9 .. 1e-10) and shooting converges to SHOOT_TOL, so an orbit on the
+# torus lies within ~1e-8 of its circle; a different orbit (another solution) lies far off.
+LINK_TOL = 1e-6
+
+
+def event_rows(model, family, built, run, amplitudes):
+    """The record's event_* arrays of a torus Run (amplitudes: (points, 2, observables), the
+    points' max |o| and half-swing), plus event_note (words per event)."""
+    rows = [_locked_row(model, family, built, f) if f.event.code == ev.LOCKED else _flag_row(family, run, f, amplitudes)
+            for f in run.found]
+    n, n_obs = family.kernel.n_state, len(model.observables)
+    return {
+        "event_type": np.array([f.event.code for f in run.found], int),
+        "event_parameter": np.array([r[0] for r in rows], float),
+        "event_index": np.array([f.index for f in run.found], int),
+        "event_state": np.array([r[1] for r in rows], float).reshape(len(rows), n),
+        "event_multipliers": np.array([r[2] for r in rows], complex).reshape(len(rows), n),
+        "event_amplitude_max": np.array([r[3] for r in rows], float).reshape(len(rows), n_obs),
+        "event_amplitude_half_pp": np.array([r[4] for r in rows], float).reshape(len(rows), n_obs),
+        "event_note": [r[5] for r in rows],
+    }
+
+
+def _flag_row(family, run, found, amplitudes):
+    """A flag between points index and index + 1: recorded at the second point (its circle at
+    phase 0 and its amplitudes; a torus has no Floquet multipliers)."""
+    a, b = run.points[found.index], run.points[found.index + 1]
+    what = {ev.TORUS_STABILITY: f"normal stability {a.stability.status} -> {b.stability.status}",
+            ev.TORUS_FOLD: "the branch turns back"}[found.event.code]
+    note = f"{what} between {a.lam:.10g} and {b.lam:.10g}"
+    k = found.index + 1
+    return (b.lam, family.nodes(b.X)[0], np.full(family.kernel.n_state, np.nan + 0j),
+            amplitudes[k, 0], amplitudes[k, 1], note)
+
+
+def locked_orbit(model, family, point, q):
+    """(shooting.Orbit, the circle's point at phase 0): the orbit of q shaft turns shot from the
+    torus's point at phase 0."""
+    u0 = family.nodes(point.X)[0]
+    p = np.array(family.params(point.lam), float)
+    p[family.phase_index] = 0.0
+    orbit = shooting.periodic_orbit(model, u0, p, family.opts, periods=q * family.period, tol=SHOOT_TOL,
+                                    staged=False)
+    return orbit, u0, p
+
+
+def _locked_row(model, family, built, found):
+    event, point = found.event, found.point
+    orbit, u0, p = locked_orbit(model, family, point, event.q)
+    distance = float(np.abs(orbit.state - u0).max())
+    linked = orbit.status == shooting.CONVERGED and distance <= LINK_TOL * max(1.0, np.abs(u0).max())
+    head = f"{event.p}/{event.q}: torus {point.stability.status}"
+    if not linked:
+        why = "did not converge" if orbit.status != shooting.CONVERGED else f"converged {distance:.2g} off the circle"
+        nan = np.full(len(model.observables), np.nan)
+        return (point.lam, u0, np.full(family.kernel.n_state, np.nan + 0j), nan, nan,
+                f"{head}; shooting over {event.q} shaft turns from the circle {why}: no orbit linked")
+    mult = floquet.multipliers(orbit.monodromy)
+    hi, half = extrema.amplitudes(model, orbit.state, p, event.q * family.period, family.opts, built(point.lam).period)
+    note = (f"{head}; periodic orbit of {event.q} shaft turns linked, {distance:.2g} from the circle "
+            f"(shooting residual {orbit.residual:.2g} after {orbit.iterations} Newton steps), "
+            f"max |multiplier| {np.abs(mult).max():.6g}")
+    return point.lam, orbit.state, mult, hi, half, note

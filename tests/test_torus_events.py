@@ -1,0 +1,144 @@
+"""Events of a torus branch (pipeline.torus_events): a locked ratio omega / Omega = 3/5 passed by
+the branch of the preloaded rotor is recognized, solved there and linked to the periodic orbit of
+5 shaft turns, which is checked against a torus solved independently at that ratio and against
+the multipliers composed from one-turn flows along the circle; the ratio search and the fold flag
+on their own; the report's torus in detail."""
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from pipeline import cli, compute, config, continuation, torus_branches
+from rotorkernels import integrators as ig, torus as tr
+from rotorkernels.continuation import events as ev, tori
+
+SCENE = "configs/filipkovsky2016_fig2b_tori.toml"
+OMEGA = 250.0       # the scene's shaft speed [Hz]: 3/5 is at 150 Hz
+
+
+@pytest.fixture(scope="module")
+def result(tmp_path_factory):
+    d = tmp_path_factory.mktemp("locked")
+    text = open(SCENE).read().replace("stop = 315.0", "stop = 150.3").replace("start = 305.0", "start = 149.8").replace(
+        "support_frequency = [305.0]", "support_frequency = [145.0]")
+    (d / "locked.toml").write_text(text)
+    assert cli.main(["continue", str(d / "locked.toml"), "-o", str(d / "locked.nc"), "--workers", "0"]) in (0, None)
+    return continuation.open_result(d / "locked.nc"), config.parse_config(text).data
+
+
+def test_the_branch_lists_the_locked_ratio_in_the_events_and_info(result, capsys, tmp_path):
+    ds, _ = result
+    k = np.flatnonzero(ds["event_type"].values == ev.LOCKED)
+    assert len(k) == 1
+    # solved exactly at 3/5 Omega (Brent on the rotation to 1e-13, then the torus solved there)
+    assert ds["event_parameter"].values[k[0]] == pytest.approx(0.6 * OMEGA, rel=1e-12)
+    note = str(ds["event_note"].values[k[0]])
+    assert note.startswith("3/5: torus stable") and "5 shaft turns linked" in note
+    table = continuation.events_table(ds)
+    assert table["type"] == ["locked"] and table["note"] == [note] and table["stable"] == [1]
+    assert ds["event_amplitude_half_pp"].values[k[0]].max() > 0
+
+
+def test_the_linked_orbit_lies_on_an_independently_solved_torus(result):
+    """The event's orbit (shooting over 5 turns) against a torus solved by collocation at 150 Hz from
+    a constant guess (tol 1e-12, nodes grown to a 1e-9 tail): both are solved far below 1e-8, so
+    they agree to 1e-8 in the scaled state (um, um per turn). Its multipliers against the
+    product of the five one-turn monodromies along the circle (theta_k = 3/5 * 2 pi k), each flown
+    from the independent circle: the monodromy of the orbit composed, to the integration's 1e-10
+    and the circles' distance times the flow's Lipschitz constant, hence 1e-7."""
+    ds, data = result
+    k = int(np.flatnonzero(ds["event_type"].values == ev.LOCKED)[0])
+    state = ds["event_state"].values[k]
+    pl = continuation.plan(data)
+    family, _ = torus_branches.torus_family(data, pl, pl.lines[0], 15)
+    spec = compute.model_of(data)
+    lam = 0.6 * OMEGA
+    p = np.array(family.params(lam), float)
+    circle = tr.solve_torus(spec.kernel, tr.periodic_guess(state, 15), p, family.phase_index, family.rotation(lam),
+                            family.opts, tol=1e-12, decay_tol=1e-9, max_nodes=63)
+    assert circle.status == tr.CONVERGED
+    assert np.abs(circle.at(0.0)[0] - state).max() < 1e-8
+    n = spec.n_state
+    product = np.eye(n)
+    for j in range(5):
+        theta = family.rotation(lam) * j
+        p[family.phase_index] = theta
+        z, status, _, _ = ig.flow(spec.kernel, 0.0, 1.0, ig.initial_state(circle.at(theta)[0], n, True), p, True,
+                                  family.opts, 0.0)
+        assert status == ig.STATUS_OK
+        product = z[n:].reshape(n, n) @ product
+    mult = ds["event_multiplier_real"].values[k] + 1j * ds["event_multiplier_imag"].values[k]
+    composed = np.linalg.eigvals(product)
+    assert np.sort(np.abs(mult)) == pytest.approx(np.sort(np.abs(composed)), abs=1e-7)
+
+
+def test_locked_ratios_are_the_fractions_of_small_denominator_in_the_range():
+    """rho(lambda) = 2 pi lambda / 10 over [5.5, 7.6]: ratios 0.55 .. 0.76; with q <= 5 the
+    fractions 3/5, 2/3, 3/4 at lambda = 6, 20/3, 7.5 (closed form)."""
+    family = SimpleNamespace(rotation=lambda v: 2.0 * np.pi * v / 10.0)
+    found = tori.locked_ratios(family, (7.6, 5.5), 5)
+    assert [(e.p, e.q) for e in found] == [(3, 5), (2, 3), (3, 4)]
+    assert [e.level for e in found] == pytest.approx([6.0, 20.0 / 3.0, 7.5], rel=1e-13)
+    assert all(e.code == ev.LOCKED and e.label == f"locked {e.p}/{e.q}" for e in found)
+
+
+def test_a_fold_of_tori_is_flagged_where_the_tangent_turns_back_in_lambda():
+    def at(dlam):
+        return SimpleNamespace(tangent=np.array([0.3, dlam]))
+    assert tori.Fold().detect(None, at(0.2), at(-0.1)) and not tori.Fold().detect(None, at(0.2), at(0.1))
+
+
+def test_the_torus_in_detail_passes_its_once_per_turn_points_through_the_circle(result):
+    """The report's torus in detail (pipeline.report.figures.torus_detail): a trajectory from the
+    circle at phase 0, integrated anew from the scene, visits the circle at phases k rho after k
+    turns (the invariance the collocation solved, checked by the flow over 40 turns: the torus
+    attracts, so the circle's error ~1e-8 and the integration's 1e-10 do not grow; 1e-6 in the
+    scaled state). The point drawn: the largest half-swing, or the one nearest [report] torus_detail."""
+    from pipeline.report.figures import torus_detail as td
+
+    ds, data = result
+    d = td.torus_detail(ds, data)
+    n = int(ds["branch_points"].values[0])
+    j = list(ds["observable"].values).index("y_B")
+    assert d.point == int(np.argmax(ds["amplitude_half_pp"].values[0, :n, j])) and d.names == ("z", "y_B")
+    strobe = d.states[::td.SAMPLES_PER_TURN]
+    expected = d.torus.at(d.torus.rho * np.arange(len(strobe)))
+    assert np.abs(strobe - expected).max() < 1e-6
+    assert d.spectrum[-1] < 1e-7 * d.spectrum[0]       # resolved: the branch's breakdown test passed
+    assert td.chosen_point(ds, 150.0) == (0, int(np.argmin(np.abs(ds["parameter"].values[0, :n] - 150.0))))
+
+
+def test_the_continuation_report_draws_the_torus_in_detail(result, tmp_path):
+    ds, _ = result
+    from pipeline.report import branch_result
+
+    branch_result.make_report(ds, tmp_path / "report")
+    assert (tmp_path / "report" / "torus_detail.png").exists()
+    text = (tmp_path / "report" / "report.html").read_text()
+    assert "A torus in detail" in text and "locked" in text and "3/5: torus stable" in text
+
+
+def test_each_stored_circle_lies_within_its_error_estimate_of_a_finer_torus(result):
+    """The stored circles are polished to a residual of 1e-12 (relative) at their parameter
+    (torus_branches.POLISH_TOL), so the estimate is at its floor at every point, not the corrector's
+    1e-9 relative residual times ||dR/dU^-1|| (up to 1.6e-6 before, docs/guide/continue.md). Each
+    against a finer torus solved anew at its parameter: 31 nodes, integration tolerances 100x
+    tighter, Newton to 1e-13: the distance (discretization, integration and solve together) lies
+    below the estimate."""
+    ds, data = result
+    pl = continuation.plan(data)
+    family, _ = torus_branches.torus_family(data, pl, pl.lines[0], 15)
+    spec = compute.model_of(data)
+    fine = family.opts._replace(rtol=family.opts.rtol / 100, atol=family.opts.atol / 100)
+    n = int(ds["branch_points"].values[0])
+    err = ds["torus_error"].values[0, :n]
+    # the floor of the estimate (the shots' integration error against the fine flow, 9e-9 to 1.1e-8
+    # here) rather than the corrector's residual, which varied by orders of magnitude between points
+    assert err.max() < 1e-7 and err.max() < 2.0 * err.min()
+    for k in (0, n - 1):
+        lam = float(ds["parameter"].values[0, k])
+        nodes = ds["torus_nodes"].values[0, k]
+        fresh = tr.solve_torus(spec.kernel, tr.resample(nodes, 31), family.params(lam), family.phase_index,
+                               family.rotation(lam), fine, tol=1e-13, decay_tol=1.0)
+        assert fresh.status == tr.CONVERGED
+        assert np.abs(fresh.at(tr.node_phases(15)) - nodes).max() <= ds["torus_error"].values[0, k]
