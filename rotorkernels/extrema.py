@@ -158,20 +158,22 @@ def _quadrature(oa, ob, ga, gb, sa, sb, h, quintic, integral, error):
 
 
 @njit(cache=True, nogil=True)
-def orbit_extent(kernel, u0, p, span, weights, opts):
+def orbit_extent(kernel, u0, p, span, weights, opts, mean):
     """(highest, lowest, mean, mean_error, status, n_rhs) of each observable o_k = weights[k] . u[:m]
     over the orbit from u0 on [0, span] (scaled time), in one integration; status an
     integrators.STATUS_* code (not OK: NaN values), n_rhs the right-hand sides evaluated.
     The step ends give o, the brackets of a sign change of g their Hermite estimates; the
     brackets whose estimate can be the highest or lowest are refined afterwards. The mean is the
-    integral of o by the quintic Hermite rule on the accepted steps where `_accelerated` (g' from
-    one right-hand side per step end), else the cubic one (`_quadrature`); mean_error its estimate."""
+    integral of o by the quintic Hermite rule on the accepted steps where `_accelerated` and
+    `mean` is set (g' from one right-hand side per step end: the cost of a mean that is wanted),
+    else the cubic one (`_quadrature`); mean_error its estimate."""
     n, n_obs = kernel.n_state, weights.shape[0]
     hi, lo, ga, gb, oa, ob = (np.empty(n_obs), np.empty(n_obs), np.empty(n_obs), np.empty(n_obs),
                               np.empty(n_obs), np.empty(n_obs))
     sa, sb, f, jbuf = np.zeros(n_obs), np.zeros(n_obs), np.empty(n), np.empty((n, n))
     integral, error = np.zeros(n_obs), np.zeros(n_obs)
-    quintic = _accelerated(kernel, weights)
+    quintic = mean and _accelerated(kernel, weights)
+    rhs_per_end = 1 if quintic or not _accelerated(kernel, weights) else 0     # `_rates`
     est_hi, est_lo = np.empty(n_obs), np.empty(n_obs)     # hi and lo with the brackets' estimates
     held = np.empty((CANDIDATES, 7))        # t, h, s, estimate, k, ga, gb of a bracket
     held_z = np.empty((CANDIDATES, n))      # its starting state
@@ -181,7 +183,7 @@ def orbit_extent(kernel, u0, p, span, weights, opts):
     for k in range(n_obs):
         hi[k] = lo[k] = est_hi[k] = est_lo[k] = oa[k]
     _rates(kernel, 0.0, z, p, weights, f, jbuf, ga, sa, quintic)
-    t, h, n_rhs = 0.0, 0.01 * span, 1
+    t, h, n_rhs = 0.0, 0.01 * span, rhs_per_end
     status = ig.STATUS_STEP_UNDERFLOW       # unless the end is reached within max_steps
     for _ in range(int(opts[ig.S_MAX_STEPS])):
         if t >= span:
@@ -189,7 +191,7 @@ def orbit_extent(kernel, u0, p, span, weights, opts):
             break
         t1 = min(t + h, span)
         zb, status, spent, h_next = ig.flow(kernel, t, t1, z, p, False, opts, h)
-        n_rhs += spent + 1
+        n_rhs += spent + rhs_per_end
         if status != ig.STATUS_OK:
             break
         _rates(kernel, t1, zb, p, weights, f, jbuf, gb, sb, quintic)
@@ -230,7 +232,7 @@ def orbit_extent(kernel, u0, p, span, weights, opts):
 
 def orbit_extrema(kernel, u0, p, span, weights, opts):
     """(highest, lowest, status) of each observable (`orbit_extent`)."""
-    hi, lo, _, _, status, _ = orbit_extent(kernel, u0, p, span, weights, opts)
+    hi, lo, _, _, status, _ = orbit_extent(kernel, u0, p, span, weights, opts, False)
     return hi, lo, status
 
 
@@ -279,7 +281,7 @@ def extent(model, state, p, span, opts, period):
     observable over the orbit through `state` lasting `span` (scaled time: forcing periods), SI;
     NaN values where the orbit could not be integrated (`orbit_extent`)."""
     hi, lo, mean, error, _, n_rhs = orbit_extent(model.kernel, np.asarray(state, float), p, float(span),
-                                                 observable_weights(model, period), opts)
+                                                 observable_weights(model, period), opts, True)
     return hi, lo, mean, error, n_rhs
 
 

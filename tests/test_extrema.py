@@ -262,7 +262,7 @@ def test_duffing_mean_matches_scipy_quad(weights):
     the integration's ~10 rtol |x|."""
     built = duffing(1.3, 0.05, 1.0, 0.3)
     sol = solve_orbit(DUFFING, built.p, TIGHT, cold_guess=DUFFING.cold_guess, tol=1e-12)
-    hi, lo, mean, error, status, n_rhs = extrema.orbit_extent(DUFFING.kernel, sol.state, built.p, 0.37, weights, TIGHT)
+    hi, lo, mean, error, status, n_rhs = extrema.orbit_extent(DUFFING.kernel, sol.state, built.p, 0.37, weights, TIGHT, True)
     ref = scipy_mean(duffing_rhs(1.3, 0.05, 1.0, 0.3), sol.state, 0.37, weights)
     assert status == ig.STATUS_OK and n_rhs > 0
     assert abs(mean[0] - ref[0]) <= error[0] + 10 * 1e-12 * max(hi[0], -lo[0])
@@ -289,3 +289,20 @@ def test_bai_orbit_means_from_the_sweep_match_scipy_quad(bai_segment):
     got = np.array([sweep_rows["x_mean"][-1], sweep_rows["y_mean"][-1]])
     np.testing.assert_array_equal(got, mean)
     assert np.all(np.abs(got - ref) <= error + 10 * 1e-10 * (hi - lo))
+
+
+def test_branch_n_rhs_counts_the_extrema_and_peak_slopes():
+    """A branch's n_rhs counts the extrema passes of its points (issue 32 gap b): the same Duffing
+    branch with weights (amplitudes, and the peak's slope: two more passes per point) costs at
+    least the extrema passes of its recorded points more than without, recounted here one by one
+    (the event searches' trial points add more, never less)."""
+    def family(**kw):
+        return al.Family(DUFFING, lambda w: duffing(w, 0.05, 1.0, 0.3).p, TIGHT, **kw)
+    settings = al.Settings(ds=0.05, ds_max=0.3)
+    plain = al.continue_orbit(family(), 0.5, np.zeros(2), (0.5, 2.0), settings)
+    weighted_family = family(weights=np.array([[1.0]]), peak=0)
+    weighted = al.continue_orbit(weighted_family, 0.5, np.zeros(2), (0.5, 2.0), settings)
+    assert len(weighted.points) == len(plain.points)
+    recount = sum(3 * extrema.orbit_extent(DUFFING.kernel, p.state, duffing(p.lam, 0.05, 1.0, 0.3).p, 1.0,
+                                           np.array([[1.0]]), TIGHT, False)[5] for p in weighted.points)
+    assert weighted.n_rhs - plain.n_rhs >= 0.9 * recount     # the +- steps' passes differ a little
