@@ -294,6 +294,26 @@ def point_classes(ds):
     return cls
 
 
+def class_runs(ds):
+    """Maximal runs of grid points of one class (point_classes) along the continued axis, one
+    list entry per run and per combination of the other swept axes: the other axes' values,
+    `start`/`end` (first and last grid value), `n_points`, `class`. What `info` lists, and what
+    the map draws as bands."""
+    cls = point_classes(ds)
+    along = schema.continued_axis(ds)
+    others = _other_axes(ds)
+    grid = ds[along].values
+    out = []
+    for values in itertools.product(*(ds[a].values for a in others)):
+        where = dict(zip(others, values))
+        names = (cls.sel(where) if where else cls).transpose(along).values
+        cuts = np.flatnonzero(names[1:] != names[:-1]) + 1
+        for i0, i1 in zip(np.concatenate(([0], cuts)), np.concatenate((cuts, [names.size])) - 1):
+            out.append({**{a: float(v) for a, v in where.items()}, "start": float(grid[i0]),
+                        "end": float(grid[i1]), "n_points": int(i1 - i0 + 1), "class": str(names[i0])})
+    return out
+
+
 def attractor_label(code, k):
     """'period-k', or the class name: 'quasi_periodic', 'chaotic', 'diverged', 'not_settled',
     'integration_failed', 'not_computed'."""
