@@ -35,7 +35,8 @@ def per_point(attractor, lo, n):
     data = config.parse_config(text).data
     data = {**data, 'analysis': {**data['analysis'], 'attractor': attractor}}
     fixed = compute.fixed_values(data)
-    compute.solve_segment(data, [{**fixed, 'clearance': 15.2e-6, 'speed': 31.0 + 0.1 * i} for i in range(2)])
+    for c in CLEARANCES:     # warm-up: every kernel these segments call compiled or loaded
+        compute.solve_segment(data, [{**fixed, 'clearance': c, 'speed': lo + 0.1 * i} for i in range(2)])
     out = {}
     for c in CLEARANCES:
         pts = [{**fixed, 'clearance': c, 'speed': lo + 0.1 * i} for i in range(n)]
@@ -95,7 +96,7 @@ def markdown(result):
     table = render.table(["round", "orbits only [CPU ms/point] before / after",
                           "with attractors [CPU ms/point] before / after", "load (1 min) before / after"], rows)
     return render.fill("extrema", table=table, orbits=heads["orbits"], attractors=heads["attractors"],
-                       base=result["base"], machine=json.dumps(result["machine"]), load=result["load"],
+                       base=result["base"], head=result.get("head", "this checkout"), machine=json.dumps(result["machine"]), load=result["load"],
                        rounds=result["rounds"], date=result["date"], command=result["command"])
 
 
@@ -112,7 +113,8 @@ def main(argv=None):
     args = ap.parse_args(argv)
     load = loadavg()
     runs = measure({"before": checkout(args.base), "after": ROOT}, args.rounds)
-    result = {"base": args.base, "runs": runs, "rounds": args.rounds,
+    head = subprocess.run(["git", "describe", "--always", "--dirty"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
+    result = {"base": args.base, "head": head, "runs": runs, "rounds": args.rounds,
               **provenance(load, "workflows.bench.extrema", argv)}
     args.out.mkdir(parents=True, exist_ok=True)
     write(result, args.out)
