@@ -81,19 +81,24 @@ def line_coexistence(family, records, settings, lam_range):
     runs = [(lo, hi) for r in records for lo, hi in record_runs(r)]
     lo_r, hi_r = lam_range
     edges = sorted({lo_r, hi_r, *(x for run in runs for x in run if lo_r <= x <= hi_r)})
-    out = []
-    for a, z in zip(edges[:-1], edges[1:]):
-        lam, kept = 0.5 * (a + z), []
-        for b, r in enumerate(records):
-            for state in _stable_orbits_at(family, r, lam, settings):
-                if not any(same_orbit(copies, state, settings.tol) for _, copies in kept):
-                    kept.append((b, phase_copies(family, state, lam, r["periods"])))
-        out.append((a, z, [b for b, _ in kept]))
-    return out
+    return [(a, z, [b for b, _ in distinct_stable_orbits(family, records, settings, 0.5 * (a + z))])
+            for a, z in zip(edges[:-1], edges[1:])]
+
+
+def distinct_stable_orbits(family, records, settings, lam):
+    """[(branch, Point)]: one per distinct stable orbit of the branch records at lam (every stable
+    chord bracketing lam corrected to its exact orbit, phase copies of one kept before dropped);
+    what line_coexistence counts, and what a sweep's jump records of its two coexisting orbits."""
+    kept = []
+    for b, r in enumerate(records):
+        for point in _stable_orbits_at(family, r, lam, settings):
+            if not any(same_orbit(copies, point.state, settings.tol) for _, _, copies in kept):
+                kept.append((b, point, phase_copies(family, point.state, lam, r["periods"])))
+    return [(b, point) for b, point, _ in kept]
 
 
 def _stable_orbits_at(family, r, lam, settings):
-    """States of the stable orbits of branch record r at lam (one per stable chord bracketing it)."""
+    """Points of the stable orbits of branch record r at lam (one per stable chord bracketing it)."""
     fam = family.with_periods(r["periods"])
     p, stable = r["parameter"], np.abs(r["multipliers"]).max(axis=1) < 1.0
     out = []
@@ -102,7 +107,7 @@ def _stable_orbits_at(family, r, lam, settings):
         guess = s0 + (lam - p[i]) / (p[i + 1] - p[i]) * (s1 - s0) if p[i + 1] != p[i] else s0
         point = al.start(fam, lam, guess, 1, settings)
         if point is not None and _near(point.state, guess, s0, s1, settings) and np.abs(point.multipliers).max() < 1.0:
-            out.append(point.state)
+            out.append(point)
     return out
 
 
