@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo docs test test-slow check-cf screenshots upgrade bench bench-scaling bench-atlas bench-chunk-plans bench-attractor bench-revisions bench-continuation bench-reductions bench-compile bench-backbone bench-models bench-latency fig13 cascade fold backbone clean
+.PHONY: demo docs test test-slow check-cf screenshots upgrade bench bench-scaling bench-atlas bench-chunk-plans bench-attractor bench-revisions bench-extrema bench-continuation bench-reductions bench-compile bench-backbone bench-models bench-latency fig13 cascade fold backbone clean
 
 # CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
 CONSTRAINTS ?= constraints.txt
@@ -73,6 +73,9 @@ bench-chunk-plans: $(STAMP)  ## per-point cost spread of Fig. 13 (orbits, attrac
 
 bench-revisions: $(STAMP)  ## per-point cost before/after the model registry (cc006f3 vs HEAD, one run) -> docs/benchmarks/revisions.*
 	$(BIN)/python -m workflows.bench.revisions
+
+bench-extrema: $(STAMP)  ## Fig. 13 per-point CPU time before (aace0b1, sampled means) and after the exact extrema, orbits only and with attractors, 7 interleaved rounds (~5 min) -> docs/benchmarks/extrema.*
+	$(BIN)/python -m workflows.bench.extrema
 
 bench-continuation: $(STAMP)  ## pseudo-arclength continuation vs a scipy peer, Duffing resonance curve (~1 min) -> docs/benchmarks/continuation.*
 	$(BIN)/python -m workflows.bench.continuation

@@ -22,8 +22,8 @@ from collections import namedtuple
 
 import numpy as np
 
-from pipeline import compute, schema
-from rotorkernels import continuation, floquet
+from pipeline import coexistence, compute, schema
+from rotorkernels import continuation, extrema, floquet
 from rotorkernels.continuation import arclength, events as boundary
 
 XTOL_REL = 1e-8
@@ -38,8 +38,9 @@ def _others(ds, axis):
 
 
 def axis_solver(data, values, axis):
-    """solve(value of `axis`, guess) -> the orbit there, the other axes at `values`; and
-    family(scale) -> the arclength family along `axis`."""
+    """solve(value of `axis`, guess) -> the orbit there, the other axes at `values`;
+    family(scale) -> the arclength family along `axis`; and half_pp(value, state, periods) -> the
+    half peak-to-peak amplitude of each observable over the orbit (SI, exact: rotorkernels.extrema)."""
     model = compute.model_of(data)
     opts = compute.integrator_settings(data)
     newton = compute.newton_settings(model, data["numerics"])
@@ -53,7 +54,11 @@ def axis_solver(data, values, axis):
 
     def family(scale):
         return arclength.Family(model, params, opts, scale=scale)
-    return solve, family
+
+    def half_pp(value, state, periods):
+        built = build({**values, axis: value})
+        return extrema.amplitudes(model, state, built.p, periods, opts, built.period)[1]
+    return solve, family, half_pp
 
 
 # One stability change between grid points i and i + 1 of a line (`line`: the other axes' grid
@@ -231,7 +236,7 @@ def refine_serially(data, axis, tasks):
 
 
 def _refine(solvers, axis, bracket):
-    solve, family = solvers
+    solve, family, _ = solvers
     (a, b), (s_low, _), (u_low, u_high) = bracket.grid, bracket.stable, bracket.states
     name = f"boundary_{axis}"
     row = {"boundary_grid_low": a, "boundary_grid_high": b, "boundary_direction": 0 if s_low == 1 else 1}
@@ -249,7 +254,7 @@ def _refine(solvers, axis, bracket):
 def _refine_jump(solvers, axis, bracket):
     """The two fold rows of a jump: the branch of its near-fold side followed towards the other
     side through the window, its first two folds (not refined, NaN, where it has not both)."""
-    _, family = solvers
+    _, family, half_pp = solvers
     (a, b), k = bracket.grid, bracket.jump
     span = b - a
     branch = arclength.continue_orbit(family(span), bracket.grid[k], bracket.states[k],
@@ -258,10 +263,33 @@ def _refine_jump(solvers, axis, bracket):
     folds = sorted([e.point.lam for e in branch.events if e.kind == arclength.FOLD][:2])
     status = 0 if len(folds) == 2 else 1
     folds = folds if status == 0 else [np.nan, np.nan]
+    orbits = [{}, {}]
+    if status == 0:     # the start's own branch reaches the middle only when followed the other way
+        back = arclength.continue_orbit(family(span), bracket.grid[k], bracket.states[k], (min(folds), max(folds)),
+                                        JUMP_SETTINGS, direction=-1 if k == 0 else 1)
+        orbits = _coexisting(family(span), (branch, back), half_pp, folds)
     return [{"boundary_grid_low": a, "boundary_grid_high": b, f"boundary_{axis}": value,
              "boundary_status": status, "boundary_type": floquet.FOLD,
-             "boundary_direction": schema.BOUNDARY_DIRECTION.index(direction)}
-            for value, direction in zip(folds, ("enters_bistable", "leaves_bistable"))]
+             "boundary_direction": schema.BOUNDARY_DIRECTION.index(direction), **orbit}
+            for value, direction, orbit in zip(folds, ("enters_bistable", "leaves_bistable"), orbits)]
+
+
+def _coexisting(family, branches, half_pp, folds):
+    """The two stable orbits that coexist in the middle of a jump's fold pair, as the extra
+    columns of its two rows (`_orbit_columns`; the smaller amplitude of the first observable in
+    the first row): coexistence.distinct_stable_orbits on the branches (through the folds, and
+    the start's followed the other way). Empty dicts where it does not find two."""
+    records = [{"parameter": np.array([p.lam for p in b.points]), "state": np.array([p.state for p in b.points]),
+                "multipliers": np.array([p.multipliers for p in b.points]).reshape(len(b.points), -1),
+                "periods": b.periods} for b in branches]
+    middle = 0.5 * (folds[0] + folds[1])
+    found = coexistence.distinct_stable_orbits(family, records, JUMP_SETTINGS, middle)
+    if len(found) != 2:
+        return [{}, {}]
+    rows = [{"boundary_orbit_half_pp": [float(v) for v in half_pp(middle, point.state, records[b]["periods"])],
+             "boundary_orbit_max_abs_multiplier": float(np.abs(point.multipliers).max()),
+             "boundary_orbit_periods": float(records[b]["periods"]), "boundary_orbit_at": middle} for b, point in found]
+    return sorted(rows, key=lambda row: row["boundary_orbit_half_pp"][0])
 
 
 def _first_event_on_branch(family, bracket):
@@ -336,7 +364,30 @@ def add_boundary_table(data, ds, map_tasks=None, done=None):
         attrs = ds[other].attrs
         table[f"boundary_{other}"] = ("boundary", np.array([r[f"boundary_{other}"] for r in rows], float),
                                       {"units": attrs["units"], "long_name": f"{attrs['long_name']} of the boundary"})
+    if any("boundary_orbit_half_pp" in r for r in rows):
+        table.update(_orbit_columns(data, ds, rows, axis))
     return ds.assign(table)     # one merge, not one per variable
+
+
+def _orbit_columns(data, ds, rows, axis):
+    """The boundary table's columns of the coexisting orbits of jumps (`_coexisting`; NaN on the
+    other rows): per observable the half peak-to-peak amplitude, the largest |multiplier|, the
+    orbit's period in forcing periods, and where along `axis` they were computed."""
+    def column(get):
+        return np.array([get(r) if "boundary_orbit_half_pp" in r else np.nan for r in rows], float)
+    coord = ds[axis].attrs
+    out = {}
+    for k, obs in enumerate(compute.model_of(data).observables):
+        unit = ds[f"amplitude_{obs.name}"].attrs.get("units", "") if f"amplitude_{obs.name}" in ds else ""
+        out[f"boundary_orbit_amplitude_{obs.name}"] = ("boundary", column(lambda r: r["boundary_orbit_half_pp"][k]), {
+            "units": unit, "long_name": f"half peak-to-peak {obs.name} of a stable orbit coexisting in a jump's interval"})
+    out["boundary_orbit_max_abs_multiplier"] = ("boundary", column(lambda r: r["boundary_orbit_max_abs_multiplier"]),
+                                                {"units": "1", "long_name": "largest |Floquet multiplier| of that orbit"})
+    out["boundary_orbit_periods"] = ("boundary", column(lambda r: r["boundary_orbit_periods"]),
+                                     {"units": "1", "long_name": "that orbit's period in forcing periods"})
+    out[f"boundary_orbit_{axis}"] = ("boundary", column(lambda r: r["boundary_orbit_at"]), {
+        "units": coord["units"], "long_name": f"{coord['long_name']} where the coexisting orbits were computed"})
+    return out
 
 
 def boundary_frame(ds):

@@ -7,7 +7,8 @@ at a period doubling met twice on a loop, or at the two period doublings that bo
 period-2k loop, follows the same orbits again. In the line's task (where the kernel is),
 `mark_copies` records per located point the first record of the same orbit, and
 `line_coexistence` counts the distinct stable orbits on each piece of the line's parameter
-range (exact orbits compared, not branches). Everything users read (info, the events table, the
+range (exact orbits compared, not branches); `mark_branch_copies` marks whole branches that are
+another's copy (listed once). Everything users read (info, the events table, the
 coexistence table, the band map) reads those, through `distinct_events` and `coexistence`.
 """
 import itertools
@@ -68,6 +69,31 @@ def mark_copies(family, records, settings):
     offsets = np.cumsum([0] + [len(r["event_type"]) for r in records])
     for b, r in enumerate(records):
         r["event_copy_of"] = np.array(first[offsets[b]:offsets[b + 1]], int)
+    return mark_branch_copies(family, records, settings)
+
+
+def mark_branch_copies(family, records, settings):
+    """Set records[b]["copy_of"] in place: the first record that is the same family of closed
+    curves (-1: none), e.g. a period-2k loop reached from both its period doublings, or a
+    period-k branch followed again from another phase. Branch b copies an earlier distinct
+    record a of the same period when, in the middle of b's parameter range (away from the period
+    doublings at a loop's ends, where the halves of a loop meet), one of b's orbits is a phase
+    copy of one of a's (each record's chords bracketing it corrected by Newton, `_orbits_at`);
+    the data of both stay, what users read lists the first."""
+    for b, r in enumerate(records):
+        r["copy_of"] = -1
+        if len(r["parameter"]) < 2:
+            continue
+        lam = 0.5 * (float(np.min(r["parameter"])) + float(np.max(r["parameter"])))
+        own = [point.state for point in _orbits_at(family, r, lam, settings, stable_only=False)]
+        for a in range(b):
+            ra = records[a]
+            if ra["copy_of"] >= 0 or ra["periods"] != r["periods"]:
+                continue
+            if any(same_orbit(phase_copies(family, point.state, lam, r["periods"]), state, settings.tol)
+                   for point in _orbits_at(family, ra, lam, settings, stable_only=False) for state in own):
+                r["copy_of"] = a
+                break
     return records
 
 
@@ -81,28 +107,35 @@ def line_coexistence(family, records, settings, lam_range):
     runs = [(lo, hi) for r in records for lo, hi in record_runs(r)]
     lo_r, hi_r = lam_range
     edges = sorted({lo_r, hi_r, *(x for run in runs for x in run if lo_r <= x <= hi_r)})
-    out = []
-    for a, z in zip(edges[:-1], edges[1:]):
-        lam, kept = 0.5 * (a + z), []
-        for b, r in enumerate(records):
-            for state in _stable_orbits_at(family, r, lam, settings):
-                if not any(same_orbit(copies, state, settings.tol) for _, copies in kept):
-                    kept.append((b, phase_copies(family, state, lam, r["periods"])))
-        out.append((a, z, [b for b, _ in kept]))
-    return out
+    return [(a, z, [b for b, _ in distinct_stable_orbits(family, records, settings, 0.5 * (a + z))])
+            for a, z in zip(edges[:-1], edges[1:])]
 
 
-def _stable_orbits_at(family, r, lam, settings):
-    """States of the stable orbits of branch record r at lam (one per stable chord bracketing it)."""
+def distinct_stable_orbits(family, records, settings, lam):
+    """[(branch, Point)]: one per distinct stable orbit of the branch records at lam (every stable
+    chord bracketing lam corrected to its exact orbit, phase copies of one kept before dropped);
+    what line_coexistence counts, and what a sweep's jump records of its two coexisting orbits."""
+    kept = []
+    for b, r in enumerate(records):
+        for point in _orbits_at(family, r, lam, settings):
+            if not any(same_orbit(copies, point.state, settings.tol) for _, _, copies in kept):
+                kept.append((b, point, phase_copies(family, point.state, lam, r["periods"])))
+    return [(b, point) for b, point, _ in kept]
+
+
+def _orbits_at(family, r, lam, settings, stable_only=True):
+    """Points of the (stable) orbits of branch record r at lam (one per (stable) chord bracketing it)."""
     fam = family.with_periods(r["periods"])
-    p, stable = r["parameter"], np.abs(r["multipliers"]).max(axis=1) < 1.0
+    p = r["parameter"]
+    stable = np.abs(r["multipliers"]).max(axis=1) < 1.0 if stable_only else np.ones(len(p), bool)
     out = []
     for i in np.flatnonzero(((p[:-1] - lam) * (p[1:] - lam) <= 0) & (stable[:-1] | stable[1:])):
         s0, s1 = r["state"][i], r["state"][i + 1]
         guess = s0 + (lam - p[i]) / (p[i + 1] - p[i]) * (s1 - s0) if p[i + 1] != p[i] else s0
         point = al.start(fam, lam, guess, 1, settings)
-        if point is not None and _near(point.state, guess, s0, s1, settings) and np.abs(point.multipliers).max() < 1.0:
-            out.append(point.state)
+        if point is not None and _near(point.state, guess, s0, s1, settings) and (
+                not stable_only or np.abs(point.multipliers).max() < 1.0):
+            out.append(point)
     return out
 
 
@@ -220,3 +253,18 @@ def _touching(pieces):
             run += 1
         prev = (lo, hi, bs)
         yield lo, hi, tuple(bs), run
+
+
+def branch_copy_of(ds):
+    """Per branch: the first branch of the same closed curves (itself: distinct; a result written
+    before copies were marked: every branch itself)."""
+    n = ds.sizes.get("branch", 0)
+    if "branch_copy_of" not in ds:
+        return np.arange(n)
+    copy = ds["branch_copy_of"].values
+    return np.where(copy >= 0, copy, np.arange(n))
+
+
+def distinct_branches(ds):
+    """Indices of the branches listed once (no copy of an earlier one)."""
+    return np.flatnonzero(branch_copy_of(ds) == np.arange(ds.sizes.get("branch", 0)))

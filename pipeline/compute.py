@@ -127,7 +127,8 @@ def _orbit_chain(model, params, opts, num, seconds):
     periodically forced points is one chain (a quasi-periodically forced point has no orbit)."""
     sols = [None] * len(params)
     for run in _periodic_runs(params):
-        chain = continuation.natural(model, [params[i].p for i in run], opts, **newton_settings(model, num))
+        chain = continuation.natural(model, [params[i].p for i in run], opts, n_samples=0,
+                                     **newton_settings(model, num))
         start = time.perf_counter()
         for i, sol in zip(run, chain):
             sols[i] = sol
@@ -223,17 +224,16 @@ def point_variables(model, sol, params, seconds, opts=None):
 
 
 def _orbit_extent(model, sol, params, opts):
-    """Mean (of the orbit samples) and half peak-to-peak (exact: rotorkernels.extrema) of each
-    observable over the orbit (SI)."""
+    """Mean and half peak-to-peak of each observable over the orbit (SI), from one integration
+    (rotorkernels.extrema.orbit_extent: exact extrema, the mean by a Hermite rule on the steps)."""
     names = [o.name for o in model.observables]
-    if sol.samples is None:
+    if sol.status != shooting.CONVERGED:
         return {k: np.nan for name in names for k in (f"{name}_mean", f"amplitude_{name}")}
-    mean = model.observe(sol.samples, params.period).mean(axis=0)
-    _, half = extrema.amplitudes(model, sol.state, params.p, 1.0, opts, params.period)
+    hi, lo, mean, _, _ = extrema.extent(model, sol.state, params.p, 1.0, opts, params.period)
     out = {}
     for k, name in enumerate(names):
         out[f"{name}_mean"] = mean[k]
-        out[f"amplitude_{name}"] = half[k]
+        out[f"amplitude_{name}"] = 0.5 * (hi[k] - lo[k])
     return out
 
 

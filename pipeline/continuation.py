@@ -20,7 +20,8 @@ import xarray as xr
 
 from pipeline import cluster, compute, result_kinds, results, runlog, schema, torus_branches
 from pipeline.coexistence import (  # noqa: F401 (the continuation result's readers use these names)
-    bistable_intervals, coexistence, distinct_events, event_copy_of, line_coexistence, mark_copies, stability_classes,
+    bistable_intervals, branch_copy_of, coexistence, distinct_branches, distinct_events, event_copy_of, line_coexistence,
+    mark_copies, stability_classes,
     stable_runs)
 from pipeline.config import ConfigError, continued_axis, range_text, settings_problems
 from rotorkernels import extrema
@@ -343,11 +344,12 @@ def _omega_l_variables(data, pl, values):
             {"parameter_over_omega_l": attrs, "event_parameter_over_omega_l": attrs})
 
 
-def _global_parents(lines):
-    """Parent branch indices over the whole result (a line's records number them locally)."""
+def _global_parents(lines, key="parent"):
+    """Parent (or copy_of) branch indices over the whole result (a line's records number them
+    locally; -1: none)."""
     out, offset = [], 0
     for _, recs in lines:
-        out += [r["parent"] + offset if r["parent"] >= 0 else -1 for r in recs]
+        out += [r.get(key, -1) + offset if r.get(key, -1) >= 0 else -1 for r in recs]
         offset += len(recs)
     return np.array(out, "int32")
 
@@ -402,7 +404,7 @@ def to_dataset(data, pl, lines, provenance):
         "max_abs_multiplier": absmax, "stable": np.where(present, absmax < 1.0, -1).astype("int8"),
         "branch_points": np.array([len(r["parameter"]) for _, r in records], "int32"),
         "branch_periods": np.array([r["periods"] for _, r in records], "int32"),
-        "branch_parent": _global_parents(lines),
+        "branch_parent": _global_parents(lines), "branch_copy_of": _global_parents(lines, "copy_of"),
         "event_copy_of": copies[0], **copies[1],
         "branch_end": np.array([r["end"] for _, r in records], "int8"),
         "branch_detail": np.array([r["detail"] for _, r in records], object),
@@ -484,16 +486,18 @@ def describe(ds):
     unit = ds["parameter"].attrs.get("units", "")
     lines = [f"continuation result: scene {ds.attrs.get('scene', '?')}, model {ds.attrs.get('model', '?')}",
              f"parameter {par} [{unit}] over {json.loads(ds.attrs['range'])}",
-             f"{ds.sizes['branch']} branch(es), {len(distinct_events(ds))} distinct located event(s)"
+             f"{ds.sizes['branch']} branch(es) ({len(distinct_branches(ds))} distinct, copies of one family of orbits "
+             f"counted once), {len(distinct_events(ds))} distinct located event(s)"
              f" ({ds.sizes.get('event', 0)} met, copies of one orbit counted once)"]
-    for b in range(ds.sizes["branch"]):
+    for b in distinct_branches(ds):
         where = ", ".join(f"{c}={float(ds[c].values[b]):g}" for c in ds.coords if ds[c].dims == ("branch",))
         what = "torus" if "branch_kind" in ds and ds["branch_kind"].values[b] == 1 else \
             f"period-{int(ds['branch_periods'].values[b])}"
         lines.append(f"  branch {b}: {what}"
                      f"{f' from branch {int(ds.branch_parent.values[b])}' if ds.branch_parent.values[b] >= 0 else ''}"
                      f"{f' ({where})' if where else ''}, {int(ds['branch_points'].values[b])} points, "
-                     f"ended {al.END_REASONS[int(ds['branch_end'].values[b])]}: {ds['branch_detail'].values[b]}")
+                     f"ended {al.END_REASONS[int(ds['branch_end'].values[b])]}: {ds['branch_detail'].values[b]}"
+                     + "".join(f"; branch {c} is the same" for c in np.flatnonzero(branch_copy_of(ds) == b) if c != b))
     lines += _peak_lines(ds, par, unit) + torus_branches.torus_lines(ds, par, unit)
     for iv in bistable_intervals(ds):
         where = ", ".join(f"{k}={v:g}" for k, v in iv.items() if k not in ("lo", "hi", "branches"))

@@ -16,7 +16,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline import duckarrays  # noqa: F401  (xarray without importing Dask for every array)
-from pipeline import fileio, schema
+from pipeline import fileio, query, schema
 
 CONVENTIONS = "CF-1.10"
 # zlib level 1 after the byte shuffle: on an atlas cube as small as level 4 without shuffle (the
@@ -263,11 +263,34 @@ def describe(ds):
     lines += ["", "variables:"] + [_describe_variable(name, var, axes) for name, var in ds.data_vars.items()]
     if "orbit_status" in ds:
         lines += ["", "points per orbit_status:"] + _flag_counts(ds["orbit_status"])
+        lines += _describe_classes(ds)
     lines += ["", "provenance:"]
     lines += [f"  {k}: {v}" for k, v in ds.attrs.items() if k not in ("title", "config_toml")]
     if "config_toml" in ds.attrs:
         lines += ["", "config:"] + ["  " + line for line in ds.attrs["config_toml"].rstrip().splitlines()]
     return "\n".join(lines)
+
+
+def _describe_classes(ds):
+    """The stability classes of the grid points and their intervals, in the one vocabulary of the
+    map, the report and `query` (query.point_classes)."""
+
+    if "stable" not in ds or "bifurcation" not in ds:
+        return []
+    runs = query.class_runs(ds)
+    along = schema.continued_axis(ds)
+    totals = {}
+    for run in runs:
+        totals[run["class"]] = totals.get(run["class"], 0) + run["n_points"]
+    lines = ["", "points per stability class (stable, bistable, no_orbit, not_applicable: what the grid "
+             "point is; fold, period_doubling, neimark_sacker, none: how stability was lost before its "
+             "unstable interval, as `query --unstable` says):"]
+    lines += [f"  {name:<16} {n:>8}" for name, n in totals.items()]
+    lines += ["", f"stability intervals along {along}:"]
+    for run in runs:
+        where = "".join(f"{a}={run[a]:g} " for a in run if a not in ("start", "end", "n_points", "class"))
+        lines.append(f"  {where}{run['start']:g} .. {run['end']:g}  {run['class']} ({run['n_points']} points)")
+    return lines
 
 
 def _describe_fixed(name, coord):

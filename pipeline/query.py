@@ -201,7 +201,11 @@ def bistable_intervals(ds):
     different branches), between the fold pair its boundary table holds (pipeline.boundaries).
 
     Each entry: the other axes' values, `start`/`end` (the lower and upper fold; NaN where the
-    pair could not be located), `grid_low`/`grid_high` (the grid points either side of the jump)."""
+    pair could not be located), `grid_low`/`grid_high` (the grid points either side of the jump),
+    and where the sweep recorded them (boundaries: coexistence.distinct_stable_orbits in the
+    middle of the pair), the two coexisting stable orbits: `orbit1_*`, `orbit2_*` (half
+    peak-to-peak amplitude of each observable, period in forcing periods, largest |multiplier|)
+    and `orbits_at` (where they were computed)."""
     along = schema.continued_axis(ds)
     others = _other_axes(ds)
     name = f"boundary_{along}"
@@ -211,10 +215,24 @@ def bistable_intervals(ds):
     for k in np.flatnonzero(ds["boundary_direction"].values >= ENTERS_BISTABLE):
         key = (*(float(ds[f"boundary_{a}"].values[k]) for a in others),
                float(ds["boundary_grid_low"].values[k]), float(ds["boundary_grid_high"].values[k]))
-        end = "start" if int(ds["boundary_direction"].values[k]) == ENTERS_BISTABLE else "end"
-        pairs.setdefault(key, {})[end] = float(ds[name].values[k])
-    return [{**dict(zip(others, key[:-2])), "start": fold.get("start", np.nan), "end": fold.get("end", np.nan),
-             "grid_low": key[-2], "grid_high": key[-1]} for key, fold in sorted(pairs.items())]
+        enters = int(ds["boundary_direction"].values[k]) == ENTERS_BISTABLE
+        pairs.setdefault(key, {})["start" if enters else "end"] = float(ds[name].values[k])
+        pairs[key].update(_coexisting_orbit(ds, k, "orbit1" if enters else "orbit2", along))
+    return [{**dict(zip(others, key[:-2])), "start": fold.pop("start", np.nan), "end": fold.pop("end", np.nan),
+             "grid_low": key[-2], "grid_high": key[-1], **dict(sorted(fold.items()))}
+            for key, fold in sorted(pairs.items())]
+
+
+def _coexisting_orbit(ds, k, prefix, along):
+    """{prefix_amplitude_<observable>, prefix_periods, prefix_max_abs_multiplier, orbits_at} of a
+    jump's boundary row k (the boundary table's orbit columns); {} where it has none."""
+    if f"boundary_orbit_{along}" not in ds or not np.isfinite(ds[f"boundary_orbit_{along}"].values[k]):
+        return {}
+    start = "boundary_orbit_amplitude_"
+    out = {f"{prefix}_amplitude_{n[len(start):]}": float(ds[n].values[k]) for n in ds.data_vars if n.startswith(start)}
+    return {**out, f"{prefix}_periods": int(ds["boundary_orbit_periods"].values[k]),
+            f"{prefix}_max_abs_multiplier": float(ds["boundary_orbit_max_abs_multiplier"].values[k]),
+            "orbits_at": float(ds[f"boundary_orbit_{along}"].values[k])}
 
 
 def unstable_intervals(ds):
@@ -292,6 +310,26 @@ def point_classes(ds):
         line = cls.loc[{**sel, along: inside}]
         cls.loc[{**sel, along: inside}] = np.where(line.values == "stable", "bistable", line.values)
     return cls
+
+
+def class_runs(ds):
+    """Maximal runs of grid points of one class (point_classes) along the continued axis, one
+    list entry per run and per combination of the other swept axes: the other axes' values,
+    `start`/`end` (first and last grid value), `n_points`, `class`. What `info` lists, and what
+    the map draws as bands."""
+    cls = point_classes(ds)
+    along = schema.continued_axis(ds)
+    others = _other_axes(ds)
+    grid = ds[along].values
+    out = []
+    for values in itertools.product(*(ds[a].values for a in others)):
+        where = dict(zip(others, values))
+        names = (cls.sel(where) if where else cls).transpose(along).values
+        cuts = np.flatnonzero(names[1:] != names[:-1]) + 1
+        for i0, i1 in zip(np.concatenate(([0], cuts)), np.concatenate((cuts, [names.size])) - 1):
+            out.append({**{a: float(v) for a, v in where.items()}, "start": float(grid[i0]),
+                        "end": float(grid[i1]), "n_points": int(i1 - i0 + 1), "class": str(names[i0])})
+    return out
 
 
 def attractor_label(code, k):

@@ -102,6 +102,7 @@ CONTINUATION_VARIABLES = {
     "event_type": (("event",), {"long_name": "located bifurcation point"}),
     "event_branch": (("event",), {"units": "1", "long_name": "branch index of the event"}),
     "event_copy_of": (("event",), {"units": "1", "long_name": "event holding the first record of this located orbit (itself: distinct)"}),
+    "branch_copy_of": (("branch",), {"units": "1", "long_name": "first branch of the same closed orbits (phase copy, loop met twice; -1: distinct)"}),
     "event_point": (("event",), {"units": "1", "long_name": "branch point just before the event"}),
     "event_parameter": (("event",), {"comment": "located on the branch to the arclength tolerance"}),
     "event_multiplier_real": (("event", "multiplier"), {"units": "1", "long_name": "Floquet multiplier at the event, real part"}),
@@ -154,7 +155,8 @@ CONTINUATION_VARIABLES = {
 CONTINUATION_OPTIONAL = ("branch_kind", "torus_status", "torus_error", "torus_exponent", "torus_nodes", "event_note", "parameter_over_omega_l",
                          "event_parameter_over_omega_l", "curve_parameter", "curve_second", "curve_critical_real",
                          "curve_critical_imag", "curve_type", "curve_points", "curve_end", "curve_detail",
-                         "piece_lo", "piece_hi", "piece_line", "piece_branches", "event_copy_of")
+                         "piece_lo", "piece_hi", "piece_line", "piece_branches", "event_copy_of",
+                         "branch_copy_of")
 
 # CF has one unit per variable; the manifold's coefficients have one per element, stated as a rule.
 MIXED_UNITS = ("no units attribute: the units differ from element to element (SI); P is the unit of "

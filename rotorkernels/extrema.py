@@ -11,8 +11,10 @@ or lowest value (CANDIDATE_MARGIN) are refined: the zero of g on a re-integratio
 start (one step of the same method, shorter than an accepted one, so as accurate), by Newton with
 g' = w . (the acceleration part of du/dt) in velocity form, else by regula falsi. The zero is
 located to XTOL of the step; an error d in its time moves o by o'' d^2 / 2 only, so the extrema
-are exact to the integrator's tolerance. Poincare samples and orbit samples are not this
-module's business.
+are exact to the integrator's tolerance. The same pass integrates each observable over the
+accepted steps for its mean over the orbit (a two-point Hermite rule on the step ends' values and
+derivatives, `_quadrature`), so a sweep point takes no orbit samples. Poincare samples and
+orbit samples are not this module's business.
 """
 import numpy as np
 from numba import njit
@@ -66,16 +68,19 @@ def _refine(kernel, t, span, c, z, p, weights, k, ga, gb, opts):
     """o_k at the zero of g_k within the step [t, t + span] from state z (g_k(t) = ga and
     g_k(t + span) = gb of opposite signs), from the estimate t + c, on a re-integration from t:
     Newton on g_k with g_k' where `_accelerated` (a step leaving the bracket replaced by regula
-    falsi), else the Illinois variant of regula falsi; NaN when the re-integration fails."""
+    falsi), else the Illinois variant of regula falsi; NaN when the re-integration fails. Returns
+    (value, right-hand sides evaluated)."""
     newton = _accelerated(kernel, weights)
     n, n_obs = kernel.n_state, weights.shape[0]
     f, jbuf, rates, slopes, values = np.empty(n), np.empty((n, n)), np.empty(n_obs), np.empty(n_obs), np.empty(n_obs)
     a, b, fa, fb = 0.0, span, ga, gb
     best = np.nan
+    n_rhs = 0
     for _ in range(MAX_REFINE):
-        zc, status, _, _ = ig.flow(kernel, t, t + c, z, p, False, opts, c)
+        zc, status, spent, _ = ig.flow(kernel, t, t + c, z, p, False, opts, c)
+        n_rhs += spent + 1          # the rates below: one right-hand side
         if status != ig.STATUS_OK:
-            return np.nan
+            return np.nan, n_rhs
         _rates(kernel, t + c, zc, p, weights, f, jbuf, rates, slopes, newton)
         _values(weights, zc, values)
         best = values[k]
@@ -101,7 +106,7 @@ def _refine(kernel, t, span, c, z, p, weights, k, ga, gb, opts):
         if abs(b - a) <= XTOL * span:
             break
         c = (a * fb - b * fa) / (fb - fa)
-    return best
+    return best, n_rhs
 
 
 @njit(cache=True, nogil=True)
@@ -130,16 +135,45 @@ CANDIDATE_MARGIN = 1e-3
 CANDIDATES = 256            # brackets held for refinement after the integration (more: refined at once)
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _quadrature(oa, ob, ga, gb, sa, sb, h, quintic, integral, error):
+    """Add the integral of each o over a step of length h to `integral` and its error estimate to
+    `error`, from the values (oa, ob), rates (ga, gb) and, if quintic, second derivatives (sa, sb)
+    at its ends. Two-point Hermite rules: cubic h (oa + ob) / 2 + h^2 (ga - gb) / 12, error
+    h^5 o''''/720; quintic h (oa + ob) / 2 + h^2 (ga - gb) / 10 + h^3 (sa + sb) / 120, error
+    h^7 o^(6) / 100800. The error estimate is the difference to the rule one order lower (cubic
+    vs quintic, trapezoid vs cubic): the lower rule's error, a bound on the rule used where the
+    step resolves o (a step across a contact's onset, where o'''' is unbounded, is as short as
+    the integrator's error control makes it)."""
+    for k in range(oa.size):
+        trapezoid = 0.5 * h * (oa[k] + ob[k])
+        cubic = trapezoid + h * h * (ga[k] - gb[k]) / 12.0
+        if quintic:
+            value = trapezoid + h * h * (ga[k] - gb[k]) / 10.0 + h ** 3 * (sa[k] + sb[k]) / 120.0
+            error[k] += abs(value - cubic)
+        else:
+            value = cubic
+            error[k] += abs(cubic - trapezoid)
+        integral[k] += value
+
+
 @njit(cache=True, nogil=True)
-def orbit_extrema(kernel, u0, p, span, weights, opts):
-    """(highest, lowest, status) of each observable o_k = weights[k] . u[:m] over the orbit from
-    u0 on [0, span] (scaled time); status an integrators.STATUS_* code (not OK: NaN values).
+def orbit_extent(kernel, u0, p, span, weights, opts, mean):
+    """(highest, lowest, mean, mean_error, status, n_rhs) of each observable o_k = weights[k] . u[:m]
+    over the orbit from u0 on [0, span] (scaled time), in one integration; status an
+    integrators.STATUS_* code (not OK: NaN values), n_rhs the right-hand sides evaluated.
     The step ends give o, the brackets of a sign change of g their Hermite estimates; the
-    brackets whose estimate can be the highest or lowest are refined afterwards."""
+    brackets whose estimate can be the highest or lowest are refined afterwards. The mean is the
+    integral of o by the quintic Hermite rule on the accepted steps where `_accelerated` and
+    `mean` is set (g' from one right-hand side per step end: the cost of a mean that is wanted),
+    else the cubic one (`_quadrature`); mean_error its estimate."""
     n, n_obs = kernel.n_state, weights.shape[0]
     hi, lo, ga, gb, oa, ob = (np.empty(n_obs), np.empty(n_obs), np.empty(n_obs), np.empty(n_obs),
                               np.empty(n_obs), np.empty(n_obs))
-    slopes, f, jbuf = np.empty(n_obs), np.empty(n), np.empty((n, n))
+    sa, sb, f, jbuf = np.zeros(n_obs), np.zeros(n_obs), np.empty(n), np.empty((n, n))
+    integral, error = np.zeros(n_obs), np.zeros(n_obs)
+    quintic = mean and _accelerated(kernel, weights)
+    rhs_per_end = 1 if quintic or not _accelerated(kernel, weights) else 0     # `_rates`
     est_hi, est_lo = np.empty(n_obs), np.empty(n_obs)     # hi and lo with the brackets' estimates
     held = np.empty((CANDIDATES, 7))        # t, h, s, estimate, k, ga, gb of a bracket
     held_z = np.empty((CANDIDATES, n))      # its starting state
@@ -148,19 +182,21 @@ def orbit_extrema(kernel, u0, p, span, weights, opts):
     _values(weights, z, oa)
     for k in range(n_obs):
         hi[k] = lo[k] = est_hi[k] = est_lo[k] = oa[k]
-    _rates(kernel, 0.0, z, p, weights, f, jbuf, ga, slopes, False)
-    t, h = 0.0, 0.01 * span
+    _rates(kernel, 0.0, z, p, weights, f, jbuf, ga, sa, quintic)
+    t, h, n_rhs = 0.0, 0.01 * span, rhs_per_end
     status = ig.STATUS_STEP_UNDERFLOW       # unless the end is reached within max_steps
     for _ in range(int(opts[ig.S_MAX_STEPS])):
         if t >= span:
             status = ig.STATUS_OK
             break
         t1 = min(t + h, span)
-        zb, status, _, h_next = ig.flow(kernel, t, t1, z, p, False, opts, h)
+        zb, status, spent, h_next = ig.flow(kernel, t, t1, z, p, False, opts, h)
+        n_rhs += spent + rhs_per_end
         if status != ig.STATUS_OK:
             break
-        _rates(kernel, t1, zb, p, weights, f, jbuf, gb, slopes, False)
+        _rates(kernel, t1, zb, p, weights, f, jbuf, gb, sb, quintic)
         _values(weights, zb, ob)
+        _quadrature(oa, ob, ga, gb, sa, sb, t1 - t, quintic, integral, error)
         for k in range(n_obs):
             hi[k] = max(hi[k], ob[k])
             lo[k] = min(lo[k], ob[k])
@@ -169,7 +205,8 @@ def orbit_extrema(kernel, u0, p, span, weights, opts):
             if (ga[k] < 0.0) != (gb[k] < 0.0) and ga[k] != 0.0 and gb[k] != 0.0:
                 s, est = _hermite(oa[k], ob[k], ga[k], gb[k], t1 - t)
                 if count == CANDIDATES:     # no room: refined at once
-                    est = _refine(kernel, t, t1 - t, s, z, p, weights, k, ga[k], gb[k], opts)
+                    est, spent = _refine(kernel, t, t1 - t, s, z, p, weights, k, ga[k], gb[k], opts)
+                    n_rhs += spent
                     if not np.isfinite(est):
                         status = ig.STATUS_NAN
                     hi[k] = max(hi[k], est)
@@ -182,13 +219,20 @@ def orbit_extrema(kernel, u0, p, span, weights, opts):
         if status != ig.STATUS_OK:
             break
         for k in range(n_obs):
-            ga[k], oa[k] = gb[k], ob[k]
+            ga[k], oa[k], sa[k] = gb[k], ob[k], sb[k]
         z, t, h = zb, t1, h_next
     if status == ig.STATUS_OK:
-        status = _refine_held(kernel, p, weights, opts, hi, lo, est_hi, est_lo, held[:count], held_z)
+        status, spent = _refine_held(kernel, p, weights, opts, hi, lo, est_hi, est_lo, held[:count], held_z)
+        n_rhs += spent
     if status != ig.STATUS_OK:
-        hi[:] = np.nan
-        lo[:] = np.nan
+        for a in (hi, lo, integral, error):
+            a[:] = np.nan
+    return hi, lo, integral / span, error / span, status, n_rhs
+
+
+def orbit_extrema(kernel, u0, p, span, weights, opts):
+    """(highest, lowest, status) of each observable (`orbit_extent`)."""
+    hi, lo, _, _, status, _ = orbit_extent(kernel, u0, p, span, weights, opts, False)
     return hi, lo, status
 
 
@@ -205,21 +249,23 @@ def _hold(held, held_z, i, row, z):
 def _refine_held(kernel, p, weights, opts, hi, lo, est_hi, est_lo, held, held_z):
     """Refine the held brackets whose estimate is within CANDIDATE_MARGIN of the estimated
     highest (est_hi; a maximum: g from + to -) or lowest value (est_lo), updating hi and lo (the
-    values at the step ends and the refined ones): a status."""
+    values at the step ends and the refined ones): (status, right-hand sides evaluated)."""
+    n_rhs = 0
     for i in range(held.shape[0]):
         t, h, s, est, k, ga, gb = held[i, 0], held[i, 1], held[i, 2], held[i, 3], int(held[i, 4]), held[i, 5], held[i, 6]
         margin = CANDIDATE_MARGIN * (est_hi[k] - est_lo[k])
         maximum = ga > 0.0
         if (maximum and est < est_hi[k] - margin) or (not maximum and est > est_lo[k] + margin):
             continue
-        v = _refine(kernel, t, h, s, held_z[i], p, weights, k, ga, gb, opts)
+        v, spent = _refine(kernel, t, h, s, held_z[i], p, weights, k, ga, gb, opts)
+        n_rhs += spent
         if not np.isfinite(v):
-            return ig.STATUS_NAN
+            return ig.STATUS_NAN, n_rhs
         if maximum:
             hi[k] = max(hi[k], v)
         else:
             lo[k] = min(lo[k], v)
-    return ig.STATUS_OK
+    return ig.STATUS_OK, n_rhs
 
 
 def observable_weights(model, period):
@@ -228,6 +274,15 @@ def observable_weights(model, period):
     w = np.array([o.weights for o in model.observables], float).reshape(len(model.observables), -1)
     scale = model.to_physical(np.ones(model.n_state), period)[:w.shape[1]]
     return np.ascontiguousarray(w * scale)
+
+
+def extent(model, state, p, span, opts, period):
+    """(highest, lowest, mean, mean's error estimate, right-hand sides evaluated) of each
+    observable over the orbit through `state` lasting `span` (scaled time: forcing periods), SI;
+    NaN values where the orbit could not be integrated (`orbit_extent`)."""
+    hi, lo, mean, error, _, n_rhs = orbit_extent(model.kernel, np.asarray(state, float), p, float(span),
+                                                 observable_weights(model, period), opts, True)
+    return hi, lo, mean, error, n_rhs
 
 
 def extremes(model, state, p, span, opts, period):

@@ -295,3 +295,9 @@ def test_shipped_attractor_cost_writeup_is_its_json_rendered():
 
     res = json.loads((DOCS / "attractor_cost.json").read_text())
     assert attractor_cost.report(res) == (DOCS / "attractor_cost.md").read_text()
+
+
+def test_extrema_writeup_is_its_json_rendered():
+    """docs/benchmarks/extrema.md is what workflows.bench.extrema makes of extrema.json."""
+    from workflows.bench import extrema
+    assert extrema.markdown(json.loads((DOCS / "extrema.json").read_text())) == (DOCS / "extrema.md").read_text()

@@ -1,6 +1,7 @@
 """One orbit, one record (issue 32 item 3): the Bai 2006 rotor's continuation at 15.2 and 19 um
 lists each located orbit once, claims coexistence only between distinct orbits, and its band
 map, `info` and coexistence table agree."""
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -98,3 +99,35 @@ def test_bai_19um_band_map_info_and_table_agree(bai19):
         assert f"{r['lo']:.10g} to {r['hi']:.10g}" in info
     # the period-4 branch's copies (40.1-41.6 Hz) are one orbit: no band there
     assert not covered(bands, 41.0)
+
+
+def test_bai_15um_lists_each_branch_once(bai15):
+    """Whole branches that are one family of closed orbits (the period-2 loop reached from both
+    its period doublings, a period-4 branch met from another phase) are marked (branch_copy_of)
+    and listed once by info. Independently: branches of one period whose located bifurcation
+    orbits coincide as closed curves (scipy, reference_curve) are one family; a branch without
+    such an event is its own."""
+    data, ds = bai15
+    spec = continuation.compute.model_of(data)
+    copy_of = continuation.branch_copy_of(ds)
+    family = list(range(ds.sizes["branch"]))
+
+    def root(b):
+        while family[b] != b:
+            b = family[b]
+        return b
+    curves = [(int(ds["event_branch"].values[e]), e, *reference_curve(spec, ds, e, 15.2e-6))
+              for e in range(ds.sizes["event"]) if ds["event_type"].values[e] != continuation.al.PEAK]
+    for (b1, e1, k1, c1, sp1), (b2, e2, k2, c2, sp2) in itertools.combinations(curves, 2):
+        same_kind = ds["event_type"].values[e1] == ds["event_type"].values[e2]
+        same_period = ds["branch_periods"].values[b1] == ds["branch_periods"].values[b2]
+        near = abs(ds["event_parameter"].values[e1] - ds["event_parameter"].values[e2]) < 1e-6
+        if b1 != b2 and same_kind and same_period and near and \
+                np.linalg.norm(c1[:, None, :] - c2[None, ::7, :], axis=2).min(axis=0).max() <= 2 * max(sp1, sp2):
+            family[max(root(b1), root(b2))] = min(root(b1), root(b2))
+    expected = [root(b) for b in range(ds.sizes["branch"])]
+    assert copy_of.tolist() == expected
+    assert len(continuation.distinct_branches(ds)) < ds.sizes["branch"]     # the loop is met twice
+    info = continuation.describe(ds)
+    assert f"({len(continuation.distinct_branches(ds))} distinct" in info
+    assert sum(line.startswith("  branch ") for line in info.splitlines()) == len(continuation.distinct_branches(ds))

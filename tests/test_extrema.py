@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
+from scipy.integrate import quad, solve_ivp
 from scipy.optimize import minimize_scalar
 
 from pipeline import compute, config, continuation
@@ -241,3 +241,68 @@ def test_peak_in_info_events_table_and_csv():
     assert cols["amplitude_half_pp_x"] == ds["event_amplitude_half_pp"].values[:, 0].tolist()
     np.testing.assert_allclose(cols["amplitude_half_pp_x"], cols["amplitude_max_x"], rtol=1e-12)   # a symmetric orbit
     assert "PK" in query.render(cols, "csv")
+
+
+def scipy_mean(fun, u0, span, weights):
+    """Mean of o = weights @ u[:m] over [0, span] by scipy's quad (epsrel 1e-13) on scipy's DOP853
+    solution at rtol 1e-13 (its dense output: 7th order, far below the means' errors here)."""
+    sol = solve_ivp(fun, (0.0, span), np.asarray(u0, float), method="DOP853", rtol=1e-13, atol=1e-16,
+                    dense_output=True)
+    m = weights.shape[1]
+    return np.array([quad(lambda t: w @ sol.sol(t)[:m], 0.0, span, limit=500, epsabs=0.0, epsrel=1e-13)[0]
+                     for w in weights]) / span
+
+
+@pytest.mark.parametrize("weights", [np.array([[1.0]]), np.array([[1.0, 0.3]])])
+def test_duffing_mean_matches_scipy_quad(weights):
+    """The mean of x (position: the quintic Hermite rule) and of x + 0.3 x' (the cubic rule, g
+    from the right-hand side) over 0.37 of a hardening Duffing orbit (over a whole period its
+    odd symmetry makes the mean zero) against scipy quad on a rtol 1e-13 solution: within the
+    stated error estimate (the rule one order lower's difference, summed over the steps) plus
+    the integration's ~10 rtol |x|."""
+    built = duffing(1.3, 0.05, 1.0, 0.3)
+    sol = solve_orbit(DUFFING, built.p, TIGHT, cold_guess=DUFFING.cold_guess, tol=1e-12)
+    hi, lo, mean, error, status, n_rhs = extrema.orbit_extent(DUFFING.kernel, sol.state, built.p, 0.37, weights, TIGHT, True)
+    ref = scipy_mean(duffing_rhs(1.3, 0.05, 1.0, 0.3), sol.state, 0.37, weights)
+    assert status == ig.STATUS_OK and n_rhs > 0
+    assert abs(mean[0] - ref[0]) <= error[0] + 10 * 1e-12 * max(hi[0], -lo[0])
+    assert abs(ref[0]) > 1e3 * abs(mean[0] - ref[0])       # a nonzero mean, resolved
+
+
+def test_bai_orbit_means_from_the_sweep_match_scipy_quad(bai_segment):
+    """x and y means of the sweep's orbit at 15.2 um, 31.2 Hz (one pass with the extrema, no orbit
+    samples) against scipy quad on scipy's DOP853 solution from the orbit's state: within the
+    stated error estimate plus the integration's ~10 rtol (1e-10) of the range."""
+    data, points, _, sweep_rows = bai_segment
+    model = compute.model_of(data)
+    built = compute.builder(data)(points[-1])
+    state = sweep_rows["orbit_state"][-1]
+    opts = compute.integrator_settings(data)
+    hi, lo, mean, error, _ = extrema.extent(model, state, built.p, 1.0, opts, built.period)
+    n = model.n_state
+    jbuf, du = np.empty((n, n)), np.empty(n)
+
+    def fun(t, u):
+        ig.derivative(model.kernel, t, np.array(u), built.p, False, du, jbuf)
+        return du.copy()
+    ref = scipy_mean(fun, state, 1.0, extrema.observable_weights(model, built.period))
+    got = np.array([sweep_rows["x_mean"][-1], sweep_rows["y_mean"][-1]])
+    np.testing.assert_array_equal(got, mean)
+    assert np.all(np.abs(got - ref) <= error + 10 * 1e-10 * (hi - lo))
+
+
+def test_branch_n_rhs_counts_the_extrema_and_peak_slopes():
+    """A branch's n_rhs counts the extrema passes of its points (issue 32 gap b): the same Duffing
+    branch with weights (amplitudes, and the peak's slope: two more passes per point) costs at
+    least the extrema passes of its recorded points more than without, recounted here one by one
+    (the event searches' trial points add more, never less)."""
+    def family(**kw):
+        return al.Family(DUFFING, lambda w: duffing(w, 0.05, 1.0, 0.3).p, TIGHT, **kw)
+    settings = al.Settings(ds=0.05, ds_max=0.3)
+    plain = al.continue_orbit(family(), 0.5, np.zeros(2), (0.5, 2.0), settings)
+    weighted_family = family(weights=np.array([[1.0]]), peak=0)
+    weighted = al.continue_orbit(weighted_family, 0.5, np.zeros(2), (0.5, 2.0), settings)
+    assert len(weighted.points) == len(plain.points)
+    recount = sum(3 * extrema.orbit_extent(DUFFING.kernel, p.state, duffing(p.lam, 0.05, 1.0, 0.3).p, 1.0,
+                                           np.array([[1.0]]), TIGHT, False)[5] for p in weighted.points)
+    assert weighted.n_rhs - plain.n_rhs >= 0.9 * recount     # the +- steps' passes differ a little

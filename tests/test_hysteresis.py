@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from pipeline import boundaries, cli, config, continuation, cube, query, schema, sweep
+from pipeline import boundaries, cli, compute, config, continuation, cube, query, schema, sweep
 from rotorkernels.continuation import arclength as al
 
 # Bai 2006 (configs/bai2006_fold.toml): the natural sweep jumps over a fold pair near 40.8 Hz at
@@ -136,3 +136,55 @@ def test_stability_changes_next_to_jumps_are_unchanged(tmp_path, start, stop, st
     code = al.FOLD if kind == "fold" else al.PERIOD_DOUBLING
     (reference,) = first["event_parameter"][first["event_type"] == code][:1]
     assert row["speed"] == pytest.approx(reference, rel=1e-8)
+
+
+def test_the_map_draws_a_narrow_bistable_band_at_least_its_minimum_width(jump_sweep, monkeypatch):
+    """The bistable band lies over the interval between the folds (query --bistable), is in the
+    legend, and a band narrower than MIN_BAND_FRACTION of the axis (the demo's 7.6 um pair: 0.1 Hz
+    of 240, half a pixel) is drawn that wide about its middle."""
+    from pipeline.report import axes_plan, map_rectangles, stability
+
+    _, ds, _ = jump_sweep
+    (iv,) = query.bistable_intervals(ds)
+    assert float(stability.BISTABLE) in stability.class_keys(ds)
+    plan = axes_plan(ds)
+    bands = [r for r in map_rectangles(ds, plan, {})[0][float(stability.BISTABLE)]
+             if r[0] <= iv["start"] and iv["end"] <= r[2]]
+    assert bands
+    span = float(np.ptp(ds["speed"].values))
+    monkeypatch.setattr(stability, "MIN_BAND_FRACTION", 2.0 * (iv["end"] - iv["start"]) / span)
+    (lo, hi), = stability.bistable_bands(ds, {})
+    assert hi - lo == pytest.approx(2.0 * (iv["end"] - iv["start"]), rel=1e-12)
+    assert 0.5 * (lo + hi) == pytest.approx(0.5 * (iv["start"] + iv["end"]), rel=1e-12)
+
+
+def test_the_bistable_interval_names_its_two_coexisting_orbits(jump_sweep):
+    """query --bistable and the report's table give the two stable orbits that coexist in the
+    middle of the fold pair (issue 32 item 4, gap d). Independently: Newton at that speed from
+    the cube's orbits either side of the jump (one on each branch), amplitudes by
+    rotorkernels.extrema; both sides converge to 1e-9 (newton_tol), so the amplitudes agree to
+    1e-6 relative with room, and each orbit is stable."""
+    from pipeline.report.tables import bistable_rows
+    from rotorkernels import extrema
+    from rotorkernels.continuation import solve_orbit
+
+    cfg, ds, clearance = jump_sweep
+    (iv,) = query.bistable_intervals(ds)
+    assert iv["start"] < iv["orbits_at"] < iv["end"]
+    model = compute.model_of(cfg.data)
+    built = compute.builder(cfg.data)({**compute.fixed_values(cfg.data), "clearance": clearance, "speed": iv["orbits_at"]})
+    opts = compute.integrator_settings(cfg.data)
+    speeds = ds["speed"].values
+    found = []
+    for grid in (iv["grid_low"], iv["grid_high"]):
+        state = ds["orbit_state"].values.reshape(speeds.size, -1)[int(np.argmin(abs(speeds - grid)))]
+        sol = solve_orbit(model, built.p, opts, [state], **compute.newton_settings(model, cfg.data["numerics"]))
+        assert sol.status == 0 and sol.stable
+        found.append(extrema.amplitudes(model, sol.state, built.p, 1.0, opts, built.period)[1])
+    found.sort(key=lambda a: a[0])
+    for j, ref in zip((1, 2), found):
+        got = [iv[f"orbit{j}_amplitude_{o.name}"] for o in model.observables]
+        np.testing.assert_allclose(got, ref, rtol=1e-6)
+        assert iv[f"orbit{j}_max_abs_multiplier"] < 1.0 and iv[f"orbit{j}_periods"] == 1
+    header, (row,) = bistable_rows(ds, [iv])
+    assert len(header) == len(row) and "-" not in row

@@ -171,3 +171,55 @@ def test_map_header_and_query_class_every_interval_alike():
     _, by_class = stability.counts(ds)
     names = [t for iv in query.unstable_intervals(ds) for t in [iv["type"]] * iv["n_points"]]
     assert by_class["fold"] == names.count("fold") and by_class["period doubling"] == names.count("period_doubling")
+
+
+@pytest.fixture(scope="module")
+def fig13_slice(tmp_path_factory):
+    """A real Fig. 13 sweep (configs/bai2006_fig13.toml, orbits only) at 15.2 and 19 um over
+    28.2-32.6 Hz in 0.05 Hz steps: stable, bistable (15.2 um's fold pair near 31.1 Hz), period
+    doubling (15.2 um, 32.4 Hz) and fold (19 um, 28.40159 Hz) intervals."""
+    from pathlib import Path
+
+    from pipeline import config, sweep
+
+    text = Path("configs/bai2006_fig13.toml").read_text()
+    text = text.replace("speed = {start = 10.0, stop = 250.0, step = 0.1}", "speed = {start = 28.2, stop = 32.6, step = 0.05}")
+    text = text.replace("clearance = [3.8e-6, 7.6e-6, 11.4e-6, 15.2e-6, 19.0e-6]", "clearance = [15.2e-6, 19.0e-6]")
+    text = text.replace("attractor = true ", "attractor = false")
+    out = tmp_path_factory.mktemp("fig13") / "slice.nc"
+    sweep.run(config.parse_config(text), str(out), workers=0)
+    return cube.open_cube(str(out))
+
+
+def test_fig13_slice_map_header_query_and_info_class_every_interval_alike(fig13_slice):
+    """One vocabulary on a real cube (issue 32 item 5): for every interval `info` lists, the map
+    draws each of its points in that class, `query --unstable` / `--bistable` put them in an
+    interval of that type (a stable one in none), and the header counts are the intervals' sizes."""
+    from pipeline.report import stability
+
+    ds = fig13_slice
+    runs = query.class_runs(ds)
+    assert {r["class"] for r in runs} >= {"stable", "bistable", "period_doubling", "fold"}
+    info = cube.describe(ds)
+    drawn = stability.stability_class(ds)
+    dims = ds["orbit_status"].dims
+    speeds = ds["speed"].values
+    unstable, bistable = query.unstable_intervals(ds), query.bistable_intervals(ds)
+
+    def covering(intervals, run):
+        return [iv for iv in intervals if iv["clearance"] == run["clearance"]
+                and iv["start"] <= run["start"] and run["end"] <= iv["end"]]
+    for run in runs:
+        assert f"clearance={run['clearance']:g} {run['start']:g} .. {run['end']:g}  {run['class']} " in info
+        for i in np.flatnonzero((speeds >= run["start"]) & (speeds <= run["end"])):
+            idx = tuple(i if d == "speed" else list(ds[d].values).index(run["clearance"]) for d in dims)
+            assert drawn[idx] == stability.NAME_CLASS[run["class"]]
+        if run["class"] in ("stable", "bistable"):
+            assert not covering(unstable, run)
+            assert bool(covering(bistable, run)) == (run["class"] == "bistable")
+        else:
+            assert [iv["type"] for iv in covering(unstable, run)] == [run["class"]]
+    _, by_class = stability.counts(ds)
+    for k, shown in enumerate(stability.CLASSES):      # "no periodic orbit": no_orbit and not_applicable
+        names = [name for name, c in stability.NAME_CLASS.items() if c == k]
+        assert by_class[shown] == sum(r["n_points"] for r in runs if r["class"] in names)

@@ -41,15 +41,16 @@ def parameter_axis(ds):
 
 
 def _panel(hv, ds, yname, ylabel, backend, ref_one=False, kind="amplitude_max"):
-    """All branches: y (an observable's `kind` of amplitude, or max |multiplier|) against the
-    parameter, solid where stable, dashed where not, each with its located events
-    (branches.branch_elements, shared with the sweep report's branch diagrams)."""
+    """All distinct branches (a copy of another, continuation.branch_copy_of, drawn once): y (an
+    observable's `kind` of amplitude, or max |multiplier|) against the parameter, solid where
+    stable, dashed where not, each with its located events (branches.branch_elements, shared
+    with the sweep report's branch diagrams)."""
     par = ds.attrs["parameter"]
     xs, event_xs, xlabel = parameter_axis(ds)
     dims = (hv.Dimension(par, label=xlabel), hv.Dimension(yname, label=ylabel))
     ys, event_ys = _values(ds, yname, kind), _event_values(ds, yname, kind)
     elements = []
-    for b in range(ds.sizes["branch"]):
+    for b in continuation.distinct_branches(ds):
         mine = ds["event_branch"].values == b
         special = [(x, y, al.EVENT_LABELS[int(k)]) for x, y, k in
                    zip(event_xs[mine], event_ys[mine], ds["event_type"].values[mine])]

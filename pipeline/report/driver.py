@@ -11,7 +11,7 @@ from pipeline.report.plan import axes_plan
 from pipeline.report.points import (compute_point, point_filename, point_rows, point_title,
                                     resolve_point, scene_data)
 from pipeline.report.registry import figures_for
-from pipeline.report.tables import interval_rows, write_csv
+from pipeline.report.tables import bistable_rows, interval_rows, write_csv
 
 _VARS = ("orbit_status", "stable", "bifurcation", "max_abs_multiplier", "multiplier_real",
          "multiplier_imag", "forcing_period", "orbit_state")
@@ -80,7 +80,8 @@ def make_report(ds, out_dir, title=None, points=None, parallel=None, say=None):
             point_sections = [(point_title(pt), fig_point(pt, "bokeh"), page.point_table_html(point_rows(pt)))
                               for pt in details]
             page.save_html(html_path, title, page.header_html(data, title, axes_plan(data)), figs,
-                           page.intervals_html(data, *interval_rows(data, intervals)),
+                           page.intervals_html(data, *interval_rows(data, intervals))
+                           + page.bistable_html(data, *bistable_rows(data, query.bistable_intervals(data))),
                            ds.attrs.get("config_toml", ""), point_sections)
         say(f"HTML page written ({time.perf_counter() - start:.1f} s)" + ("" if here else "; the PNGs left are drawn here"))
     if not here:

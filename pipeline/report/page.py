@@ -77,6 +77,16 @@ def intervals_html(ds, header, rows):
     return heading + f'<table class="intervals"><thead><tr>{head}</tr></thead>\n<tbody>\n{body}\n</tbody></table>'
 
 
+def bistable_html(ds, header, rows):
+    """The bistable-interval section (only where the sweep found jumps): heading and table."""
+    if not rows:
+        return ""
+    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
+    body = "\n".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>" for r in rows)
+    return (f"<h2>Bistable {continued_axis(ds).replace('_', ' ')} intervals: the two stable orbits that coexist</h2>"
+            f'<table class="intervals"><thead><tr>{head}</tr></thead>\n<tbody>\n{body}\n</tbody></table>')
+
+
 def point_table_html(rows):
     body = "\n".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(v)}</td></tr>" for k, v in rows)
     return f'<table class="point">\n{body}\n</table>'

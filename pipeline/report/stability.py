@@ -30,11 +30,35 @@ def stability_class(ds):
     return np.vectorize(lambda n: NAME_CLASS.get(n, np.nan), otypes=[float])(names)
 
 
+BISTABLE = CLASSES.index("bistable")
+# A bistable band is drawn at least this fraction of the continued axis wide (a few pixels of a
+# report's map: the demo's 7.6 um fold pair spans 0.1 Hz of 240, half a pixel): a marker, drawn
+# over the class beneath, centred on the interval between the folds.
+MIN_BAND_FRACTION = 0.004
+
+
 def class_keys(ds):
-    """Stability classes present anywhere in the cube, in CLASSES order (NaN last)."""
+    """Stability classes present anywhere in the cube, in CLASSES order (NaN last); bistable also
+    where a bistable interval holds no grid point (its band and legend entry are drawn)."""
     cls = stability_class(ds)
-    keys = [float(i) for i in range(len(CLASSES)) if (cls == i).any()]
+    keys = [float(i) for i in range(len(CLASSES)) if (cls == i).any() or (i == BISTABLE and query.bistable_intervals(ds))]
     return keys + ([np.nan] if np.isnan(cls).any() else [])
+
+
+def bistable_bands(ds, where):
+    """[(lo, hi)] drawn for the bistable intervals of the line `where` (query.bistable_intervals:
+    between the folds, else the jump's grid points), widened about their middle to at least
+    MIN_BAND_FRACTION of the continued axis."""
+    grid = ds[continued_axis(ds)].values.astype(float)
+    least = 0.5 * MIN_BAND_FRACTION * float(np.ptp(grid) if grid.size > 1 else 1.0)
+    out = []
+    for iv in query.bistable_intervals(ds):
+        if not all(np.isclose(iv[a], v, rtol=1e-9, atol=0.0) for a, v in where.items() if a in iv):
+            continue
+        lo, hi = (iv["start"], iv["end"]) if np.isfinite([iv["start"], iv["end"]]).all() else (iv["grid_low"], iv["grid_high"])
+        mid, half = 0.5 * (lo + hi), max(0.5 * (hi - lo), least)
+        out.append((mid - half, mid + half))
+    return out
 
 
 def class_name(c):

@@ -1,10 +1,11 @@
-"""The unstable-interval table of a cube, for the HTML page and the CSV."""
+"""The unstable-interval table of a cube, for the HTML page and the CSV, and the bistable
+intervals with the two stable orbits that coexist in each."""
 import csv
 
 import numpy as np
 
 from pipeline.report.cubeinfo import continued_axis, other_axes
-from pipeline.report.plan import TYPE_NAMES, axis_display, axis_label
+from pipeline.report.plan import TYPE_NAMES, axis_display, axis_label, unit_display
 
 
 def interval_rows(ds, intervals, machine=False):
@@ -27,6 +28,41 @@ def interval_rows(ds, intervals, machine=False):
     if machine:
         header = [h.replace("µ", "u").replace("|multiplier|", "abs multiplier") for h in header]
     return header, rows
+
+
+def bistable_rows(ds, intervals):
+    """The bistable-interval table (query.bistable_intervals) as (header, rows of strings) in
+    display units: the line, the fold pair, and each of the two coexisting stable orbits (computed
+    by coexistence.distinct_stable_orbits where the sweep met the jump) with its half
+    peak-to-peak amplitudes, period and largest |multiplier| ("-" where not recorded)."""
+    others = other_axes(ds)
+    unit = axis_display(ds, continued_axis(ds))[1]
+    names = sorted({k[len("orbit1_amplitude_"):] for iv in intervals for k in iv if k.startswith("orbit1_amplitude_")})
+    orbit_cols = [f"amplitude_{n}" for n in names] + ["periods", "max_abs_multiplier"]
+    header = ([axis_label(ds, a) for a in others] + [f"lower fold [{unit}]", f"upper fold [{unit}]", f"orbits at [{unit}]"]
+              + [f"orbit {j}: " + (f"half p-p {c[len('amplitude_'):]} [{_display(ds, c)[1]}]" if c.startswith("amplitude_")
+                                   else "period [forcing periods]" if c == "periods" else "max |multiplier|")
+                 for j in (1, 2) for c in orbit_cols])
+    factors = [axis_display(ds, a)[0] for a in others]
+    rows = []
+    for iv in intervals:
+        cells = [_orbit_cell(ds, c, iv.get(f"orbit{j}_{c}")) for j in (1, 2) for c in orbit_cols]
+        rows.append([f"{iv[a] * f:.6g}" for a, f in zip(others, factors)]
+                    + [_refined(iv, "start"), _refined(iv, "end"), _refined(iv, "orbits_at")] + cells)
+    return header, rows
+
+
+def _display(ds, column):
+    """(factor, display unit) of an amplitude column: its cube variable's units (SI)."""
+    return unit_display(ds[column].attrs.get("units", "1") if column in ds else "1")
+
+
+def _orbit_cell(ds, column, value):
+    if value is None or (isinstance(value, float) and not np.isfinite(value)):
+        return "-"
+    if column.startswith("amplitude_"):
+        return f"{value * _display(ds, column)[0]:.6g}"
+    return str(value) if column == "periods" else f"{value:.4g}"
 
 
 def _refined(iv, key):

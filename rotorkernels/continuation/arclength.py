@@ -152,27 +152,29 @@ class Family(NamedTuple):
             t = engine.tangent(_bordered(sol.monodromy, dphi, at.tangent))
         except np.linalg.LinAlgError:
             return None
-        amplitudes, slope = self.measures(sol.X, t, settings)
+        amplitudes, slope, n_rhs = self.measures(sol.X, t, settings)
+        counter.n += n_rhs
         return Point(sol.X, self.lam(sol.X), sol.monodromy, sol.multipliers, t, dphi, sol.iterations, sol.residual,
                      amplitudes, slope)
 
     def extremes(self, X, rows):
-        """(highest, lowest) of the observables weights[rows] over the orbit from X's state."""
-        hi, lo, _ = extrema.orbit_extrema(self.model.kernel, X[:-1], self.params(self.lam(X)), float(self.periods),
-                                          np.ascontiguousarray(self.weights[rows]), self.opts)
-        return hi, lo
+        """(highest, lowest, n_rhs) of the observables weights[rows] over the orbit from X's state."""
+        hi, lo, _, _, _, n_rhs = extrema.orbit_extent(self.model.kernel, X[:-1], self.params(self.lam(X)),
+                                                      float(self.periods), np.ascontiguousarray(self.weights[rows]),
+                                                      self.opts, False)
+        return hi, lo, n_rhs
 
     def measures(self, X, t, settings):
-        """(amplitudes, slope) of a point at X with tangent t (None, NaN without weights)."""
+        """(amplitudes, slope, n_rhs) of a point at X with tangent t (None, NaN, 0 without weights)."""
         if self.weights is None:
-            return None, np.nan
-        hi, lo = self.extremes(X, slice(None))
+            return None, np.nan, 0
+        hi, lo, n_rhs = self.extremes(X, slice(None))
         amplitudes = np.array([np.maximum(hi, -lo), 0.5 * (hi - lo)])
         if self.peak < 0:
-            return amplitudes, np.nan
+            return amplitudes, np.nan, n_rhs
         h, row = settings.fd_step, slice(self.peak, self.peak + 1)
-        (hi_p, lo_p), (hi_m, lo_m) = (self.extremes(X + sign * h * t, row) for sign in (1.0, -1.0))
-        return amplitudes, float(((hi_p - lo_p) - (hi_m - lo_m))[0] / (4.0 * h))
+        (hi_p, lo_p, n_p), (hi_m, lo_m, n_m) = (self.extremes(X + sign * h * t, row) for sign in (1.0, -1.0))
+        return amplitudes, float(((hi_p - lo_p) - (hi_m - lo_m))[0] / (4.0 * h)), n_rhs + n_p + n_m
 
     def where(self, point):
         return f"lambda = {point.lam!r}"

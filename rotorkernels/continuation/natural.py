@@ -78,7 +78,9 @@ def solve_orbit(model, p, opts, history=(), *, cold_guess, periods=1, tol=1e-9, 
                 transient_periods=30, n_samples=32):
     """Periodic orbit, multipliers and orbit samples at one parameter point.
 
-    history: converged states of the previous points of the chain (most recent last)."""
+    history: converged states of the previous points of the chain (most recent last);
+    n_samples: orbit samples per forcing period (0: none, samples None -- a sweep takes its
+    orbit means and extrema in one pass, rotorkernels.extrema.orbit_extent)."""
     problem = ForcedOrbitProblem(model, p, opts, periods)
     n_rhs = 0
     best = None
@@ -98,7 +100,7 @@ def solve_orbit(model, p, opts, history=(), *, cold_guess, periods=1, tol=1e-9, 
                              state, None, n_rhs)
     lams = floquet.multipliers(mono)
     max_abs, stable, bif = floquet.classify(lams)
-    samples = problem.samples(state, n_samples)
+    samples = problem.samples(state, n_samples) if n_samples else None
     return PointSolution(status, reason, iters, res, lams, max_abs, stable, bif, state, samples, n_rhs)
 
 

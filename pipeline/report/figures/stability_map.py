@@ -9,8 +9,8 @@ from pipeline.report import style
 from pipeline.report.figures.panels import Sizes, facet_figure, panel_opts
 from pipeline.report.plan import axes_plan, axis_display, axis_label, fmt, where_label
 from pipeline.report.registry import Figure, register
-from pipeline.report.stability import (class_colour, class_keys, class_name, line_segments,
-                                       refined_edges)
+from pipeline.report.stability import (BISTABLE, bistable_bands, class_colour, class_keys, class_name,
+                                       line_segments, refined_edges)
 
 RECT_HALF = 0.45        # half height of a band in the stability map (gaps between lines)
 
@@ -27,6 +27,8 @@ def map_rectangles(ds, plan, where):
         for lo, hi, c in segments:
             key = -1.0 if np.isnan(c) else c
             rects.setdefault(key, []).append((lo, i - RECT_HALF, hi, i + RECT_HALF))
+        for lo, hi in bistable_bands(ds, line):       # drawn last: over the class beneath
+            rects.setdefault(float(BISTABLE), []).append((lo, i - RECT_HALF, hi, i + RECT_HALF))
         edges += [(e, i) for e in refined]
     return rects, edges
 
