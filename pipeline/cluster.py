@@ -11,8 +11,6 @@ them starts or closes a cluster another way. It imports only the standard librar
 Commands run their tasks through an executor (`executor()`): a Dask cluster (`DaskExecutor`) or,
 for small work, this process (`InProcess`), with one interface (submitter, as_completed, lost,
 n_workers, close), so a command's task loop is written once for both."""
-import asyncio
-import concurrent.futures
 import contextlib
 import functools
 import gc
@@ -313,6 +311,9 @@ def check_scheduler(scheduler):
     made) unless a Dask scheduler answers at a --scheduler address: nothing listening, a service
     that says nothing (a silent listener, an HTTP server) or something else (an HTTP reply read as
     a Dask frame header asked for 3.07 EiB) is one line."""
+    import asyncio                # here, not at start: the command line's parsing reads this module
+    import concurrent.futures
+
     target = scheduler_of(scheduler)
     host, _, port = target.address.split("://", 1)[-1].rpartition(":")
     if not host or not port.isdigit():
@@ -342,6 +343,8 @@ def _no_handshake_text(exc, timeout):
 
 async def _identity(address, security, timeout):
     """The `type` of the Dask server at `address` (its identity reply), all within `timeout` s."""
+    import asyncio
+
     from distributed.comm import connect as dask_connect
 
     async def ask():
