@@ -336,9 +336,9 @@ def _positive_float(text):
 
 
 def _cluster_options(parser):
-    """Where run, continue and backbone run: in this process for small work (estimated below
-    $ROTORSWEEP_IN_PROCESS_BELOW_S, default 3 s of CPU), else on a local Dask cluster, or on a
-    given scheduler (always used when given); the flags choose."""
+    """Where run, continue and backbone run: in this process for small work (estimated below the
+    scene's [run] in_process_below or $ROTORSWEEP_IN_PROCESS_BELOW_S, default 3 s of CPU), else on
+    a local Dask cluster, or on a given scheduler (always used when given); the flags choose."""
     where = parser.add_mutually_exclusive_group()
     where.add_argument("--workers", type=_worker_count,
                        help="local Dask worker processes (default: one per core, at least 2, or none for small "

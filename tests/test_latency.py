@@ -60,6 +60,20 @@ def test_the_threshold_is_overridable(monkeypatch):
         cluster.in_process_below_s()
 
 
+def test_the_scene_sets_the_threshold_and_keeps_its_hash(monkeypatch):
+    monkeypatch.setenv(cluster.IN_PROCESS_VARIABLE, "0")
+    plain = config.parse_config(DUFFING)
+    scene = config.parse_config(DUFFING + '\n[run]\nin_process_below = "1 min"\n')
+    assert cluster.in_process_below_s(plain.data) == 0 and cluster.in_process_below_s(scene.data) == 60
+    assert cluster.runs_in_process(None, None, 59.0, data=scene.data)
+    assert not cluster.runs_in_process(None, None, 59.0, data=plain.data)
+    assert scene.hash() == plain.hash()        # where a scene runs is not what it computes: --resume works
+    with pytest.raises(config.ConfigError, match="run.in_process_below: must be >= 0"):
+        config.parse_config(DUFFING + "\n[run]\nin_process_below = -1\n")
+    with pytest.raises(config.ConfigError, match="run.in_process_below: .* not a quantity of unit s"):
+        config.parse_config(DUFFING + '\n[run]\nin_process_below = "3 m"\n')
+
+
 def test_measured_unit_costs_are_kept_in_the_cache(tmp_path, monkeypatch):
     monkeypatch.setenv("ROTORSWEEP_CACHE", str(tmp_path))
     assert workload.estimate("point", "duffing", 10) == 10 * workload.DEFAULT_COSTS["point"]
