@@ -136,6 +136,9 @@ def test_the_accessor_registers_without_hvplot_and_draws_with_it(tiny_cube):
     code = ("import sys, rotorsweep; ds = rotorsweep.open_cube(sys.argv[1]); assert 'hvplot' not in sys.modules; "
             "ds.rotorsweep.max_multiplier(); assert 'hvplot' in sys.modules")
     subprocess.run([sys.executable, "-c", code, str(tiny_cube)], check=True, env=env(), timeout=300, cwd=ROOT)
+    before = ("import xarray as xr, rotorsweep, pipeline.explore; "
+              "assert type(xr.Dataset().rotorsweep).__name__ == 'CubeAccessor'")    # once: no override warning
+    subprocess.run([sys.executable, "-W", "error", "-c", before], check=True, env=env(), timeout=300, cwd=ROOT)
 
 
 def readme_example(tmp_path):
