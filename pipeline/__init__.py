@@ -10,6 +10,11 @@ The Python API mirrors the command line:
     ds, kind = pipeline.open_result(path)                          # a result of any kind (info, query)
     pipeline.make_report(ds, "out/demo_report")                    # rotorsweep report
     pipeline.point(speed=100.0, clearance=7.6e-6)                  # rotorsweep point
+
+Importing pipeline imports nothing heavy and installs import hooks for short commands (issue
+35): the `rotorsweep` accessor registers itself when xarray is imported
+(register_accessor_when_xarray_loads), and Numba's BLAS check does not import scipy.linalg
+(_quick_blas_check).
 """
 import contextlib
 import importlib.abc
