@@ -65,8 +65,8 @@ screenshots: demo fold  ## the demo and fold reports in headless Chromium (apt-g
 bench-scaling: $(STAMP)  ## 1 vs 2 workers, chunk sizes, memory of the Fig. 13 sweep (5 repeats, ~7 min, quiet machine) -> docs/benchmarks/scaling.*
 	$(BIN)/python -m workflows.bench.scaling --repeats 5
 
-bench-latency: $(STAMP)  ## tour commands and small continuations end to end, before (74f5cb3) and after, median of 5 (~15 min) -> docs/benchmarks/latency.*
-	$(BIN)/python -m workflows.bench.latency
+bench-latency: $(STAMP)  ## tour commands and small continuations end to end, before (74f5cb3) and after, median of 5 (~5 min quiet; reports with ARGS=--reports) -> docs/benchmarks/latency.*
+	$(BIN)/python -m workflows.bench.latency $(ARGS)
 
 bench-chunk-plans: $(STAMP)  ## per-point cost spread of Fig. 13 (orbits, attractors) and the guided chunk plans simulated on it (~1 min) -> docs/benchmarks/chunk_plans.*
 	$(BIN)/python -m workflows.bench.chunk_plans

@@ -10,8 +10,99 @@ The Python API mirrors the command line:
     ds, kind = pipeline.open_result(path)                          # a result of any kind (info, query)
     pipeline.make_report(ds, "out/demo_report")                    # rotorsweep report
     pipeline.point(speed=100.0, clearance=7.6e-6)                  # rotorsweep point
+
+Importing pipeline imports nothing heavy and installs import hooks for short commands (issue
+35): the `rotorsweep` accessor registers itself when xarray is imported
+(register_accessor_when_xarray_loads), and Numba's BLAS check does not import scipy.linalg
+(_quick_blas_check).
 """
+import contextlib
+import importlib.abc
+import importlib.util
 import json
+import sys
+
+
+def _accessor(ds):
+    """ds.rotorsweep: pipeline.explore.CubeAccessor, imported on the first use of an accessor."""
+    from pipeline import explore
+
+    return explore.CubeAccessor(ds)
+
+
+def register_accessor():
+    """Register the `rotorsweep` accessor on xarray Datasets (once; xarray must be imported)."""
+    xr = sys.modules["xarray"]
+    if getattr(xr.Dataset, "rotorsweep", None) is not _accessor:
+        xr.register_dataset_accessor("rotorsweep")(_accessor)
+
+
+class _AroundImport(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    """Runs the import of the module `name` inside the context manager `around()`: it finds that
+    module's spec with the other finders and wraps its loader, once."""
+
+    def __init__(self, name, around):
+        self.name, self.around, self.loader = name, around, None
+
+    def find_spec(self, fullname, path=None, target=None):
+        if fullname != self.name or self.loader is not None:
+            return None
+        sys.meta_path.remove(self)
+        spec = importlib.util.find_spec(fullname)
+        if spec is None or spec.loader is None:
+            return spec
+        self.loader, spec.loader = spec.loader, self
+        return spec
+
+    def create_module(self, spec):
+        return self.loader.create_module(spec)
+
+    def exec_module(self, module):
+        module.__spec__.loader = module.__loader__ = self.loader
+        with self.around():
+            self.loader.exec_module(module)
+
+
+def _around_import(name, around):
+    """around() about the import of `name`, unless it is imported (or hooked) already."""
+    if name not in sys.modules and not any(isinstance(f, _AroundImport) and f.name == name for f in sys.meta_path):
+        sys.meta_path.insert(0, _AroundImport(name, around))
+
+
+@contextlib.contextmanager
+def _then_register_accessor():
+    yield
+    register_accessor()
+
+
+def register_accessor_when_xarray_loads():
+    """The `rotorsweep` accessor without importing xarray (0.4 s, issue 35): registered now where
+    xarray is already imported, else right after its import."""
+    if "xarray" in sys.modules:
+        register_accessor()
+    _around_import("xarray", _then_register_accessor)
+
+
+@contextlib.contextmanager
+def _quick_blas_check():
+    """Numba's check for BLAS, run once where its typing starts (numba.np.arraymath), imports the
+    whole of scipy.linalg and numpy.f2py with it: 0.15-0.4 s of a 1-s command (issue 35 item 3).
+    A cached kernel needs none of it: one calling LAPACK imports scipy.linalg.cython_lapack itself
+    at its first call, and numba checks again (ensure_lapack) where it compiles one. Here the
+    check asks only that scipy be installed (a dependency of rotorsweep) and, where this Numba
+    has it, that scipy's LAPACK integer width be the one Numba was built for (scipy.__config__)."""
+    from numba.np import linalg
+
+    full = linalg.ensure_blas
+    if importlib.util.find_spec("scipy") is not None:
+        linalg.ensure_blas = getattr(linalg, "_check_lapack_int_width", lambda: None)
+    try:
+        yield
+    finally:
+        linalg.ensure_blas = full
+
+
+_around_import("numba.np.arraymath", _quick_blas_check)
 
 
 def as_config(cfg, allow_large=False, whole_grid=True):

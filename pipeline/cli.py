@@ -13,8 +13,7 @@ import threading
 import numpy as np
 
 import pipeline
-from pipeline import config as config_mod
-from pipeline import cluster, fileio, preflight, schema
+from pipeline import cluster, fileio, preflight
 
 EXIT_USAGE = 2
 
@@ -28,6 +27,8 @@ USER_ERRORS = (("pipeline.config", "ConfigError"), ("pipeline.cube", "CubeError"
 
 def _confirm_large(args):
     """--yes, or on a terminal a yes/no question, lets a grid above numerics.max_points run."""
+    from pipeline import config as config_mod
+
     if args.yes:
         return True
     try:
@@ -121,6 +122,8 @@ def _attractor_row(args, cfg):
 def _given(args, cfg):
     """The point's axis values from --speed/--clearance/--contact-angle/--preload and --at: SI
     numbers, or unit strings in the axis's unit ("7.6 um", "600 rpm")."""
+    from pipeline import config as config_mod
+
     flags = {"speed": ("--speed", args.speed), "clearance": ("--clearance", args.clearance),
              "contact_angle": ("--contact-angle", args.contact_angle), "preload": ("--preload", args.preload)}
     return config_mod.flag_values({**flags, **_at(args.at)}, cfg.model)
@@ -128,6 +131,8 @@ def _given(args, cfg):
 
 def _at(items):
     """{axis: (flag, text)} from --at AXIS=VALUE options (VALUE: SI number or unit string)."""
+    from pipeline import config as config_mod
+
     given = {}
     for item in items or []:
         name, sep, value = item.partition("=")
@@ -138,6 +143,7 @@ def _at(items):
 
 
 def cmd_modes(args):
+    from pipeline import config as config_mod
     from pipeline import modes
 
     cfg = pipeline.as_config(args.config, whole_grid=False)
@@ -148,6 +154,8 @@ def cmd_modes(args):
 
 
 def _attractor_result(row):
+    from pipeline import schema
+
     code, k, method = int(row["attractor"]), int(row["period"]), int(row["lle_method"])
     lam = [[_num(re), _num(im)] for re, im in zip(row["attractor_multiplier_real"], row["attractor_multiplier_imag"])]
     mods = np.hypot(row["attractor_multiplier_real"], row["attractor_multiplier_imag"])
@@ -164,6 +172,8 @@ def _attractor_result(row):
 
 
 def cmd_point(args):
+    from pipeline import schema
+
     cfg = pipeline.as_config(args.config, whole_grid=False)
     if args.attractor:
         row = _attractor_row(args, cfg)
@@ -326,9 +336,9 @@ def _positive_float(text):
 
 
 def _cluster_options(parser):
-    """Where run, continue and backbone run: in this process for small work (estimated below
-    $ROTORSWEEP_IN_PROCESS_BELOW_S, default 3 s of CPU), else on a local Dask cluster, or on a
-    given scheduler (always used when given); the flags choose."""
+    """Where run, continue and backbone run: in this process for small work (estimated below the
+    scene's [run] in_process_below or $ROTORSWEEP_IN_PROCESS_BELOW_S, default 3 s of CPU), else on
+    a local Dask cluster, or on a given scheduler (always used when given); the flags choose."""
     where = parser.add_mutually_exclusive_group()
     where.add_argument("--workers", type=_worker_count,
                        help="local Dask worker processes (default: one per core, at least 2, or none for small "

@@ -11,8 +11,6 @@ them starts or closes a cluster another way. It imports only the standard librar
 Commands run their tasks through an executor (`executor()`): a Dask cluster (`DaskExecutor`) or,
 for small work, this process (`InProcess`), with one interface (submitter, as_completed, lost,
 n_workers, close), so a command's task loop is written once for both."""
-import asyncio
-import concurrent.futures
 import contextlib
 import functools
 import gc
@@ -210,27 +208,35 @@ class InProcess:
 # Below this estimate of a command's work (CPU seconds, pipeline.workload) it runs in the driver
 # process: a local cluster of 2 workers took 2-3 s to start and load the kernels (2 cores), and
 # halves at best the time of the work, so it pays from about twice its start-up. Overridden by
-# $ROTORSWEEP_IN_PROCESS_BELOW_S (0: always a cluster).
+# the scene's [run] in_process_below, else $ROTORSWEEP_IN_PROCESS_BELOW_S (0: always a cluster).
 IN_PROCESS_BELOW_S = 3.0
 IN_PROCESS_VARIABLE = "ROTORSWEEP_IN_PROCESS_BELOW_S"
 
 
-def in_process_below_s():
-    """The threshold of in-process execution: $ROTORSWEEP_IN_PROCESS_BELOW_S, else IN_PROCESS_BELOW_S."""
+def in_process_below_s(data=None):
+    """The threshold of in-process execution: the [run] in_process_below of a scene's config data
+    (seconds, validated with the config), else $ROTORSWEEP_IN_PROCESS_BELOW_S, else IN_PROCESS_BELOW_S."""
+    scene_value = (data or {}).get("run", {}).get("in_process_below")
+    if scene_value is not None:
+        return float(scene_value)
     text = os.environ.get(IN_PROCESS_VARIABLE, "").strip()
     try:
-        return float(text) if text else IN_PROCESS_BELOW_S
+        value = float(text) if text else IN_PROCESS_BELOW_S
     except ValueError:
-        raise SweepError(f"${IN_PROCESS_VARIABLE}={text!r}: expected a number of seconds") from None
+        value = -1.0
+    if not value >= 0:
+        raise SweepError(f"${IN_PROCESS_VARIABLE}={text!r}: expected a number of seconds >= 0")
+    return value
 
 
-def runs_in_process(workers, scheduler, estimate_s, tasks=None):
+def runs_in_process(workers, scheduler, estimate_s, tasks=None, data=None):
     """Whether a command runs in this process: never with a scheduler or a worker count given,
-    always with workers=0, else when its estimated work is below in_process_below_s() or it is
-    one task (`tasks`: how many it can be split into at most; a cluster cannot speed up one)."""
+    always with workers=0, else when its estimated work is below in_process_below_s(data) (data:
+    the scene's config data) or it is one task (`tasks`: how many it can be split into at most;
+    a cluster cannot speed up one)."""
     if scheduler or workers:
         return False
-    return workers == 0 or tasks == 1 or estimate_s < in_process_below_s()
+    return workers == 0 or tasks == 1 or estimate_s < in_process_below_s(data)
 
 
 def executor(workers, scheduler):
@@ -313,6 +319,9 @@ def check_scheduler(scheduler):
     made) unless a Dask scheduler answers at a --scheduler address: nothing listening, a service
     that says nothing (a silent listener, an HTTP server) or something else (an HTTP reply read as
     a Dask frame header asked for 3.07 EiB) is one line."""
+    import asyncio                # here, not at start: the command line's parsing reads this module
+    import concurrent.futures
+
     target = scheduler_of(scheduler)
     host, _, port = target.address.split("://", 1)[-1].rpartition(":")
     if not host or not port.isdigit():
@@ -342,6 +351,8 @@ def _no_handshake_text(exc, timeout):
 
 async def _identity(address, security, timeout):
     """The `type` of the Dask server at `address` (its identity reply), all within `timeout` s."""
+    import asyncio
+
     from distributed.comm import connect as dask_connect
 
     async def ask():

@@ -134,7 +134,15 @@ SCHEMA = {
                                 help="displacement beyond which a state counts as diverged"),
         "max_points": _num(1, kind="int", default=200_000, help="larger grids need --yes"),
     },
+    # where a command runs, not what it computes: left out of the scene's hash (RUN_SECTION)
+    "run": {
+        "in_process_below": _num(0, default=None, unit="s",
+                                 help="estimated CPU seconds of work below which run, continue and backbone compute in "
+                                      "this process, without a cluster (0: always a cluster; default: "
+                                      "$ROTORSWEEP_IN_PROCESS_BELOW_S, else 3 s); results are the same bit for bit"),
+    },
 }
+RUN_SECTION = "run"
 REQUIRED_SECTIONS = ("scene", "sweep")
 
 DEFAULT_CONFIG_TOML = """\
@@ -335,8 +343,10 @@ class Config:
         return int(np.prod([len(v) for v in self.axes.values()]))
 
     def hash(self):
-        """Identifies the scene (data, not formatting): changes with any value, not comments."""
-        text = json.dumps(self.data, sort_keys=True, separators=(",", ":"))
+        """Identifies the scene (data, not formatting): changes with any value but those of
+        RUN_SECTION (where it runs), not with comments."""
+        scene = {k: v for k, v in self.data.items() if k != RUN_SECTION}
+        text = json.dumps(scene, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()
 
 

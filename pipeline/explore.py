@@ -1,6 +1,7 @@
 """A cube explored the hvplot way, in a notebook: one function per figure kind of the report,
 each returning an hvplot (HoloViews) object, also reachable as methods of the `rotorsweep`
-accessor that importing this module (or `rotorsweep`) registers on xarray Datasets:
+accessor that importing this module (or `rotorsweep`: pipeline.register_accessor) registers on
+xarray Datasets:
 
     import rotorsweep
     ds = rotorsweep.open_cube("out/demo.nc")
@@ -29,7 +30,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from pipeline import result_kinds, schema
+from pipeline import register_accessor, result_kinds, schema
 from pipeline.report.cubeinfo import (branch_observables, branch_values, continued_axis,
                                       default_observable, has_attractor, other_axes)
 from pipeline.report.stability import CLASSES, PALETTE, stability_class
@@ -313,7 +314,6 @@ FIGURES = {kind: {f.__name__: f for f in figures} for kind, figures in (
     (result_kinds.BACKBONE, (backbones,)))}
 
 
-@xr.register_dataset_accessor("rotorsweep")
 class CubeAccessor:
     """ds.rotorsweep.<figure>(...): the functions of pipeline.explore on this result, where its
     kind has them (pipeline.result_kinds: a sweep cube has every one; a figure that does not
@@ -381,3 +381,6 @@ class CubeAccessor:
 
     def backbones(self, where=None, **kwargs):
         return self._draw("backbones", where, **kwargs)
+
+
+register_accessor()         # ds.rotorsweep: this module's CubeAccessor (pipeline.register_accessor)

@@ -108,7 +108,8 @@ def run_lines(cfg, task, lines, workers, scheduler, stream, summary, parts, unit
     if not todo:
         return results
     model = compute.model_of(cfg.data).name
-    in_process = cluster.runs_in_process(workers, scheduler, workload.estimate(unit, model, len(todo)), len(todo))
+    in_process = cluster.runs_in_process(workers, scheduler, workload.estimate(unit, model, len(todo)), len(todo),
+                                         cfg.data)
     say(stream, "computing in this process (small work: no cluster)" if in_process else
         f"connecting to the Dask scheduler at {scheduler}" if scheduler else
         f"starting {cluster.local_workers(workers)} local Dask worker(s) (127.0.0.1)")

@@ -316,9 +316,9 @@ def _connect(cfg, workers, scheduler, n_points, say):
     """The executor of a sweep of n_points (pipeline.cluster.executor: this process for small
     work or workers=0, else a cluster), with the scene's kernels compiled (or loaded) here."""
     estimate = workload.estimate(point_unit(cfg.data), compute.model_of(cfg.data).name, n_points)
-    if cluster.runs_in_process(workers, scheduler, estimate):
+    if cluster.runs_in_process(workers, scheduler, estimate, data=cfg.data):
         say(f"computing in this process (about {estimate:.1f} s of work; a local cluster pays from "
-            f"{cluster.in_process_below_s():g} s)" if workers != 0 else "computing in this process (--workers 0)")
+            f"{cluster.in_process_below_s(cfg.data):g} s)" if workers != 0 else "computing in this process (--workers 0)")
         executor = cluster.executor(0, None)
     else:
         say(f"connecting to the Dask scheduler at {scheduler}" if scheduler else

@@ -10,14 +10,43 @@ sweeps, cubes, queries, reports) and `rotorkernels` (the Numba numerics).
     rotorsweep.make_report(ds, "out/demo_report")                  # rotorsweep report
     rotorsweep.point(speed=100.0, clearance=7.6e-6)                # rotorsweep point
     ds.rotorsweep.max_multiplier()                                 # hvplot figures (explore)
-"""
-from pipeline import explore, make_report, open_cube, open_result, point, run, unstable_intervals
-from pipeline.cluster import VERSION as __version__
-from pipeline.cluster import SweepError
-from pipeline.config import ConfigError, load_config, parse_config
-from pipeline.cube import CubeError
-from pipeline.query import QueryError, attractor_intervals
 
-__all__ = ["ConfigError", "CubeError", "QueryError", "SweepError", "__version__", "attractor_intervals",
-           "explore", "load_config", "make_report", "open_cube", "open_result", "parse_config", "point", "run",
-           "unstable_intervals"]
+Each name is loaded on first use (PEP 562 `__getattr__`), so `import rotorsweep` reads neither
+Numba, xarray nor plotting (issue 35); the `ds.rotorsweep` accessor is registered on xarray
+as soon as xarray is imported, before or after rotorsweep.
+"""
+import importlib
+
+import pipeline
+
+# public name -> (module, attribute in it; None: the module itself)
+_API = {
+    "explore": ("pipeline.explore", None),
+    "make_report": ("pipeline", "make_report"), "open_cube": ("pipeline", "open_cube"),
+    "open_result": ("pipeline", "open_result"), "point": ("pipeline", "point"), "run": ("pipeline", "run"),
+    "unstable_intervals": ("pipeline", "unstable_intervals"),
+    "__version__": ("pipeline.cluster", "VERSION"), "SweepError": ("pipeline.cluster", "SweepError"),
+    "ConfigError": ("pipeline.config", "ConfigError"), "load_config": ("pipeline.config", "load_config"),
+    "parse_config": ("pipeline.config", "parse_config"),
+    "CubeError": ("pipeline.cube", "CubeError"),
+    "QueryError": ("pipeline.query", "QueryError"), "attractor_intervals": ("pipeline.query", "attractor_intervals"),
+}
+
+__all__ = sorted(_API)
+
+
+def __getattr__(name):
+    if name not in _API:
+        raise AttributeError(f"module 'rotorsweep' has no attribute {name!r}")
+    module, attribute = _API[name]
+    value = importlib.import_module(module)
+    value = value if attribute is None else getattr(value, attribute)
+    globals()[name] = value          # once loaded, a plain module attribute
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_API))
+
+
+pipeline.register_accessor_when_xarray_loads()

@@ -1,6 +1,7 @@
 """Small work answers without a cluster (issue 35): where a command runs (in this process or on a
-Dask cluster) changes no result bit; `import rotorsweep` and `rotorsweep info` import no plotting
-or Dask module; the README's Python example runs as a plain script and in an exec (issue 37)."""
+Dask cluster) changes no result bit; `import rotorsweep`, the command line's parsing, `info`,
+`query` and `point` import no module they do not use (plotting, Dask, scipy's solvers, ...); the
+README's Python example runs as a plain script and in an exec (issue 37)."""
 import os
 import re
 import subprocess
@@ -16,8 +17,23 @@ from tests.test_pipeline import SMALL
 
 ROOT = Path(__file__).resolve().parents[1]
 CLI = [str(Path(sys.executable).with_name("rotorsweep"))]
-HEAVY = ("hvplot", "panel", "holoviews", "bokeh", "matplotlib", "dask", "distributed", "scipy.linalg",
-         "scipy.interpolate", "scipy.integrate", "scipy.optimize")
+PLOTTING = ("hvplot", "panel", "holoviews", "bokeh", "matplotlib")
+DASK = ("dask", "distributed")
+SCIPY_SOLVERS = ("scipy.linalg", "scipy.interpolate", "scipy.integrate", "scipy.optimize", "numpy.f2py")
+HEAVY = PLOTTING + DASK + SCIPY_SOLVERS
+# what each command must not import (issue 35): nothing heavy where nothing is computed or read;
+# a result file needs xarray (with pandas) and numba (the model registry), a point only numba
+NOTHING_READ = HEAVY + ("numba", "xarray", "pandas", "netCDF4", "pint")
+COMMANDS = {
+    "import rotorsweep": (["-c", "import rotorsweep"], NOTHING_READ),
+    "argument parsing": (["-m", "pipeline.cli", "--help"], NOTHING_READ),
+    "info": (["-m", "pipeline.cli", "info", "{cube}"], HEAVY + ("pint",)),
+    "query --unstable": (["-m", "pipeline.cli", "query", "{cube}", "--unstable"], HEAVY + ("pint",)),
+    "query --where --var": (["-m", "pipeline.cli", "query", "{cube}", "--where", "speed=0:1e4", "--var",
+                             "max_abs_multiplier"], HEAVY + ("pint",)),
+    "point": (["-m", "pipeline.cli", "point", "--speed", "100", "--clearance", "7.6e-6"],
+              HEAVY + ("xarray", "pandas", "netCDF4", "pint")),
+}
 
 
 def env():
@@ -60,6 +76,20 @@ def test_the_threshold_is_overridable(monkeypatch):
         cluster.in_process_below_s()
 
 
+def test_the_scene_sets_the_threshold_and_keeps_its_hash(monkeypatch):
+    monkeypatch.setenv(cluster.IN_PROCESS_VARIABLE, "0")
+    plain = config.parse_config(DUFFING)
+    scene = config.parse_config(DUFFING + '\n[run]\nin_process_below = "1 min"\n')
+    assert cluster.in_process_below_s(plain.data) == 0 and cluster.in_process_below_s(scene.data) == 60
+    assert cluster.runs_in_process(None, None, 59.0, data=scene.data)
+    assert not cluster.runs_in_process(None, None, 59.0, data=plain.data)
+    assert scene.hash() == plain.hash()        # where a scene runs is not what it computes: --resume works
+    with pytest.raises(config.ConfigError, match="run.in_process_below: must be >= 0"):
+        config.parse_config(DUFFING + "\n[run]\nin_process_below = -1\n")
+    with pytest.raises(config.ConfigError, match="run.in_process_below: .* not a quantity of unit s"):
+        config.parse_config(DUFFING + '\n[run]\nin_process_below = "3 m"\n')
+
+
 def test_measured_unit_costs_are_kept_in_the_cache(tmp_path, monkeypatch):
     monkeypatch.setenv("ROTORSWEEP_CACHE", str(tmp_path))
     assert workload.estimate("point", "duffing", 10) == 10 * workload.DEFAULT_COSTS["point"]
@@ -92,22 +122,23 @@ def imported_modules(args):
     return {m.group(1) for m in re.finditer(r"^import time:.*\|\s*([\w.]+)\s*$", proc.stderr, re.M)}
 
 
-def heavy(modules):
-    return sorted(m for m in modules if any(m == h or m.startswith(h + ".") for h in HEAVY))
+def heavy(modules, listed):
+    return sorted(m for m in modules if any(m == h or m.startswith(h + ".") for h in listed))
 
 
-def test_import_rotorsweep_loads_no_plotting_dask_or_scipy_solvers():
-    assert heavy(imported_modules(["-c", "import rotorsweep"])) == []
-
-
-def test_info_loads_no_plotting_dask_or_scipy_solvers(tiny_cube):
-    assert heavy(imported_modules(["-m", "pipeline.cli", "info", str(tiny_cube)])) == []
+@pytest.mark.parametrize("command", COMMANDS)
+def test_a_command_imports_only_what_it_uses(command, tiny_cube):
+    args, listed = COMMANDS[command]
+    assert heavy(imported_modules([a.replace("{cube}", str(tiny_cube)) for a in args]), listed) == []
 
 
 def test_the_accessor_registers_without_hvplot_and_draws_with_it(tiny_cube):
     code = ("import sys, rotorsweep; ds = rotorsweep.open_cube(sys.argv[1]); assert 'hvplot' not in sys.modules; "
             "ds.rotorsweep.max_multiplier(); assert 'hvplot' in sys.modules")
     subprocess.run([sys.executable, "-c", code, str(tiny_cube)], check=True, env=env(), timeout=300, cwd=ROOT)
+    before = ("import xarray as xr, rotorsweep, pipeline.explore; "
+              "assert type(xr.Dataset().rotorsweep).__name__ == 'CubeAccessor'")    # once: no override warning
+    subprocess.run([sys.executable, "-W", "error", "-c", before], check=True, env=env(), timeout=300, cwd=ROOT)
 
 
 def readme_example(tmp_path):

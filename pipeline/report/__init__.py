@@ -28,29 +28,33 @@ third of the time, and a second process gained nothing measurable (fold report 8
 Modules import only downward: driver -> pngs -> figures -> registry, page, points, tables, branches ->
 plan, stability -> cubeinfo, style.
 """
-from pipeline.report.branches import SPECIAL_LABELS, Special, branch_elements, stability_runs
-from pipeline.report.cubeinfo import (attractor_counts, axis_edges, branch_observables,
-                                      continued_axis, has_attractor, has_down, sweep_labels)
-from pipeline.report.driver import make_report
-from pipeline.report.figures.bifurcation import fig_bifurcation
-from pipeline.report.figures.branch_diagram import fig_branches
-from pipeline.report.figures.multiplier_frequency import critical_frequency, fig_multiplier_frequency
-from pipeline.report.figures.lle import fig_lle
-from pipeline.report.figures.max_multiplier import fig_max_multiplier
-from pipeline.report.figures.multiplier_paths import (MAX_BOUNDARIES, fig_multiplier_paths,
-                                                      stability_boundaries)
-from pipeline.report.figures.point import fig_point
-from pipeline.report.figures.response import fig_response
-from pipeline.report.figures.stability_map import RECT_HALF, fig_stability_map, map_rectangles
-from pipeline.report.page import header_html
-from pipeline.report.plan import (MAX_PANELS, axes_plan, axis_display, figure_title, line_plan,
-                                  where_label)
-from pipeline.report.poincare import BIF_POINTS, thin_points
-from pipeline.report.points import parse_point, point_filename, resolve_point
-from pipeline.report.registry import Figure, figures_for, register
-from pipeline.report.stability import (CLASSES, PALETTE, counts, line_segments, refined_edges,
-                                       stability_class)
-from pipeline.report.style import SWEEP_COLOURS, holoviews
+import importlib
+
+# name -> the submodule defining it, imported on first use (PEP 562): importing any
+# pipeline.report.<module> (the accessor's cubeinfo, style) loads this package, which must not load
+# the report driver and every figure with it (issue 35)
+_NAMES = {
+    "branches": "SPECIAL_LABELS Special branch_elements stability_runs",
+    "cubeinfo": "attractor_counts axis_edges branch_observables continued_axis has_attractor has_down sweep_labels",
+    "driver": "make_report",
+    "figures.bifurcation": "fig_bifurcation",
+    "figures.branch_diagram": "fig_branches",
+    "figures.multiplier_frequency": "critical_frequency fig_multiplier_frequency",
+    "figures.lle": "fig_lle",
+    "figures.max_multiplier": "fig_max_multiplier",
+    "figures.multiplier_paths": "MAX_BOUNDARIES fig_multiplier_paths stability_boundaries",
+    "figures.point": "fig_point",
+    "figures.response": "fig_response",
+    "figures.stability_map": "RECT_HALF fig_stability_map map_rectangles",
+    "page": "header_html",
+    "plan": "MAX_PANELS axes_plan axis_display figure_title line_plan where_label",
+    "poincare": "BIF_POINTS thin_points",
+    "points": "parse_point point_filename resolve_point",
+    "registry": "Figure figures_for register",
+    "stability": "CLASSES PALETTE counts line_segments refined_edges stability_class",
+    "style": "SWEEP_COLOURS holoviews",
+}
+_WHERE = {name: module for module, names in _NAMES.items() for name in names.split()}
 
 __all__ = [
     "BIF_POINTS", "CLASSES", "Figure", "MAX_BOUNDARIES", "MAX_PANELS", "PALETTE", "RECT_HALF",
@@ -63,3 +67,13 @@ __all__ = [
     "resolve_point", "stability_boundaries", "stability_class", "stability_runs", "sweep_labels",
     "thin_points", "where_label",
 ]
+
+
+def __getattr__(name):
+    if name not in _WHERE:
+        raise AttributeError(f"module 'pipeline.report' has no attribute {name!r}")
+    if _WHERE[name] == "registry":
+        importlib.import_module("pipeline.report.figures")     # registers them: figures_for sees every one
+    value = getattr(importlib.import_module(f"pipeline.report.{_WHERE[name]}"), name)
+    globals()[name] = value
+    return value

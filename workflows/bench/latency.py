@@ -2,7 +2,7 @@
 the Duffing resonance and on the Bai fold scene's 7.6 um line), before and after a change, in one
 run (issue 35):
 
-    python -m workflows.bench.latency [--base 74f5cb3] [--repeats 5] [--only info,point]
+    python -m workflows.bench.latency [--base 74f5cb3] [--repeats 5] [--only info,point] [--reports]
         # -> docs/benchmarks/latency.{json,md}
 
 The base revision is checked out into build/latency/<rev> (git worktree) and run with its own tree
@@ -10,7 +10,8 @@ first on PYTHONPATH and as working directory; the working tree is "after". Every
 (warm Numba cache, warm file cache), then `--repeats` times per tree, alternating, so that load
 drifts hit both; wall and CPU (user + system of the command and the processes it waited for) are
 recorded and their medians reported with the load average around each. The machine may be shared:
-the numbers say what this run measured, the load says how quiet it was."""
+the numbers say what this run measured, the load says how quiet it was. The reports (about 90 s
+each, no target) run only with --reports, so that the default run takes a few minutes."""
 import argparse
 import json
 import os
@@ -27,6 +28,7 @@ BUILD = ROOT / "build" / "latency"
 DEMO = BUILD / "demo.nc"
 BAI_76 = BUILD / "bai2006_fold_7.6um.toml"
 # (name, argv after `rotorsweep` or a python -c program, the target of issue 35 in s or None)
+REPORTS = ("report", "report --point")
 COMMANDS = (
     ("import rotorsweep", ["-c", "import rotorsweep"], 0.5),
     # the parts every command pays: the interpreter, numba (the kernels), xarray (the result files) and
@@ -153,26 +155,29 @@ def floor_text(runs):
     if not all(p in cpu for p in parts):
         return ""
     return (f"Where the time goes (after, median CPU): the interpreter {cpu['python -c pass']:.2f} s; numba "
-            f"{cpu['import numba']:.2f} s, which every command imports (the model registry defines its kernels "
-            f"with it); scipy.linalg {cpu['import numba + scipy.linalg'] - cpu['import numba']:.2f} s more, which "
-            "numba imports at its first compiled call (its BLAS check; the kernels call LAPACK through scipy's "
-            f"cython_lapack, so it cannot be skipped where a kernel runs); xarray (with pandas) "
-            f"{cpu['import xarray']:.2f} s, which `import rotorsweep` (its accessor), `info`, `query` and every "
-            "command writing a result import. Plotting, Dask and distributed are not imported by "
-            "`import rotorsweep` and `info` (tests/test_latency.py checks both) nor by a small `continue` run "
-            "in the process.")
+            f"{cpu['import numba']:.2f} s, which every command but `import rotorsweep` and the argument parsing "
+            "imports (the model registry defines its kernels with it); scipy.linalg "
+            f"{cpu['import numba + scipy.linalg'] - cpu['import numba']:.2f} s more, which numba's BLAS check imported "
+            "at the first compiled call before: now only a kernel calling LAPACK imports it, at its first call "
+            "(pipeline/__init__.py); xarray (with pandas) "
+            f"{cpu['import xarray']:.2f} s, which `info`, `query` and every command writing a result import. "
+            "`import rotorsweep` loads its names on first use and registers the accessor when xarray is imported; "
+            "each command's imports are checked in tests/test_latency.py (no plotting, Dask or scipy solvers in "
+            "info, query or point; no numba or xarray in `import rotorsweep` or the argument parsing).")
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--base", default="74f5cb3", help="the revision before (default: before issue 35)")
     ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--only", help="comma-separated command names to run (default: all)")
+    ap.add_argument("--only", help="comma-separated command names to run (default: all but the reports)")
+    ap.add_argument("--reports", action="store_true", help=f"also {' and '.join(REPORTS)} (~90 s each)")
     ap.add_argument("--out", type=Path, default=DOCS)
     ap.add_argument("--merge", action="store_true",
                     help="keep the commands of an earlier latency.json in --out that this run does not measure")
     args = ap.parse_args(argv)
-    commands = [c for c in COMMANDS if not args.only or c[0] in args.only.split(",")]
+    commands = [c for c in COMMANDS if c[0] in args.only.split(",")] if args.only else \
+        [c for c in COMMANDS if args.reports or c[0] not in REPORTS]
     label = subprocess.run(["git", "log", "-1", "--format=%s", args.base], cwd=ROOT, capture_output=True,
                            text=True).stdout.strip()[:70]
     head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
