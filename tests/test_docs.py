@@ -4,6 +4,7 @@ site's sources name only pages that exist."""
 import doctest
 import inspect
 import io
+import re
 import sys
 import tempfile
 from pathlib import Path
@@ -93,3 +94,11 @@ def test_every_page_of_the_site_is_in_a_toctree():
              if "_build" not in p.parts and p.parent.name != "benchmarks"]
     missing = [p for p in pages if p not in ("index", "benchmarks") and f"\n{p}\n" not in index]
     assert not missing, f"pages in no toctree of docs/index.md: {missing}"
+
+
+def test_the_speed_page_copies_no_measured_number():
+    """Numbers live on the benchmark pages (written from their JSON); docs/speed.md includes their
+    headline sections instead of repeating them by hand (issue 37)."""
+    prose = re.sub(r"```.*?```", "", (DOCS / "speed.md").read_text(), flags=re.DOTALL)     # the includes
+    measured = re.findall(r"\d+(?:\.\d+)?\s?(?:x|s|ms|us|ns|%|MiB|GiB|points/s)(?![\w-])", prose)
+    assert not measured, f"docs/speed.md repeats benchmark numbers: {measured}"
