@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+import pipeline
 import rotorsweep
 from pipeline import config, config_reference, units
 from rotorkernels import models
@@ -35,8 +36,12 @@ lyapunov_max_periods = 200
 
 
 def public_functions():
-    return [(name, getattr(rotorsweep, name)) for name in rotorsweep.__all__
-            if inspect.isfunction(getattr(rotorsweep, name))]
+    """rotorsweep's public functions and those of its explore module (the notebook figures)."""
+    top = [(name, getattr(rotorsweep, name)) for name in rotorsweep.__all__
+           if inspect.isfunction(getattr(rotorsweep, name))]
+    explore = [(f"explore.{name}", f) for name, f in vars(rotorsweep.explore).items()
+               if inspect.isfunction(f) and not name.startswith("_") and f.__module__ == rotorsweep.explore.__name__]
+    return top + explore
 
 
 def test_the_committed_config_reference_is_current():
@@ -65,6 +70,23 @@ def cube_path():
     return str(path)
 
 
+@pytest.fixture(scope="module")
+def continuation_path():
+    """The Duffing resonance curve of the continue command's tests, in this process (~1 s)."""
+    from tests.test_continue_command import DUFFING
+    return str(pipeline.continue_branches(rotorsweep.parse_config(DUFFING), f"{tempfile.mkdtemp()}/duffing.nc",
+                                          workers=0))
+
+
+@pytest.fixture(scope="module")
+def backbone_path():
+    """asymmetric5's axial mode at 5 amplitudes, in this process (~3 s): a linearization and a
+    shaft speed, for the Campbell diagram and the mode shapes."""
+    from tests.test_backbone_command import scene
+    cfg = rotorsweep.parse_config(scene(modes="1", amplitude_max=4e-6, amplitude_points=5, surface_mode=2))
+    return str(pipeline.backbones(cfg, f"{tempfile.mkdtemp()}/axial.nc", workers=0))
+
+
 def run_examples(obj, name, globs):
     """Failures of obj's doctest examples (0: all pass); the report goes to the assertion."""
     out = io.StringIO()
@@ -75,10 +97,11 @@ def run_examples(obj, name, globs):
 
 
 @pytest.mark.parametrize("name, function", public_functions())
-def test_the_examples_of_the_public_functions_run(name, function, cube_path):
+def test_the_examples_of_the_public_functions_run(name, function, cube_path, continuation_path, backbone_path):
     module = sys.modules[function.__module__]
     failures, report = run_examples(function, f"rotorsweep.{name}",
-                                    {**vars(module), "rotorsweep": rotorsweep, "cube_path": cube_path})
+                                    {**vars(module), "rotorsweep": rotorsweep, "cube_path": cube_path,
+                                     "continuation_path": continuation_path, "backbone_path": backbone_path})
     assert failures == 0, report
 
 
