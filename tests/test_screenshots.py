@@ -56,4 +56,4 @@ def sweep_report(tiny_cube, tmp_path_factory):
 
 @needs_chromium
 def test_sweep_report_renders_in_a_browser(sweep_report, tmp_path):
-    assert_renders(sweep_report, tmp_path / "shot.png")
+    assert_renders(sweep_report, tmp_path / "shot.png", kind="sweep")
