@@ -154,8 +154,8 @@ def _limit(y, **style):
 
 @plotting
 def max_multiplier(ds, **kwargs):
-    """max |multiplier| along the continued axis, one line per value of the first other axis,
-    and the |lambda| = 1 line.
+    """The largest Floquet multiplier modulus along the continued axis, one line per value of the
+    first other axis, and the line where it is 1.
 
     >>> ds = rotorsweep.open_cube(cube_path)
     >>> fig = rotorsweep.explore.max_multiplier(ds)      # or ds.rotorsweep.max_multiplier()
