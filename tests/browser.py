@@ -133,14 +133,15 @@ def assert_looks_like(shot_png, kind):
     if os.environ.get(UPDATE):
         save_reference(shot_png, reference)
         return
-    assert reference.is_file(), f"no reference screenshot {reference}: run `make screenshots`"
+    assert reference.is_file(), f"no reference screenshot {reference}: run `make screenshot-references`"
     font = helvetica()
     if font != REFERENCE_FONT:
         pytest.skip(f"the references are drawn with {REFERENCE_FONT}, this machine draws Helvetica as {font!r}")
     fraction, height = difference(shot_png, reference)
     assert fraction <= FRACTION_TOL and height <= HEIGHT_TOL, (
-        f"{kind} report differs from {reference}: {fraction:.2%} of its {CELL} px cells, height by {height} px "
-        f"(see {shot_png}; if the change is meant, run `make screenshots` and commit the references)")
+        f"{kind} report differs from {reference}: {fraction:.2%} of the {CELL} px cells of its worst "
+        f"{WINDOW * CELL} px stretch, its height by {height} px (see {shot_png}; if the change is meant, run "
+        "`make screenshot-references` and commit tests/screenshots)")
 
 
 def blank_figure(page, out, index):
