@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo docs test test-slow check-cf screenshots upgrade bench bench-scaling bench-atlas bench-chunk-plans bench-attractor bench-revisions bench-extrema bench-continuation bench-reductions bench-compile bench-backbone bench-models bench-latency fig13 cascade fold backbone clean
+.PHONY: demo docs test test-slow check-cf screenshots screenshot-references upgrade bench bench-scaling bench-atlas bench-chunk-plans bench-attractor bench-revisions bench-extrema bench-continuation bench-reductions bench-compile bench-backbone bench-models bench-latency fig13 cascade fold backbone clean
 
 # CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
 CONSTRAINTS ?= constraints.txt
@@ -59,8 +59,11 @@ check-cf: $(STAMP)  ## CF checks of every result kind with cfchecker and the IOO
 	$(BIN)/python -c "import cfchecker.cfchecks, compliance_checker.runner"  # fails here, not as skipped tests, without udunits2
 	$(BIN)/python -m pytest -q -k cf_checkers tests/test_cube.py tests/test_continue_command.py tests/test_backbone_command.py
 
-screenshots: demo fold  ## the demo and fold reports in headless Chromium (apt-get install chromium) -> docs/screenshots/*.png
+screenshots: demo fold screenshot-references  ## the demo and fold reports in headless Chromium (apt-get install chromium) -> docs/screenshots/*.png, and the tests' references
 	$(BIN)/python -m workflows.screenshots out/demo_report out/bai2006_fold_report -o docs/screenshots
+
+screenshot-references: $(STAMP)  ## the reference screenshots the browser tests compare with (sweep, continuation, backbone report; ~3 min) -> tests/screenshots/*.png
+	ROTORSWEEP_UPDATE_SCREENSHOTS=1 $(BIN)/python -m pytest -q -k renders_in_a_browser tests/test_screenshots.py tests/test_continue_command.py tests/test_backbone_command.py
 
 bench-scaling: $(STAMP)  ## 1 vs 2 workers, chunk sizes, memory of the Fig. 13 sweep (5 repeats, ~7 min, quiet machine) -> docs/benchmarks/scaling.*
 	$(BIN)/python -m workflows.bench.scaling --repeats 5

@@ -39,7 +39,14 @@ from pipeline.report.style import LINE_COLOURS, holoviews
 
 def plotting(figure):
     """A figure function that imports hvplot (registering .hvplot on pandas and xarray objects)
-    before it draws."""
+    before it draws.
+
+    >>> @rotorsweep.explore.plotting
+    ... def speeds(ds):
+    ...     return ds["max_abs_multiplier"].isel(clearance=0).hvplot.line(x="speed")   # .hvplot: registered by then
+    >>> type(speeds(rotorsweep.open_cube(cube_path))).__name__
+    'Curve'
+    """
     @functools.wraps(figure)
     def draw(*args, **kwargs):
         import hvplot.pandas  # noqa: F401
@@ -74,7 +81,13 @@ def _scaled(da):
 
 def row_dims(ds):
     """The dimensions of one row of to_frame(): the grid points of a sweep cube, the points of
-    a continuation's branches, the amplitudes of a backbone result's lines."""
+    a continuation's branches, the amplitudes of a backbone result's lines.
+
+    >>> rotorsweep.explore.row_dims(rotorsweep.open_cube(cube_path))
+    ['speed', 'clearance']
+    >>> rotorsweep.explore.row_dims(rotorsweep.open_result(continuation_path)[0])
+    ['branch', 'point']
+    """
     kind = result_kinds.kind_of(ds).name
     if kind == result_kinds.CONTINUATION:
         return list(ds["parameter"].dims)
@@ -87,7 +100,12 @@ def to_frame(ds, variables=None):
     """A tidy pandas DataFrame: one row per grid point (sweep cube), branch point (continuation)
     or backbone point, the row's coordinates and the `variables` (default: every variable with
     one value per row) as columns; lengths in um and frequencies in Hz with the unit in the
-    column name (`clearance_um`, `speed_Hz`). Cheap to plot with hvplot, unlike the whole cube."""
+    column name (`clearance_um`, `speed_Hz`). Cheap to plot with hvplot, unlike the whole cube.
+
+    >>> table = rotorsweep.explore.to_frame(rotorsweep.open_cube(cube_path), ["max_abs_multiplier"])
+    >>> table.columns.tolist(), table["clearance_um"].tolist()
+    (['speed_Hz', 'clearance_um', 'max_abs_multiplier'], [7.6, 7.6])
+    """
     dims = row_dims(ds)
     if variables is None:
         variables = [v for v in ds.data_vars if set(ds[v].dims) == set(dims)]
@@ -137,15 +155,26 @@ def _limit(y, **style):
 
 @plotting
 def max_multiplier(ds, **kwargs):
-    """max |multiplier| along the continued axis, one line per value of the first other axis,
-    and the |lambda| = 1 line."""
+    """The largest Floquet multiplier modulus along the continued axis, one line per value of the
+    first other axis, and the line where it is 1.
+
+    >>> ds = rotorsweep.open_cube(cube_path)
+    >>> fig = rotorsweep.explore.max_multiplier(ds)      # or ds.rotorsweep.max_multiplier()
+    >>> type(fig).__name__, [d.name for d in fig.kdims]  # a widget per further axis
+    ('DynamicMap', ['clearance'])
+    """
     return _shown(ds["max_abs_multiplier"]).hvplot.line(x=continued_axis(ds), by=_by(ds), **kwargs) * _limit(1.0)
 
 
 @plotting
 def stability_map(ds, **kwargs):
     """The stability class of every grid point (colours of the report's map) over the continued
-    axis and the first other axis (grid cells, not the refined edges of the report's map)."""
+    axis and the first other axis (grid cells, not the refined edges of the report's map).
+
+    >>> fig = rotorsweep.explore.stability_map(rotorsweep.open_cube(cube_path))
+    >>> type(fig).__name__
+    'DynamicMap'
+    """
     cls = _point_array(ds, stability_class(ds), "stability_class",
                        {"long_name": "stability class: " + ", ".join(f"{i} {c}" for i, c in enumerate(CLASSES))})
     x, y = continued_axis(ds), _by(ds)
@@ -158,7 +187,12 @@ def stability_map(ds, **kwargs):
 def branches(ds, observable=None, **kwargs):
     """The periodic orbit's `observable` (see report.branch_observables; default: Poincare
     coordinate with attractors, else amplitude) along the continued axis, stable solid and
-    unstable dashed, one colour per value of the first other axis."""
+    unstable dashed, one colour per value of the first other axis.
+
+    >>> fig = rotorsweep.explore.branches(rotorsweep.open_cube(cube_path), "amplitude_x")
+    >>> type(fig).__name__
+    'DynamicMap'
+    """
     observable = observable or default_observable(ds)
     label, units = branch_observables(ds)[observable]
     da = _point_array(ds, branch_values(ds, observable), observable, {"long_name": label, "units": units})
@@ -171,7 +205,12 @@ def branches(ds, observable=None, **kwargs):
 @plotting
 def response(ds, observable=None, **kwargs):
     """Half peak-to-peak amplitude of an observable (default: the first) along the continued
-    axis, one line per value of the first other axis."""
+    axis, one line per value of the first other axis.
+
+    >>> fig = rotorsweep.explore.response(rotorsweep.open_cube(cube_path))
+    >>> type(fig).__name__
+    'DynamicMap'
+    """
     observable = observable or schema.model_of(ds).observables[0].name
     return _shown(ds[f"amplitude_{observable}"]).hvplot.line(x=continued_axis(ds), by=_by(ds), **kwargs)
 
@@ -179,7 +218,12 @@ def response(ds, observable=None, **kwargs):
 @plotting
 def multiplier_frequency(ds, **kwargs):
     """Frequency of the critical multiplier (arg(lambda) / 2 pi / T) vs shaft speed, one series
-    per value of the first other axis, with the 1x line (not a Campbell diagram: campbell())."""
+    per value of the first other axis, with the 1x line (not a Campbell diagram: campbell()).
+
+    >>> fig = rotorsweep.explore.multiplier_frequency(rotorsweep.open_cube(cube_path))
+    >>> type(fig).__name__
+    'DynamicMap'
+    """
     from pipeline.report.figures.multiplier_frequency import multiplier_frequency_points
 
     speed = ds[continued_axis(ds)].values
@@ -191,7 +235,12 @@ def multiplier_frequency(ds, **kwargs):
 def bode(ds, observable=None, **kwargs):
     """Bode (amplitude, phase) and polar plots of the first harmonic of `observable` (default:
     the scene's report observable) of the orbits along the swept or continued parameter, stable
-    solid, unstable dashed (pipeline.report.figures.bode; the orbits are integrated again)."""
+    solid, unstable dashed (pipeline.report.figures.bode; the orbits are integrated again).
+
+    >>> fig = rotorsweep.explore.bode(rotorsweep.open_result(continuation_path)[0])
+    >>> type(fig).__name__, len(fig)                 # amplitude, phase and polar panels
+    ('Layout', 3)
+    """
     from pipeline.report import harmonics
     from pipeline.report.figures import bode as figure
     from pipeline.report.points import scene_data
@@ -212,7 +261,13 @@ def bode(ds, observable=None, **kwargs):
 @plotting
 def campbell(ds, **kwargs):
     """The Campbell diagram of the result's scene (models with a linearization and a shaft
-    speed): damped natural frequencies vs shaft speed, critical speeds marked and listed."""
+    speed): damped natural frequencies vs shaft speed, critical speeds marked and listed.
+
+    >>> ds, _ = rotorsweep.open_result(backbone_path)      # asymmetric5: a linearization and a speed
+    >>> fig = rotorsweep.explore.campbell(ds)
+    >>> type(fig).__name__
+    'Layout'
+    """
     from pipeline.report.figures import mode_campbell
 
     if not mode_campbell.has_linear_analysis(ds):
@@ -224,7 +279,13 @@ def campbell(ds, **kwargs):
 @plotting
 def mode_shapes(ds, **kwargs):
     """The mode shapes at the scene's first grid point: each station's orbit, one panel per mode
-    (models with a linearization whose coordinates name stations)."""
+    (models with a linearization whose coordinates name stations).
+
+    >>> ds, _ = rotorsweep.open_result(backbone_path)
+    >>> fig = rotorsweep.explore.mode_shapes(ds)
+    >>> type(fig).__name__
+    'Layout'
+    """
     from pipeline.report.figures import mode_shapes as figure
 
     if not figure.has_stations(ds):
@@ -236,7 +297,12 @@ def mode_shapes(ds, **kwargs):
 @plotting
 def bifurcation(ds, variable="poincare_x", **kwargs):
     """The attractors' Poincare samples along the continued axis (all samples of a point in one
-    column; pass rasterize=True for large cubes, which needs datashader: not installed with rotorsweep)."""
+    column; pass rasterize=True for large cubes, which needs datashader: not installed with rotorsweep).
+
+    >>> fig = rotorsweep.explore.bifurcation(rotorsweep.open_cube(cube_path))
+    >>> type(fig).__name__, fig.kdims[0].name
+    ('Scatter', 'speed')
+    """
     if not has_attractor(ds):
         raise ValueError("the cube has no attractor diagnostics ([analysis] attractor = true)")
     single = [a for a in other_axes(ds) if ds.sizes[a] == 1]      # flattened: its value would be the title
@@ -246,14 +312,24 @@ def bifurcation(ds, variable="poincare_x", **kwargs):
 @plotting
 def lle(ds, **kwargs):
     """Largest Lyapunov exponent along the continued axis, one line per value of the first
-    other axis, and the zero line."""
+    other axis, and the zero line.
+
+    >>> fig = rotorsweep.explore.lle(rotorsweep.open_cube(cube_path))
+    >>> type(fig).__name__
+    'DynamicMap'
+    """
     return _shown(ds["lle"]).hvplot.line(x=continued_axis(ds), by=_by(ds), **kwargs) * _limit(0.0)
 
 
 @plotting
 def multipliers(ds, where=None, **kwargs):
     """The Floquet multipliers in the complex plane along a line (`where`: the other axes'
-    values), coloured by the continued axis, in a square frame with the unit circle."""
+    values), coloured by the continued axis, in a square frame with the unit circle.
+
+    >>> fig = rotorsweep.explore.multipliers(rotorsweep.open_cube(cube_path), where={"clearance": 7.6e-6})
+    >>> [type(layer).__name__ for layer in fig]       # the unit circle, the multipliers
+    ['Curve', 'Scatter']
+    """
     line = ds.sel(where) if where else ds
     t = np.linspace(0, 2 * np.pi, 361)
     circle = holoviews().Curve((np.cos(t), np.sin(t)), "multiplier_real", "multiplier_imag").opts(
@@ -269,7 +345,13 @@ def multipliers(ds, where=None, **kwargs):
 def branch_diagram(ds, observable=None, **kwargs):
     """A continuation result's branches: half peak-to-peak of `observable` (default: the
     result's report observable) over the continued parameter, one colour per branch, stable
-    solid and unstable dashed (a NaN ends a line: the other stability's points are gaps)."""
+    solid and unstable dashed (a NaN ends a line: the other stability's points are gaps).
+
+    >>> ds, _ = rotorsweep.open_result(continuation_path)
+    >>> fig = rotorsweep.explore.branch_diagram(ds)  # or ds.rotorsweep.branch_diagram()
+    >>> type(fig).__name__, fig.get_dimension("omega").name
+    ('Overlay', 'omega')
+    """
     observable = observable or ds.attrs.get("report_observable") or str(ds["observable"].values[0])
     shown = _shown(ds[["parameter", "amplitude_half_pp"]].sel(observable=observable))
     table = pd.DataFrame({"branch": np.repeat(np.arange(ds.sizes["branch"]), ds.sizes["point"]),
@@ -293,7 +375,13 @@ def _label(name, da):
 def backbones(ds, where=None, **kwargs):
     """A backbone result's backbones at one line (`where`: the swept axes' values; default the
     first): frequency over the master's amplitude, continuation solid and manifold dashed, one
-    colour per mode."""
+    colour per mode.
+
+    >>> ds, _ = rotorsweep.open_result(backbone_path)
+    >>> fig = rotorsweep.explore.backbones(ds)       # or ds.rotorsweep.backbones()
+    >>> type(fig).__name__
+    'Overlay'
+    """
     line = ds.sel(where) if where else ds.isel({a: 0 for a in ds["axial_approach"].dims})
     modes = line["mode"].values
     table = pd.DataFrame({"mode": np.repeat(modes, line.sizes["amplitude"]),

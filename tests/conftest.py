@@ -1,5 +1,27 @@
-"""Fixtures shared by test modules."""
+"""Fixtures shared by test modules, and the suite's own cache directory."""
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
 import pytest
+
+# What the suite measures (pipeline/workload.py: $ROTORSWEEP_CACHE/costs.json) goes to a cache of
+# its own, not the user's: set before anything imports rotorkernels, and inherited by the CLI's
+# subprocesses and Dask workers. Its numba/ links to the user's, where rotorkernels keeps the
+# compiled kernels under the same variable, so the suite does not compile them again.
+PRIVATE_CACHE = Path(tempfile.mkdtemp(prefix="rotorsweep-test-cache-"))
+
+
+def pytest_configure(config):
+    user = Path(os.environ.get("ROTORSWEEP_CACHE") or Path.home() / ".cache" / "rotorsweep")
+    (user / "numba").mkdir(parents=True, exist_ok=True)
+    (PRIVATE_CACHE / "numba").symlink_to(user / "numba", target_is_directory=True)
+    os.environ["ROTORSWEEP_CACHE"] = str(PRIVATE_CACHE)
+
+
+def pytest_unconfigure(config):
+    shutil.rmtree(PRIVATE_CACHE, ignore_errors=True)       # the link only, not the user's kernels
 
 # A real sweep, small: 19 um, 62-66 Hz (period 2 after the period doubling, period 1 above the
 # refined boundary at ~64.9 Hz), both directions. Built in-process as sweep.run does it, without

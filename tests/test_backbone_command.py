@@ -3,6 +3,7 @@ continuation backbones (rotorkernels.continuation.backbone) — the result file,
 continuation agreement at the order the cubic theory predicts, info / query / report, and input
 errors before any work."""
 import json
+import os
 import subprocess
 import sys
 
@@ -10,10 +11,11 @@ import numpy as np
 import pytest
 
 from pipeline import backbone, cli, compute, config, result_kinds
-from tests import cfcheck
+from tests import browser, cfcheck
 from tests.runlog_check import check_log
 from tests.browser import assert_renders, needs_chromium
 from tests.figure_checks import assert_legend_hover_and_width
+from workflows import screenshots
 
 AXIAL = "configs/filipkovsky2010_axial.toml"
 
@@ -196,7 +198,25 @@ def test_cf_checkers_find_no_error_and_units_are_stated(axial_result, tmp_path):
 
 @needs_chromium
 def test_backbone_report_renders_in_a_browser(axial_result, tmp_path):
-    assert_renders(axial_result[1], tmp_path / "shot.png")
+    assert_renders(axial_result[1], tmp_path / "shot.png", kind="backbone")
+
+
+@needs_chromium
+def test_the_screenshot_comparison_passes_a_window_1_px_off_and_fails_a_missing_plot(axial_result, tmp_path):
+    """tests/browser.py's tolerance, on the backbone report (the smallest page): rendered 1 px
+    narrower and wider it matches its reference, with its first figure (the one of its three
+    whose loss changes the fewest cells, measured) drawn blank it does not."""
+    reference = browser.REFERENCES / "backbone.png"
+    if os.environ.get(browser.UPDATE) or not reference.is_file() or browser.helvetica() != browser.REFERENCE_FONT:
+        pytest.skip("no reference to compare with on this machine (see tests/browser.py)")
+    page = browser.masked_page(axial_result[1] / "report.html", tmp_path / "report.html")
+    for width in (screenshots.WIDTH - 1, screenshots.WIDTH + 1):
+        screenshots.capture(page, tmp_path / f"{width}.png", width=width)
+        fraction, height = browser.difference(tmp_path / f"{width}.png", reference)
+        assert fraction <= browser.FRACTION_TOL and height <= browser.HEIGHT_TOL, (width, fraction, height)
+    screenshots.capture(browser.blank_figure(page, tmp_path / "blank.html", 0), tmp_path / "blank.png")
+    fraction, _ = browser.difference(tmp_path / "blank.png", reference)
+    assert fraction > 2 * browser.FRACTION_TOL, fraction
 
 
 def test_every_plot_of_the_report_has_a_legend_and_a_hover(axial_result):

@@ -199,7 +199,7 @@ def test_cf_checkers_find_no_error(duffing_result, tmp_path):
 
 @needs_chromium
 def test_continuation_report_renders_in_a_browser(duffing_result, tmp_path):
-    assert_renders(duffing_result[1] / "report", tmp_path / "shot.png")
+    assert_renders(duffing_result[1] / "report", tmp_path / "shot.png", kind="continuation")
 
 
 def test_events_csv_has_units_in_every_numeric_header(duffing_result):

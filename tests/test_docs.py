@@ -4,12 +4,14 @@ site's sources name only pages that exist."""
 import doctest
 import inspect
 import io
+import re
 import sys
 import tempfile
 from pathlib import Path
 
 import pytest
 
+import pipeline
 import rotorsweep
 from pipeline import config, config_reference, units
 from rotorkernels import models
@@ -34,8 +36,12 @@ lyapunov_max_periods = 200
 
 
 def public_functions():
-    return [(name, getattr(rotorsweep, name)) for name in rotorsweep.__all__
-            if inspect.isfunction(getattr(rotorsweep, name))]
+    """rotorsweep's public functions and those of its explore module (the notebook figures)."""
+    top = [(name, getattr(rotorsweep, name)) for name in rotorsweep.__all__
+           if inspect.isfunction(getattr(rotorsweep, name))]
+    explore = [(f"explore.{name}", f) for name, f in vars(rotorsweep.explore).items()
+               if inspect.isfunction(f) and not name.startswith("_") and f.__module__ == rotorsweep.explore.__name__]
+    return top + explore
 
 
 def test_the_committed_config_reference_is_current():
@@ -64,6 +70,23 @@ def cube_path():
     return str(path)
 
 
+@pytest.fixture(scope="module")
+def continuation_path():
+    """The Duffing resonance curve of the continue command's tests, in this process (~1 s)."""
+    from tests.test_continue_command import DUFFING
+    return str(pipeline.continue_branches(rotorsweep.parse_config(DUFFING), f"{tempfile.mkdtemp()}/duffing.nc",
+                                          workers=0))
+
+
+@pytest.fixture(scope="module")
+def backbone_path():
+    """asymmetric5's axial mode at 5 amplitudes, in this process (~3 s): a linearization and a
+    shaft speed, for the Campbell diagram and the mode shapes."""
+    from tests.test_backbone_command import scene
+    cfg = rotorsweep.parse_config(scene(modes="1", amplitude_max=4e-6, amplitude_points=5, surface_mode=2))
+    return str(pipeline.backbones(cfg, f"{tempfile.mkdtemp()}/axial.nc", workers=0))
+
+
 def run_examples(obj, name, globs):
     """Failures of obj's doctest examples (0: all pass); the report goes to the assertion."""
     out = io.StringIO()
@@ -74,10 +97,11 @@ def run_examples(obj, name, globs):
 
 
 @pytest.mark.parametrize("name, function", public_functions())
-def test_the_examples_of_the_public_functions_run(name, function, cube_path):
+def test_the_examples_of_the_public_functions_run(name, function, cube_path, continuation_path, backbone_path):
     module = sys.modules[function.__module__]
     failures, report = run_examples(function, f"rotorsweep.{name}",
-                                    {**vars(module), "rotorsweep": rotorsweep, "cube_path": cube_path})
+                                    {**vars(module), "rotorsweep": rotorsweep, "cube_path": cube_path,
+                                     "continuation_path": continuation_path, "backbone_path": backbone_path})
     assert failures == 0, report
 
 
@@ -93,3 +117,11 @@ def test_every_page_of_the_site_is_in_a_toctree():
              if "_build" not in p.parts and p.parent.name != "benchmarks"]
     missing = [p for p in pages if p not in ("index", "benchmarks") and f"\n{p}\n" not in index]
     assert not missing, f"pages in no toctree of docs/index.md: {missing}"
+
+
+def test_the_speed_page_copies_no_measured_number():
+    """Numbers live on the benchmark pages (written from their JSON); docs/speed.md includes their
+    headline sections instead of repeating them by hand (issue 37)."""
+    prose = re.sub(r"```.*?```", "", (DOCS / "speed.md").read_text(), flags=re.DOTALL)     # the includes
+    measured = re.findall(r"\d+(?:\.\d+)?\s?(?:x|s|ms|us|ns|%|MiB|GiB|points/s)(?![\w-])", prose)
+    assert not measured, f"docs/speed.md repeats benchmark numbers: {measured}"

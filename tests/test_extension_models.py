@@ -3,144 +3,11 @@ $ROTORSWEEP_MODELS (modules written here, never a file of rotorsweep), run throu
 `continue`, `backbone` (the conservative one), `modes`, `info`, `query` and `report`; what the
 pipeline needs to know about them it reads from their specs' capabilities."""
 import json
-import os
-import subprocess
-import sys
-import textwrap
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-
-# A forced 2-DOF rotor: isotropic linear spring (plus an optional cubic one) turning at `speed`
-# with a rotating force F (cos, sin)(2 pi speed t); scaled time tau = speed t. Its linearization
-# (declared on the spec) is M = m I, C = c I, K = k I.
-FORCED = '''
-import numpy as np
-from numba import njit
-
-from rotorkernels.models.spec import Built, LinearSystem, ModelSpec, Observable, Parameter
-from rotorkernels.models.velocity import upper_rows, velocity_rows
-
-
-@njit(cache=True, nogil=True, inline="always")
-def rhs(tau, u, p, du):
-    velocity_rows(u, du, 2)
-    c, s = np.cos(2.0 * np.pi * tau), np.sin(2.0 * np.pi * tau)
-    du[2] = p[0] * (p[4] * c - p[2] * u[0] - p[3] * u[0] ** 3) - p[1] * u[2]
-    du[3] = p[0] * (p[4] * s - p[2] * u[1] - p[3] * u[1] ** 3) - p[1] * u[3]
-
-
-@njit(cache=True, nogil=True, inline="always")
-def jac(tau, u, p, out):
-    upper_rows(out, 2)
-    for i in range(2):
-        for j in range(4):
-            out[2 + i, j] = 0.0
-        out[2 + i, i] = -p[0] * (p[2] + 3.0 * p[3] * u[i] ** 2)
-        out[2 + i, 2 + i] = -p[1]
-
-
-@njit(cache=True, nogil=True, inline="always")
-def rhs_jac(tau, u, p, du, out):
-    rhs(tau, u, p, du)
-    jac(tau, u, p, out)
-
-
-def build(v):
-    T = 1.0 / v["speed"]
-    m = v["mass"]
-    return Built(np.array([T * T / m, T * v["damping"] / m, v["stiffness"], v["cubic"], v["force"]]), T, {})
-
-
-def linearization(v, equilibrium):
-    eye = np.eye(2)
-    return LinearSystem(v["mass"] * eye, v["damping"] * eye, 0 * eye, v["stiffness"] * eye, ("x", "y"))
-
-
-SPEC = ModelSpec(
-    name="tw_forced", id=91, module=__name__, n_position=2,
-    description="throwaway test model: forced isotropic 2-DOF rotor",
-    parameters=(
-        Parameter(name="speed", unit="Hz", long_name="shaft speed", axis=True, lo=0, lo_open=True),
-        Parameter(name="mass", section="tw", unit="kg", default=1.0, lo=0, lo_open=True),
-        Parameter(name="stiffness", section="tw", unit="N m-1", default=1000.0, lo=0, lo_open=True),
-        Parameter(name="damping", section="tw", unit="N s m-1", default=4.0, lo=0),
-        Parameter(name="cubic", section="tw", unit="N m-3", default=0.0),
-        Parameter(name="force", section="tw", unit="N", default=1.0),
-    ),
-    continuation=("speed",),
-    build=build, cold_guess=lambda p: np.zeros(4), length_scale=1.0,
-    observables=(Observable("x", (1.0, 0.0), "m", "x displacement"),
-                 Observable("y", (0.0, 1.0), "m", "y displacement")),
-    linearization=linearization, speed="speed",
-)
-'''
-
-# A conservative 2-DOF chain: two unit masses on springs k to ground, coupled by `coupling`, each
-# with a hardening cubic spring; no damping, no forcing. Its capabilities come from `polynomial`.
-CONSERVATIVE = '''
-import numpy as np
-from numba import njit
-
-from rotorkernels.models.spec import Built, ModelSpec, Observable, Parameter, PolynomialSystem
-from rotorkernels.models.velocity import upper_rows, velocity_rows
-
-
-@njit(cache=True, nogil=True, inline="always")
-def rhs(tau, u, p, du):
-    velocity_rows(u, du, 2)
-    du[2] = -p[0] * ((p[1] + p[2]) * u[0] - p[2] * u[1] + p[3] * u[0] ** 3)
-    du[3] = -p[0] * ((p[1] + p[2]) * u[1] - p[2] * u[0] + p[3] * u[1] ** 3)
-
-
-@njit(cache=True, nogil=True, inline="always")
-def jac(tau, u, p, out):
-    upper_rows(out, 2)
-    for i in range(2):
-        out[2 + i, 2] = 0.0
-        out[2 + i, 3] = 0.0
-        out[2 + i, i] = -p[0] * (p[1] + p[2] + 3.0 * p[3] * u[i] ** 2)
-        out[2 + i, 1 - i] = p[0] * p[2]
-
-
-@njit(cache=True, nogil=True, inline="always")
-def rhs_jac(tau, u, p, du, out):
-    rhs(tau, u, p, du)
-    jac(tau, u, p, out)
-
-
-def build(v):
-    T = 2.0 * np.pi * np.sqrt(v["mass"] / v["stiffness"])     # the lowest linear period
-    return Built(np.array([T * T / v["mass"], v["stiffness"], v["coupling"], v["cubic"]]), T, {})
-
-
-def polynomial(v):
-    k, kc = v["stiffness"], v["coupling"]
-    q3 = np.zeros((2, 2, 2, 2))
-    q3[0, 0, 0, 0] = q3[1, 1, 1, 1] = v["cubic"]
-    return PolynomialSystem(M=v["mass"] * np.eye(2), G=np.zeros((2, 2)), K=np.array([[k + kc, -kc], [-kc, k + kc]]),
-                            Q2=np.zeros((2, 2, 2)), Q3=q3, coordinates=("q1", "q2"), units=("m", "m"))
-
-
-SPEC = ModelSpec(
-    name="tw_pair", id=92, module=__name__, n_position=2, forced=False,
-    description="throwaway test model: conservative coupled pair of hardening oscillators",
-    parameters=(
-        Parameter(name="coupling", section="pair", unit="N m-1", long_name="coupling stiffness", axis=True,
-                  lo=0, unset=0.5),
-        Parameter(name="mass", section="pair", unit="kg", default=1.0, lo=0, lo_open=True),
-        Parameter(name="stiffness", section="pair", unit="N m-1", default=1.0, lo=0, lo_open=True),
-        Parameter(name="cubic", section="pair", unit="N m-3", default=1.0),
-    ),
-    continuation=("coupling",),
-    build=build, cold_guess=lambda p: np.zeros(4), length_scale=1.0,
-    observables=(Observable("q1", (1.0, 0.0), "m", "first mass"), Observable("q2", (0.0, 1.0), "m", "second mass")),
-    polynomial=polynomial,
-)
-'''
+from tests import plugin_models
 
 FORCED_SCENE = """
 [scene]
@@ -181,19 +48,13 @@ amplitude_limit = 10.0
 @pytest.fixture(scope="module")
 def plugin_env(tmp_path_factory):
     d = tmp_path_factory.mktemp("plugins")
-    (d / "tw_forced_model.py").write_text(textwrap.dedent(FORCED))
-    (d / "tw_pair_model.py").write_text(textwrap.dedent(CONSERVATIVE))
-    (d / "forced.toml").write_text(FORCED_SCENE)
-    (d / "pair.toml").write_text(PAIR_SCENE)
-    env = {**os.environ, "ROTORSWEEP_MODELS": "tw_forced_model, tw_pair_model",
-           "PYTHONPATH": os.pathsep.join([str(d), str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    modules = {"tw_forced_model": plugin_models.FORCED, "tw_pair_model": plugin_models.CONSERVATIVE}
+    env = plugin_models.plugin_env(d, modules, {"forced.toml": FORCED_SCENE, "pair.toml": PAIR_SCENE})
     return d, env
 
 
 def _cli(env, *args, rc=0):
-    proc = subprocess.run([sys.executable, "-m", "pipeline.cli", *map(str, args)], env=env,
-                          capture_output=True, text=True, timeout=900, cwd=ROOT)
-    assert proc.returncode == rc, f"rotorsweep {args}:\n{proc.stdout}\n{proc.stderr}"
+    proc = plugin_models.cli(env, *args, rc=rc)
     return proc.stdout + proc.stderr
 
 

@@ -90,6 +90,14 @@ def test_the_scene_sets_the_threshold_and_keeps_its_hash(monkeypatch):
         config.parse_config(DUFFING + '\n[run]\nin_process_below = "3 m"\n')
 
 
+def test_the_suite_measures_into_a_cache_of_its_own():
+    """tests/conftest.py: what the suite's runs measure stays out of the user's costs.json, while
+    the compiled kernels are the user's (not compiled again for the suite)."""
+    from tests.conftest import PRIVATE_CACHE
+    assert os.path.dirname(workload.costs_path()) == str(PRIVATE_CACHE)
+    assert not Path(os.path.realpath(os.environ["NUMBA_CACHE_DIR"])).is_relative_to(PRIVATE_CACHE.resolve())
+
+
 def test_measured_unit_costs_are_kept_in_the_cache(tmp_path, monkeypatch):
     monkeypatch.setenv("ROTORSWEEP_CACHE", str(tmp_path))
     assert workload.estimate("point", "duffing", 10) == 10 * workload.DEFAULT_COSTS["point"]

@@ -4,7 +4,6 @@ import json
 import os
 import subprocess
 import sys
-import textwrap
 import tomllib
 from pathlib import Path
 
@@ -13,6 +12,7 @@ import pytest
 
 from rotorkernels import integrators as ig, models, shooting
 from rotorkernels.models import generate
+from tests import plugin_models
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -72,64 +72,6 @@ def test_registry_refuses_a_second_model_with_a_taken_name_or_id():
         models.get("nope")
 
 
-# A 3-mass chain (wall-k-m-k-m-k-m), proportional damping c, force F cos(2 pi f t) on the first
-# mass; scaled time tau = f t, state (q, dq/dtau) in m. Linear, so its orbit and multipliers are
-# known in closed form (below).
-CHAIN = '''
-import numpy as np
-from numba import njit
-
-from rotorkernels.models.spec import Built, ModelSpec, Observable, Parameter
-from rotorkernels.models.velocity import upper_rows, velocity_rows
-
-
-@njit(cache=True, nogil=True, inline="always")
-def rhs(tau, u, p, du):
-    velocity_rows(u, du, 3)
-    du[3] = -p[0] * (2.0 * u[0] - u[1]) - p[1] * u[3] + p[2] * np.cos(2.0 * np.pi * tau)
-    du[4] = -p[0] * (-u[0] + 2.0 * u[1] - u[2]) - p[1] * u[4]
-    du[5] = -p[0] * (u[2] - u[1]) - p[1] * u[5]
-
-
-@njit(cache=True, nogil=True, inline="always")
-def jac(tau, u, p, out):
-    upper_rows(out, 3)
-    k = ((2.0, -1.0, 0.0), (-1.0, 2.0, -1.0), (0.0, -1.0, 1.0))
-    for i in range(3):
-        for j in range(3):
-            out[3 + i, j] = -p[0] * k[i][j]
-            out[3 + i, 3 + j] = -p[1] if i == j else 0.0
-
-
-@njit(cache=True, nogil=True, inline="always")
-def rhs_jac(tau, u, p, du, out):
-    rhs(tau, u, p, du)
-    jac(tau, u, p, out)
-
-
-def build(v):
-    T = 1.0 / v["frequency"]
-    m = v["mass"]
-    return Built(np.array([T * T * v["stiffness"] / m, T * v["damping"] / m, T * T * v["force"] / m]), T, {})
-
-
-SPEC = ModelSpec(
-    name="chain3", id=90, module=__name__, n_position=3,
-    description="throwaway test model: forced linear 3-mass chain",
-    parameters=(
-        Parameter(name="frequency", unit="Hz", long_name="forcing frequency", axis=True, lo=0, lo_open=True),
-        Parameter(name="stiffness", section="chain", unit="N m-1", long_name="spring stiffness",
-                  axis=True, unset=1000.0, lo=0, lo_open=True),
-        Parameter(name="mass", section="chain", unit="kg", default=1.0, lo=0, lo_open=True),
-        Parameter(name="damping", section="chain", unit="N s m-1", default=2.0, lo=0),
-        Parameter(name="force", section="chain", unit="N", default=1.0),
-    ),
-    continuation=("frequency",),
-    build=build, cold_guess=lambda p: np.zeros(6), length_scale=1.0,
-    observables=(Observable("q1", (1.0, 0.0, 0.0), "m", "first mass displacement"),
-                 Observable("q3", (0.0, 0.0, 1.0), "m", "last mass displacement")),
-)
-'''
 
 SCENE = """
 [scene]
@@ -164,18 +106,11 @@ def _chain_response(f, k, m=1.0, c=2.0, force=1.0):
 @pytest.fixture(scope="module")
 def chain_env(tmp_path_factory):
     d = tmp_path_factory.mktemp("chain")
-    (d / "chain3_model.py").write_text(textwrap.dedent(CHAIN))
-    (d / "chain.toml").write_text(SCENE)
-    env = {**os.environ, "ROTORSWEEP_MODELS": "chain3_model",
-           "PYTHONPATH": os.pathsep.join([str(d), str(ROOT), os.environ.get("PYTHONPATH", "")])}
-    return d, env
+    return d, plugin_models.plugin_env(d, {"chain3_model": plugin_models.CHAIN}, {"chain.toml": SCENE})
 
 
 def _cli(env, *args):
-    proc = subprocess.run([sys.executable, "-m", "pipeline.cli", *map(str, args)], env=env,
-                          capture_output=True, text=True, timeout=900, cwd=ROOT)
-    assert proc.returncode == 0, f"rotorsweep {args}:\n{proc.stdout}\n{proc.stderr}"
-    return proc.stdout
+    return plugin_models.cli(env, *args).stdout
 
 
 # slow: the plugin's dispatch is a second compilation of every kernel (about 2 minutes on 2 cores)
@@ -300,16 +235,10 @@ def test_a_scene_compiles_nothing_after_its_warmup_from_an_empty_cache(tmp_path)
 def test_a_model_module_that_cannot_load_is_one_line_and_version_still_works(tmp_path, plugins, why):
     """A typo in $ROTORSWEEP_MODELS (or a module that fails on import) gave a traceback for every
     command, --version included."""
-    (tmp_path / "broken_model_module.py").write_text("1 / 0\n")
-    env = {**os.environ, "ROTORSWEEP_MODELS": plugins,
-           "PYTHONPATH": os.pathsep.join([str(tmp_path), str(ROOT), os.environ.get("PYTHONPATH", "")])}
-
-    def cli(*args):
-        return subprocess.run([sys.executable, "-m", "pipeline.cli", *args], env=env, capture_output=True,
-                              text=True, timeout=300, cwd=ROOT)
-    version = cli("--version")
+    env = {**plugin_models.plugin_env(tmp_path, {"broken_model_module": "1 / 0\n"}), "ROTORSWEEP_MODELS": plugins}
+    version = plugin_models.cli(env, "--version")
     assert version.returncode == 0 and "rotorsweep" in version.stdout
-    info = cli("info", str(tmp_path / "x.nc"))
+    info = plugin_models.cli(env, "info", str(tmp_path / "x.nc"), rc=2)
     assert info.returncode == 2 and "Traceback" not in info.stderr
     [line] = info.stderr.strip().splitlines()
     assert line.startswith(f"rotorsweep info: error: $ROTORSWEEP_MODELS: model module {plugins!r}: {why}: ")

@@ -129,6 +129,23 @@ class Killer:
         self.thread.join()
 
 
+def driver_killed_then_resumed(run, address, parts, minimum, timeout, resume_timeout):
+    """The command `run` started on the cluster at `address`, SIGKILLed once `minimum` part files
+    are in `parts` (its stderr the error if they never come), then run again with --resume:
+    (the resumed run's finished process, the part files there were when the driver died)."""
+    driver = subprocess.Popen(run + ["--scheduler", address], stderr=subprocess.PIPE, text=True)
+    try:
+        wait_for_parts(parts, driver, minimum=minimum, timeout=timeout)
+    except AssertionError:
+        raise AssertionError(driver.communicate()[1]) from None
+    driver.kill()                                                # the driver, once
+    driver.wait()
+    parts_at_kill = len(list(parts.glob("*.npz")))
+    resumed = subprocess.run(run + ["--scheduler", address, "--resume"], capture_output=True, text=True,
+                             timeout=resume_timeout)
+    return resumed, parts_at_kill
+
+
 @pytest.mark.slow
 def test_chaos_workers_killed_every_few_chunks_and_the_driver_once(tmp_path):
     """A few thousand points (orbits only) while a worker dies every 8 finished chunks and the
@@ -143,16 +160,8 @@ def test_chaos_workers_killed_every_few_chunks_and_the_driver_once(tmp_path):
     run = CLI + ["run", str(cfg), "-o", str(out), "--chunk-points", "16", "-q"]
     with dask_cluster(tmp_path, n_workers=2, nanny=True) as (address, client), Killer(client, cube.parts_dir(out), every=8) as killer:
         t0 = time.monotonic()
-        driver = subprocess.Popen(run + ["--scheduler", address], stderr=subprocess.PIPE, text=True)
-        try:
-            wait_for_parts(cube.parts_dir(out), driver, minimum=40, timeout=1200)
-        except AssertionError:
-            raise AssertionError(driver.communicate()[1]) from None
-        driver.kill()                                                # the driver, once
-        driver.wait()
-        parts_at_driver_kill = len(list(cube.parts_dir(out).glob("*.npz")))
-        resumed = subprocess.run(run + ["--scheduler", address, "--resume"], capture_output=True, text=True,
-                                 timeout=3600)
+        resumed, parts_at_driver_kill = driver_killed_then_resumed(run, address, cube.parts_dir(out), minimum=40,
+                                                                   timeout=1200, resume_timeout=3600)
         chaos_s = time.monotonic() - t0
         assert resumed.returncode == 0, resumed.stderr
     n_points = cube.open_cube(out)["orbit_status"].size
@@ -176,15 +185,8 @@ def test_chaos_continue_a_line_worker_killed_and_the_driver_once(tmp_path):
     out = tmp_path / "chaos.nc"
     run = CLI + ["continue", str(cfg), "-o", str(out), "-q"]
     with dask_cluster(tmp_path, n_workers=2, nanny=True) as (address, client), Killer(client, cube.parts_dir(out), every=3) as killer:
-        driver = subprocess.Popen(run + ["--scheduler", address], stderr=subprocess.PIPE, text=True)
-        try:
-            wait_for_parts(cube.parts_dir(out), driver, minimum=7, timeout=600)
-        except AssertionError:
-            raise AssertionError(driver.communicate()[1]) from None
-        driver.kill()                                                # the driver, once
-        driver.wait()
-        resumed = subprocess.run(run + ["--scheduler", address, "--resume"], capture_output=True, text=True,
-                                 timeout=1200)
+        resumed, _ = driver_killed_then_resumed(run, address, cube.parts_dir(out), minimum=7, timeout=600,
+                                                resume_timeout=1200)
         assert resumed.returncode == 0, resumed.stderr
     assert killer.kills >= 2
     assert_same_result(reference, out)

@@ -56,4 +56,27 @@ def sweep_report(tiny_cube, tmp_path_factory):
 
 @needs_chromium
 def test_sweep_report_renders_in_a_browser(sweep_report, tmp_path):
-    assert_renders(sweep_report, tmp_path / "shot.png")
+    assert_renders(sweep_report, tmp_path / "shot.png", kind="sweep")
+
+
+def test_the_comparison_passes_a_moved_or_blurred_page_and_fails_one_missing_a_plot(tmp_path):
+    """tests/browser.py's measure without a browser, on the committed backbone reference drawn back
+    at page size: itself, moved by 3 and 2 px, or blurred, it matches; with its first plot (rows
+    251-579, columns 38-586 of the page, found by drawing that figure blank) made white it does not."""
+    from scipy import ndimage
+
+    from tests import browser
+
+    reference = browser.REFERENCES / "backbone.png"
+    page = np.kron(browser.grey(reference), np.ones((browser.SCALE, browser.SCALE)))
+
+    def difference(img):
+        mpimg.imsave(tmp_path / "shot.png", img, cmap="gray", vmin=0.0, vmax=1.0)
+        return browser.difference(tmp_path / "shot.png", reference)
+
+    assert difference(page) == (0.0, 0)
+    assert difference(np.roll(page, (3, -2), axis=(0, 1)))[0] <= browser.FRACTION_TOL
+    assert difference(ndimage.gaussian_filter(page, 1.0))[0] <= browser.FRACTION_TOL
+    blank = page.copy()
+    blank[251:580, 38:587] = 1.0
+    assert difference(blank)[0] > 2 * browser.FRACTION_TOL

@@ -67,9 +67,10 @@ class Capture(NamedTuple):
     width: int          # the page's width [px] in a WIDTH window
 
 
-def capture(html, png, chromium=None):
-    """Render `html` in headless Chromium into `png`, cropped to the page; returns a Capture
-    (JavaScript errors, figures rendered of the page's figures)."""
+def capture(html, png, chromium=None, width=WIDTH, flags=()):
+    """Render `html` in headless Chromium into `png`, cropped to the page, in a window `width` px
+    wide (`flags`: more Chromium switches); returns a Capture (JavaScript errors, figures rendered
+    of the page's figures)."""
     html, png = Path(html).resolve(), Path(png)
     if not html.is_file():
         raise ScreenshotError(f"{html}: no such report page (make it first, e.g. `make demo`)")
@@ -81,8 +82,8 @@ def capture(html, png, chromium=None):
         raw = Path(tmp) / "page.png"
         cmd = [chromium or browser(), "--headless=new", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
                "--no-first-run", "--enable-logging=stderr", "--v=0", f"--user-data-dir={tmp}/profile",
-               f"--window-size={WIDTH},{MAX_HEIGHT}", f"--virtual-time-budget={VIRTUAL_TIME_MS}",
-               f"--screenshot={raw}", probed.as_uri()]
+               f"--window-size={width},{MAX_HEIGHT}", f"--virtual-time-budget={VIRTUAL_TIME_MS}",
+               *flags, f"--screenshot={raw}", probed.as_uri()]
         done = subprocess.run(cmd, capture_output=True, text=True, timeout=180)
         if not raw.is_file():
             raise ScreenshotError(f"{html}: Chromium wrote no screenshot (exit {done.returncode}): "
