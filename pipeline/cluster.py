@@ -394,10 +394,10 @@ def provenance(cfg, kind):
     """The global attributes every result file of `kind` (pipeline.result_kinds) records:
     `history` names the command that wrote it (run, continue, backbone), the version, the model,
     the config and its hash."""
-    from pipeline import compute, result_kinds
+    from pipeline import result_kinds
 
     kind = result_kinds.KINDS[kind]
-    model = compute.model_of(cfg.data)
+    model = cfg.model
     created = datetime.now(timezone.utc).isoformat(timespec="seconds")
     return {
         "history": f"{created} rotorsweep {VERSION}: {kind.command} {cfg.path or 'scene ' + cfg.data['scene']['name']}",

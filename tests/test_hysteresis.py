@@ -55,7 +55,7 @@ def jump_sweep(request, tmp_path_factory):
 def _reference_folds(cfg, clearance):
     """The folds of `rotorsweep continue` on the same scene: the branch from the range's lower
     end, followed through the fold pair (another start and other steps than the sweep's)."""
-    (first, *_) = continuation.continue_line(cfg.data, {"clearance": clearance})
+    (first, *_) = continuation.continue_line(cfg.scene, {"clearance": clearance})
     return np.sort(first["event_parameter"][first["event_type"] == al.FOLD])
 
 
@@ -132,7 +132,7 @@ def test_stability_changes_next_to_jumps_are_unchanged(tmp_path, start, stop, st
     (row,) = boundaries.boundary_frame(ds)
     assert schema.BIFURCATION[row["type"]] == kind and row["direction"] == 0 and row["status"] == 0
     assert query.bistable_intervals(ds) == []
-    (first, *_) = continuation.continue_line(cfg.data, {"clearance": clearance})
+    (first, *_) = continuation.continue_line(cfg.scene, {"clearance": clearance})
     code = al.FOLD if kind == "fold" else al.PERIOD_DOUBLING
     (reference,) = first["event_parameter"][first["event_type"] == code][:1]
     assert row["speed"] == pytest.approx(reference, rel=1e-8)
