@@ -222,7 +222,7 @@ def test_a_cube_written_with_the_removed_hybrid_opens_and_says_what_it_was(tmp_p
     opened = cube.open_cube(path)
     assert 'stiffness = "paper"' in cube.describe(opened)
     with pytest.raises(Exception, match=r"K x 1.5.*as_printed"):
-        points.scene_data(opened)
+        points.scene_of(opened)
 
 
 def test_the_printed_scene_config_validates():
