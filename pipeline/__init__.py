@@ -258,12 +258,14 @@ def point(speed=None, clearance=None, contact_angle=None, preload=None, config=N
     >>> int(row["orbit_status"]), int(row["stable"]), row["multiplier_real"].shape
     (0, 1, (4,))
     """
+    from dataclasses import replace
+
     from pipeline import compute
 
     cfg = as_config(config, whole_grid=False)
     given = {"speed": speed, "clearance": clearance, "contact_angle": contact_angle, "preload": preload, **values}
     pt = compute.point_values(cfg, given)
     # the periodic orbit only, even where the scene also asks for attractors (`point --attractor`)
-    data = {**cfg.data, "analysis": {**cfg.data["analysis"], "floquet": True, "attractor": False}}
-    row = compute.solve_segment(data, [pt])
+    scene = replace(cfg.scene, analysis=replace(cfg.scene.analysis, floquet=True, attractor=False))
+    row = compute.solve_segment(scene, [pt])
     return {k: v[0] for k, v in row.items()}

@@ -29,7 +29,7 @@ import numpy as np
 import xarray as xr
 from scipy.interpolate import CubicSpline
 
-from pipeline import cluster, compute, result_kinds, results, runlog
+from pipeline import cluster, result_kinds, results, runlog
 from pipeline.config import ConfigError, settings_problems
 from rotorkernels import nnm
 from rotorkernels.continuation import backbone as cb
@@ -54,32 +54,31 @@ class Plan:
     axes: tuple                 # names of the swept axes (the result's leading dimensions)
 
 
-def plan(data, check_lines=True):
-    """The backbones a validated scene asks for; raises ConfigError naming every key that cannot
-    work (before any work starts). check_lines: also check every line's modes and amplitudes
-    (the driver does; a line's task need not repeat it for all the others)."""
-    spec = compute.model_of(data)
+def plan(scene, check_lines=True):
+    """The backbones a scene (pipeline.scene.Scene) asks for; raises ConfigError naming every key
+    that cannot work (before any work starts). check_lines: also check every line's modes and
+    amplitudes (the driver does; a line's task need not repeat it for all the others)."""
+    spec = scene.model
     if spec.polynomial is None:
         raise ConfigError(f"scene.model: {spec.name} is not a conservative polynomial model; backbones are "
                           f"computed for {', '.join(_conservative_models())}")
-    sec = data["backbone"]
+    sec = scene.backbone
     errors = []
-    modes = _modes(sec["modes"], errors)
-    settings = Settings(ds=sec["ds"], ds_max=sec["ds_max"], max_steps=sec["max_steps"],
-                        tol=data["numerics"]["newton_tol"])
-    errors += settings_problems(settings.problems(), "backbone", sec)
-    a_max, a_min = sec["amplitude_max"], sec["amplitude_min"]
+    modes = _modes(sec.modes, errors)
+    settings = Settings(ds=sec.ds, ds_max=sec.ds_max, max_steps=sec.max_steps, tol=scene.newton.tol)
+    errors += settings_problems(settings.problems(), "backbone", vars(sec))
+    a_max, a_min = sec.amplitude_max, sec.amplitude_min
     if a_max is None and not spec.amplitude_bound:
         errors.append(f"backbone.amplitude_max: required for model {spec.name} (it states no amplitude bound "
                       "to take a default from)")
     if a_max is not None and a_min is not None and a_min >= a_max:
         errors.append(f"backbone.amplitude_min: {a_min!r} m must be below backbone.amplitude_max ({a_max!r} m)")
-    axes = tuple(data["sweep"])
-    lines = tuple(dict(zip(axes, map(float, combo))) for combo in itertools.product(*data["sweep"].values()))
-    pl = Plan(modes, a_max, a_min, sec["amplitude_points"], sec["continuation"], settings,
-              sec["surface_mode"] - 1, lines, axes)
+    axes = tuple(scene.axes)
+    lines = tuple(dict(zip(axes, map(float, combo))) for combo in itertools.product(*scene.axes.values()))
+    pl = Plan(modes, a_max, a_min, sec.amplitude_points, sec.continuation, settings,
+              sec.surface_mode - 1, lines, axes)
     if not errors and check_lines:
-        errors += _line_problems(data, pl)
+        errors += _line_problems(scene, pl)
     if errors:
         raise ConfigError("\n".join(errors))
     return pl
@@ -109,12 +108,12 @@ def amplitude_bound(spec, values):
     return spec.build(values).derived[spec.amplitude_bound] if spec.amplitude_bound else np.inf
 
 
-def _line_problems(data, pl):
+def _line_problems(scene, pl):
     """Per line: the modes exist, the amplitudes stay below the model's amplitude bound."""
-    spec = compute.model_of(data)
+    spec = scene.model
     out = []
     for where in pl.lines:
-        values = line_values(data, where)
+        values = line_values(scene, where)
         n = len(nnm.linear_modes(spec.polynomial(values)))
         z0 = amplitude_bound(spec, values)
         label = ", ".join(f"{k} = {v:g}" for k, v in where.items()) or "the scene"
@@ -133,10 +132,9 @@ def _line_problems(data, pl):
     return out
 
 
-def line_values(data, where):
-    """The model's parameter values at one line."""
-    spec = compute.model_of(data)
-    return {**compute.scene_values(data, spec), **compute.fixed_values(data), **where}
+def line_values(scene, where):
+    """The model's parameter values at one line of a scene."""
+    return {**scene.values, **scene.fixed, **where}
 
 
 def amplitudes(pl, z0):
@@ -148,17 +146,17 @@ def amplitudes(pl, z0):
 
 # --- one line ------------------------------------------------------------------------------------
 
-def backbone_line(data, where):
+def backbone_line(scene, where):
     """Every mode of one line (a Dask task): a dict of numpy arrays (mode records stacked)."""
-    pl = plan(data, check_lines=False)
-    spec = compute.model_of(data)
-    values = line_values(data, where)
+    pl = plan(scene, check_lines=False)
+    spec = scene.model
+    values = line_values(scene, where)
     system = spec.polynomial(values)
     z0 = amplitude_bound(spec, values)
     grid = amplitudes(pl, z0)
     modes = nnm.linear_modes(system)
     chosen = pl.modes if pl.modes is not None else tuple(range(len(modes)))
-    opts = compute.integrator_settings(data)
+    opts = scene.integrator
     records = [mode_record(spec, values, system, modes, k, grid, pl, opts) for k in chosen]
     man = records[chosen.index(pl.surface_mode)]["manifold"] if pl.surface_mode in chosen else None
     surface = surface_record(system, man or _manifold_or_none(system, pl.surface_mode), grid[-1])
@@ -301,12 +299,12 @@ def surface_record(system, man, amplitude):
 
 # --- the result ----------------------------------------------------------------------------------
 
-def to_dataset(data, pl, lines, provenance):
-    """The backbone result (schema: result_kinds.BACKBONE_VARIABLES): lines = [line dicts] in
-    plan order, dims (swept axes..., mode, ...)."""
-    spec = compute.model_of(data)
-    system = spec.polynomial(line_values(data, pl.lines[0]))
-    shape = tuple(len(data["sweep"][a]) for a in pl.axes)
+def to_dataset(scene, pl, lines, provenance):
+    """The backbone result (schema: result_kinds.BACKBONE_VARIABLES) of a scene: lines = [line
+    dicts] in plan order, dims (swept axes..., mode, ...)."""
+    spec = scene.model
+    system = spec.polynomial(line_values(scene, pl.lines[0]))
+    shape = tuple(len(scene.axes[a]) for a in pl.axes)
     first = lines[0]
     n_mode, n_amp = len(first["modes"]), first["grid"].size
     n_pt = max([len(r["points"].get("frequency", ())) for ln in lines for r in ln["records"]] + [1])
@@ -349,7 +347,7 @@ def to_dataset(data, pl, lines, provenance):
     surface_values, surface_attrs = _surface_variables(lines, pl, shape, names, units)
     values.update(surface_values)
     attrs.update(surface_attrs)
-    coords = {a: (a, data["sweep"][a], _axis_attrs(spec, a)) for a in pl.axes}
+    coords = {a: (a, scene.axes[a], _axis_attrs(spec, a)) for a in pl.axes}
     coords["mode"] = ("mode", np.array(first["modes"]) + 1, {"units": "1", "long_name": "mode number (1 = lowest linear frequency)"})
     coords["amplitude_grid"] = (pl.axes + ("amplitude",), np.array([ln["grid"] for ln in lines]).reshape(shape + (n_amp,)),
                                 {"units": "m", "long_name": "master amplitude (first harmonic of its displacement)"})
@@ -405,16 +403,16 @@ def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.s
     """Compute the backbones a config asks for into a netCDF result at `output`; returns its path.
     Each finished line is kept as a part file until the result is written (`resume`: computes
     only the lines missing, see pipeline.results)."""
-    pl = plan(cfg.data)
+    pl = plan(cfg.scene)
     with (results.result_output(cfg, output, overwrite, scheduler, resume) as (output, parts),
           runlog.log_file(output, "backbone")):
-        results.say(stream, f"backbones of {cfg.data['scene']['model']} on {len(pl.lines)} line(s)"
+        results.say(stream, f"backbones of {cfg.scene.model_name} on {len(pl.lines)} line(s)"
                             f"{'' if pl.continuation else ' (manifold only)'}")
         lines = results.run_lines(cfg, backbone_line, pl.lines, workers, scheduler, stream, _line_summary, parts,
                                   unit="backbone_line")
         provenance = cluster.provenance(cfg, result_kinds.BACKBONE)
         results.say(stream, f"writing the result: {output}")
-        return results.finish(to_dataset(cfg.data, pl, lines, provenance), output, parts)
+        return results.finish(to_dataset(cfg.scene, pl, lines, provenance), output, parts)
 
 
 def _line_summary(line):

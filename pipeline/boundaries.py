@@ -37,14 +37,15 @@ def _others(ds, axis):
     return [a for a in schema.point_axes(ds) if a != axis]
 
 
-def axis_solver(data, values, axis):
+def axis_solver(scene, values, axis):
     """solve(value of `axis`, guess) -> the orbit there, the other axes at `values`;
     family(scale) -> the arclength family along `axis`; and half_pp(value, state, periods) -> the
-    half peak-to-peak amplitude of each observable over the orbit (SI, exact: rotorkernels.extrema)."""
-    model = compute.model_of(data)
-    opts = compute.integrator_settings(data)
-    newton = compute.newton_settings(model, data["numerics"])
-    build = compute.builder(data)
+    half peak-to-peak amplitude of each observable over the orbit (SI, exact: rotorkernels.extrema)
+    (scene: pipeline.scene.Scene)."""
+    model = scene.model
+    opts = scene.integrator
+    newton = scene.newton.solve_orbit_args(model)
+    build = compute.builder(scene)
 
     def params(value):
         return build({**values, axis: value}).p
@@ -179,7 +180,7 @@ def entries(bracket, refined):
     return [(key_of(bracket, k), row) for k, row in enumerate(refined)]
 
 
-def refine_brackets(data, axis, items):
+def refine_brackets(scene, axis, items):
     """The refined row of each (where, Bracket) in items (one solver per line), for a jump the
     list of its two fold rows: a worker task."""
     solvers = {}
@@ -187,19 +188,21 @@ def refine_brackets(data, axis, items):
     for where, bracket in items:
         key = tuple(sorted(where.items()))
         if key not in solvers:
-            solvers[key] = axis_solver(data, {**compute.fixed_values(data), **where}, axis)
+            solvers[key] = axis_solver(scene, {**scene.fixed, **where}, axis)
         refine = _refine if bracket.jump is None else _refine_jump
         rows.append(refine(solvers[key], axis, bracket))
     return rows
 
 
-def refine_within(data, axes, axis, index, results):
-    """[[line, i, row], ...]: the refined stability changes between two points of one chunk (its
-    grid `index` and `results`), in plain JSON types: a chunk's task refines them with its points,
-    and its part file keeps them, so a resumed sweep does not refine them again."""
+def refine_within(scene, index, results):
+    """[[line, i, row], ...]: the refined stability changes along the scene's continued axis
+    between two points of one chunk (its grid `index` and `results`), in plain JSON types: a
+    chunk's task refines them with its points, and its part file keeps them, so a resumed sweep
+    does not refine them again."""
+    axes, axis = scene.axes, scene.along
     found = Tracker(axes, axis).add(index, results)
     found += chunk_jumps(axes, axis, index, results)
-    rows = refine_brackets(data, axis, found)
+    rows = refine_brackets(scene, axis, found)
     return [[list(key[0]), *key[1:], {k: v.item() if isinstance(v, np.generic) else v for k, v in row.items()}]
             for (_, b), refined in zip(found, rows) for key, row in entries(b, refined)]
 
@@ -210,10 +213,10 @@ def keyed(items):
     return {(tuple(e[0]), *(int(v) for v in e[1:-1])): e[-1] for e in items}
 
 
-def boundary_rows(data, ds, map_tasks=None, done=None):
+def boundary_rows(scene, ds, map_tasks=None, done=None):
     """One dict per stability change in the cube, in grid order. done: {(line, i): row} refined
     already (a sweep refines brackets while it computes); the others are refined one task per
-    line by map_tasks(data, axis, tasks) -> the rows of each task in order (default: here, one
+    line by map_tasks(scene, axis, tasks) -> the rows of each task in order (default: here, one
     after the other; a sweep passes one that spreads them over its Dask workers)."""
     axis = schema.continued_axis(ds)
     done = dict(done or {})
@@ -222,7 +225,7 @@ def boundary_rows(data, ds, map_tasks=None, done=None):
         if key_of(b) not in done:
             todo.setdefault(b.line, []).append((where, b))
     tasks = list(todo.values())
-    for task, rows in zip(tasks, (map_tasks or refine_serially)(data, axis, tasks)):
+    for task, rows in zip(tasks, (map_tasks or refine_serially)(scene, axis, tasks)):
         for (_, b), refined in zip(task, rows):
             done.update(entries(b, refined))
     others = _others(ds, axis)
@@ -230,9 +233,9 @@ def boundary_rows(data, ds, map_tasks=None, done=None):
             for key in sorted(done)]
 
 
-def refine_serially(data, axis, tasks):
+def refine_serially(scene, axis, tasks):
     """refine_brackets of each task in this process (the map_tasks of boundary_rows without a cluster)."""
-    return [refine_brackets(data, axis, task) for task in tasks]
+    return [refine_brackets(scene, axis, task) for task in tasks]
 
 
 def _refine(solvers, axis, bracket):
@@ -352,10 +355,10 @@ class Tracker:
         return found
 
 
-def add_boundary_table(data, ds, map_tasks=None, done=None):
+def add_boundary_table(scene, ds, map_tasks=None, done=None):
     """ds with the boundary variables (dimension `boundary`, possibly of length 0); map_tasks and
     done as in boundary_rows."""
-    rows = boundary_rows(data, ds, map_tasks, done)
+    rows = boundary_rows(scene, ds, map_tasks, done)
     axis = schema.continued_axis(ds)
     coord = ds[axis].attrs
     table = {name: ("boundary", np.array([r[name] for r in rows], dtype=dtype), dict(attrs))
@@ -365,11 +368,11 @@ def add_boundary_table(data, ds, map_tasks=None, done=None):
         table[f"boundary_{other}"] = ("boundary", np.array([r[f"boundary_{other}"] for r in rows], float),
                                       {"units": attrs["units"], "long_name": f"{attrs['long_name']} of the boundary"})
     if any("boundary_orbit_half_pp" in r for r in rows):
-        table.update(_orbit_columns(data, ds, rows, axis))
+        table.update(_orbit_columns(scene, ds, rows, axis))
     return ds.assign(table)     # one merge, not one per variable
 
 
-def _orbit_columns(data, ds, rows, axis):
+def _orbit_columns(scene, ds, rows, axis):
     """The boundary table's columns of the coexisting orbits of jumps (`_coexisting`; NaN on the
     other rows): per observable the half peak-to-peak amplitude, the largest |multiplier|, the
     orbit's period in forcing periods, and where along `axis` they were computed."""
@@ -377,7 +380,7 @@ def _orbit_columns(data, ds, rows, axis):
         return np.array([get(r) if "boundary_orbit_half_pp" in r else np.nan for r in rows], float)
     coord = ds[axis].attrs
     out = {}
-    for k, obs in enumerate(compute.model_of(data).observables):
+    for k, obs in enumerate(scene.model.observables):
         unit = ds[f"amplitude_{obs.name}"].attrs.get("units", "") if f"amplitude_{obs.name}" in ds else ""
         out[f"boundary_orbit_amplitude_{obs.name}"] = ("boundary", column(lambda r: r["boundary_orbit_half_pp"][k]), {
             "units": unit, "long_name": f"half peak-to-peak {obs.name} of a stable orbit coexisting in a jump's interval"})

@@ -116,7 +116,7 @@ def _attractor_row(args, cfg):
     from pipeline import compute
 
     pt = compute.point_values(cfg, _given(args, cfg))
-    return compute.point_detail(cfg.data, pt, periods=16, steps_per_period=8)["row"]
+    return compute.point_detail(cfg.scene, pt, periods=16, steps_per_period=8)["row"]
 
 
 def _given(args, cfg):

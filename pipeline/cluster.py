@@ -213,10 +213,10 @@ IN_PROCESS_BELOW_S = 3.0
 IN_PROCESS_VARIABLE = "ROTORSWEEP_IN_PROCESS_BELOW_S"
 
 
-def in_process_below_s(data=None):
-    """The threshold of in-process execution: the [run] in_process_below of a scene's config data
-    (seconds, validated with the config), else $ROTORSWEEP_IN_PROCESS_BELOW_S, else IN_PROCESS_BELOW_S."""
-    scene_value = (data or {}).get("run", {}).get("in_process_below")
+def in_process_below_s(scene_value=None):
+    """The threshold of in-process execution: a scene's [run] in_process_below (seconds, validated
+    with the config; pipeline.scene.Scene.in_process_below), else $ROTORSWEEP_IN_PROCESS_BELOW_S,
+    else IN_PROCESS_BELOW_S."""
     if scene_value is not None:
         return float(scene_value)
     text = os.environ.get(IN_PROCESS_VARIABLE, "").strip()
@@ -229,14 +229,14 @@ def in_process_below_s(data=None):
     return value
 
 
-def runs_in_process(workers, scheduler, estimate_s, tasks=None, data=None):
+def runs_in_process(workers, scheduler, estimate_s, tasks=None, below=None):
     """Whether a command runs in this process: never with a scheduler or a worker count given,
-    always with workers=0, else when its estimated work is below in_process_below_s(data) (data:
-    the scene's config data) or it is one task (`tasks`: how many it can be split into at most;
+    always with workers=0, else when its estimated work is below in_process_below_s(below) (below:
+    the scene's threshold, None where it gives none) or it is one task (`tasks`: how many it can be split into at most;
     a cluster cannot speed up one)."""
     if scheduler or workers:
         return False
-    return workers == 0 or tasks == 1 or estimate_s < in_process_below_s(data)
+    return workers == 0 or tasks == 1 or estimate_s < in_process_below_s(below)
 
 
 def executor(workers, scheduler):
@@ -405,10 +405,10 @@ def provenance(cfg, kind):
     """The global attributes every result file of `kind` (pipeline.result_kinds) records:
     `history` names the command that wrote it (run, continue, backbone), the version, the model,
     the config and its hash."""
-    from pipeline import compute, result_kinds
+    from pipeline import result_kinds
 
     kind = result_kinds.KINDS[kind]
-    model = compute.model_of(cfg.data)
+    model = cfg.model
     created = datetime.now(timezone.utc).isoformat(timespec="seconds")
     return {
         "history": f"{created} rotorsweep {VERSION}: {kind.command} {cfg.path or 'scene ' + cfg.data['scene']['name']}",

@@ -1,4 +1,4 @@
-"""From a validated scene to kernel inputs, and from kernel outputs to cube variables.
+"""From a scene (pipeline.scene.Scene) to kernel inputs, and from kernel outputs to cube variables.
 
 A *segment* is a run of consecutive values of the continued axis (shaft speed for
 jeffcott_clearance) at fixed values of the other axes: the orbit is continued along it, each
@@ -12,54 +12,28 @@ from dataclasses import replace
 import numpy as np
 
 from pipeline import schema
-from rotorkernels import attractor, continuation, extrema, integrators, models, shooting
+from rotorkernels import attractor, continuation, extrema, integrators, shooting
 
 
-def model_of(data):
-    return models.get(data["scene"]["model"])
-
-
-def require_forced(data, command):
-    """ConfigError unless the scene's model is forced: `run`, `continue` and `point` shoot orbits
+def require_forced(spec, command):
+    """ConfigError unless the model `spec` is forced: `run`, `continue` and `point` shoot orbits
     over a forcing period, which a conservative model (symmetric4, asymmetric5) has not."""
-    spec = model_of(data)
     if not spec.forced:
         from pipeline.config import ConfigError
         raise ConfigError(f"scene.model: {spec.name} is conservative (no damping, no forcing): `rotorsweep {command}` "
                           "needs a forced model; its nonlinear normal modes and backbones: `rotorsweep backbone`")
 
 
-def scene_values(data, spec):
-    """The model's parameter values given by the scene (its sections), by parameter name."""
-    return {p.name: data[p.section][p.name] for p in spec.parameters if p.section is not None}
-
-
-def builder(data):
-    """point {axis: value} -> Built kernel inputs (p, period, derived values), the scene's values
-    gathered once (a segment builds many points)."""
-    spec = model_of(data)
-    values = scene_values(data, spec)
+def builder(scene):
+    """point {axis: value} -> Built kernel inputs (p, period, derived values) of a scene
+    (pipeline.scene.Scene), its values gathered once (a segment builds many points)."""
+    spec, values = scene.model, scene.values
     return lambda point: spec.build({**values, **point})
 
 
-def point_params(data, point):
+def point_params(scene, point):
     """Built kernel inputs (p, period, derived values) at one grid point {axis: value}."""
-    return builder(data)(point)
-
-
-def integrator_settings(data):
-    numerics = data["numerics"]
-    return integrators.settings(numerics["integrator"], rtol=numerics["rtol"], atol=numerics["atol"],
-                                steps_per_unit=numerics["rk4_steps"],
-                                amplitude_limit=numerics["amplitude_limit"] / model_of(data).length_scale)
-
-
-def fixed_values(data):
-    """Values of the axis parameters a scene gives in their sections, else their `unset` value
-    (None: derived per point, e.g. a contact angle that follows from the clearance)."""
-    spec = model_of(data)
-    values = {p.name: data[p.section][p.name] for p in spec.parameters if p.axis and p.section is not None}
-    return {name: spec.parameter(name).unset if v is None else v for name, v in values.items()}
+    return builder(scene)(point)
 
 
 def point_values(cfg, given):
@@ -67,9 +41,9 @@ def point_values(cfg, given):
     fixed values; raises config.ConfigError naming what is missing or out of range."""
     from pipeline import config
 
-    require_forced(cfg.data, "point")
+    require_forced(cfg.model, "point")
     spec = cfg.model
-    values = {**fixed_values(cfg.data), **{k: v for k, v in given.items() if v is not None}}
+    values = {**cfg.scene.fixed, **{k: v for k, v in given.items() if v is not None}}
     unknown = sorted(set(values) - set(spec.axes))
     missing = [a for a in spec.axes if a not in values]
     problems = [f"{name}: not an axis of model {spec.name} (axes: {', '.join(spec.axes)})" for name in unknown]
@@ -80,21 +54,21 @@ def point_values(cfg, given):
     return values
 
 
-def solve_segment(data, points):
-    """Solve a continuation segment. points: list of dicts {axis: value} (SI, angles in degrees).
-    Returns schema variables, one row per point: the periodic orbit ([analysis] floquet) and the
-    attractor ([analysis] attractor)."""
-    model = model_of(data)
-    ana = data["analysis"]
-    opts = integrator_settings(data)
+def solve_segment(scene, points):
+    """Solve a continuation segment of a scene (pipeline.scene.Scene). points: list of dicts
+    {axis: value} (SI, angles in degrees). Returns schema variables, one row per point: the
+    periodic orbit ([analysis] floquet) and the attractor ([analysis] attractor)."""
+    model = scene.model
+    ana = scene.analysis
+    opts = scene.integrator
     params, seconds, sols = [], [], []
-    build = builder(data)
+    build = builder(scene)
     for pt in points:
         start = time.perf_counter()
         params.append(build(pt))
         seconds.append(time.perf_counter() - start)
-    if ana["floquet"]:
-        sols = _orbit_chain(model, params, opts, data["numerics"], seconds)
+    if ana.floquet:
+        sols = _orbit_chain(model, params, opts, scene.newton, seconds)
     else:
         sols = [_no_orbit(model, "not_requested")] * len(points)
     rows = []
@@ -102,13 +76,13 @@ def solve_segment(data, points):
         start = time.perf_counter()
         rows.append(point_variables(model, sol, par, 0.0, opts))
         seconds[i] += time.perf_counter() - start
-    if ana["attractor"]:
-        settings = attractor_settings(data)
-        for direction, suffix in _directions(ana["sweep_direction"]):
+    if ana.attractor:
+        settings = ana.settings
+        for direction, suffix in _directions(ana.sweep_direction):
             order = range(len(points)) if direction == "up" else range(len(points) - 1, -1, -1)
             for i, att in _attractor_chain(model, params, sols, opts, settings, order, seconds):
                 rows[i].update({name + suffix: v for name, v in attractor_variables(model, att, params[i].period).items()})
-        if ana["sweep_direction"] == "both":
+        if ana.sweep_direction == "both":
             for row in rows:
                 row["hysteresis"] = _differs(model, row, schema.DOWN_SUFFIX)
     for row, sec in zip(rows, seconds):
@@ -116,19 +90,13 @@ def solve_segment(data, points):
     return {name: np.array([r[name] for r in rows]) for name in rows[0]}
 
 
-def newton_settings(model, num):
-    """Keyword arguments of continuation.solve_orbit from the scene's numerics."""
-    return {"cold_guess": model.cold_guess, "tol": num["newton_tol"],
-            "max_iter": num["max_newton_iter"], "transient_periods": num["transient_periods"]}
-
-
-def _orbit_chain(model, params, opts, num, seconds):
+def _orbit_chain(model, params, opts, newton, seconds):
     """Periodic orbits along the segment by natural continuation, timed per point; each run of
     periodically forced points is one chain (a quasi-periodically forced point has no orbit)."""
     sols = [None] * len(params)
     for run in _periodic_runs(params):
         chain = continuation.natural(model, [params[i].p for i in run], opts, n_samples=0,
-                                     **newton_settings(model, num))
+                                     **newton.solve_orbit_args(model))
         start = time.perf_counter()
         for i, sol in zip(run, chain):
             sols[i] = sol
@@ -162,22 +130,6 @@ def _directions(option):
     if option == "both":
         return (("up", ""), ("down", schema.DOWN_SUFFIX))
     return ((option, ""),)
-
-
-# A Lyapunov run measures at least this many forcing periods before its standard-error stop
-# ([analysis] lyapunov_rtol; lowering it would save little: Fig. 13's chaotic runs have a median
-# 5.6 % standard error after 1000 periods, so ~10 % -- its scene's tolerance -- at ~300):
-# with two multipliers of nearly equal modulus (a gap of ~0.02 per period is common here) the
-# tangent frame aligns slowly, and 100 periods left the exponent off by several standard errors
-# (Fig. 13 at 1 Hz: 6 of 1032 stable points; 300 periods: none beyond 3 standard errors).
-LYAPUNOV_MIN_PERIODS = 300
-
-
-def attractor_settings(data):
-    """The scene's attractor.Settings: its [analysis] keys of the same names, and the Lyapunov
-    run's minimum length (LYAPUNOV_MIN_PERIODS)."""
-    settings = attractor.Settings.from_keys(data["analysis"])
-    return replace(settings, lyapunov_min_periods=min(LYAPUNOV_MIN_PERIODS, settings.lyapunov_max_periods))
 
 
 def _attractor_chain(model, params, sols, opts, settings, order, seconds):
@@ -237,7 +189,7 @@ def _orbit_extent(model, sol, params, opts):
     return out
 
 
-def point_detail(data, point, start_state=None, periods=256, steps_per_period=32):
+def point_detail(scene, point, start_state=None, periods=256, steps_per_period=32):
     """What `report --point` draws at one point: the cube variables of the point (orbit and
     attractor; a dict of numpy values), a trajectory on the attractor over `periods` forcing
     periods, and the power spectrum of its first observable.
@@ -246,15 +198,15 @@ def point_detail(data, point, start_state=None, periods=256, steps_per_period=32
     diagnosing the point afresh from its periodic orbit -- where attractors coexist, this picks
     the one the sweep found. Returns dict(row, time [s], one array per observable (SI; x and y
     for jeffcott_clearance), frequency [Hz], power [unit^2], spectrum_of: the observable's name)."""
-    data = {**data, "analysis": {**data["analysis"], "attractor": True, "sweep_direction": "up"}}
-    row = {k: v[0] for k, v in solve_segment(data, [point]).items()}
-    model = model_of(data)
-    par = point_params(data, point)
+    scene = replace(scene, analysis=replace(scene.analysis, attractor=True, sweep_direction="up"))
+    row = {k: v[0] for k, v in solve_segment(scene, [point]).items()}
+    model = scene.model
+    par = point_params(scene, point)
     state = np.asarray(row["attractor_state"] if start_state is None else start_state, float)
     n = int(periods) * int(steps_per_period)
     traj = np.full((n, model.n_state), np.nan)
     if np.all(np.isfinite(state)):
-        traj = shooting.sample_orbit(model.kernel, state, par.p, float(periods), n, integrator_settings(data))
+        traj = shooting.sample_orbit(model.kernel, state, par.p, float(periods), n, scene.integrator)
     dt = par.period / steps_per_period
     values = model.observe(traj, par.period)
     ok = np.all(np.isfinite(values), axis=1)

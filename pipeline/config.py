@@ -9,6 +9,7 @@ import json
 import math
 import re
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -341,6 +342,12 @@ class Config:
     @property
     def n_points(self):
         return int(np.prod([len(v) for v in self.axes.values()]))
+
+    @cached_property
+    def scene(self):
+        """The typed scene (pipeline.scene.Scene) the commands and their tasks work from, built once."""
+        from pipeline import scene
+        return scene.build(self)
 
     def hash(self):
         """Identifies the scene (data, not formatting): changes with any value but those of

@@ -23,7 +23,7 @@ from pipeline.coexistence import (  # noqa: F401 (the continuation result's read
     bistable_intervals, branch_copy_of, coexistence, distinct_branches, distinct_events, event_copy_of, line_coexistence,
     mark_copies, stability_classes,
     stable_runs)
-from pipeline.config import ConfigError, continued_axis, range_text, settings_problems
+from pipeline.config import ConfigError, range_text, settings_problems
 from rotorkernels import extrema
 from rotorkernels.continuation import arclength as al, solve_orbit, twoparam
 
@@ -45,21 +45,21 @@ class Plan:
         return (min(self.start, self.stop), max(self.start, self.stop))
 
 
-def plan(data):
-    """The continuation a validated scene asks for; raises ConfigError naming every key that
-    cannot work (before any work starts)."""
-    compute.require_forced(data, "continue")
-    spec = compute.model_of(data)
-    sec = data["continuation"]
-    name = sec["parameter"] or continued_axis(spec, data["sweep"])
+def plan(scene):
+    """The continuation a scene (pipeline.scene.Scene) asks for; raises ConfigError naming every
+    key that cannot work (before any work starts)."""
+    spec = scene.model
+    compute.require_forced(spec, "continue")
+    sec = scene.continuation
+    name = sec.parameter or scene.along
     floats = [p.name for p in spec.parameters if p.kind == "float"]
     if name not in floats:
         raise ConfigError(f"continuation.parameter: {name!r} is not a float parameter of model {spec.name} "
                           f"(continuable: {', '.join(floats)})")
     par = spec.parameter(name)
-    sweep = data["sweep"]
+    sweep = scene.axes
     errors = []
-    start, stop = sec["start"], sec["stop"]
+    start, stop = sec.start, sec.stop
     for key, value in (("start", start), ("stop", stop)):
         if value is None and name not in sweep:
             errors.append(f"continuation.{key}: required ({name} is not swept, so the sweep gives no range)")
@@ -73,26 +73,26 @@ def plan(data):
         if not _within(value, par):
             errors.append(f"continuation.{key}: {value!r} is outside the allowed values of {name}: "
                           f"must be {range_text(par)}")
-    settings = al.Settings(ds=sec["ds"], ds_min=sec["ds_min"], ds_max=sec["ds_max"], max_steps=sec["max_steps"],
-                           max_angle=sec["max_angle"], tol=data["numerics"]["newton_tol"])
-    errors += settings_problems(settings.problems(), "continuation", sec)
+    settings = al.Settings(ds=sec.ds, ds_min=sec.ds_min, ds_max=sec.ds_max, max_steps=sec.max_steps,
+                           max_angle=sec.max_angle, tol=scene.newton.tol)
+    errors += settings_problems(settings.problems(), "continuation", vars(sec))
     if errors:
         raise ConfigError("\n".join(errors))
-    second = sec["curves_in"]
+    second = sec.curves_in
     if second and (second == name or len(sweep.get(second, ())) < 2):
         raise ConfigError(f"continuation.curves_in: {second!r} must be another axis the sweep gives at least two "
                           f"values (the box of the curves and the grid they are checked on); swept: "
                           f"{', '.join(a for a in sweep if a != name and len(sweep[a]) > 1) or 'none'}")
     others = [a for a in sweep if a != name]
     lines = tuple(dict(zip(others, map(float, combo))) for combo in itertools.product(*(sweep[a] for a in others)))
-    problem = "" if torus_branches.is_torus_line(data, name, start, lines[0]) else \
-        _period_problem(data, name, start, stop, lines[0])
+    problem = "" if torus_branches.is_torus_line(scene, name, start, lines[0]) else \
+        _period_problem(scene, name, start, stop, lines[0])
     if problem:
         raise ConfigError(f"continuation.parameter: {problem}")
-    if data["report"]["frequency_unit"] == "omega_l" and par.unit != "Hz":
+    if scene.report.frequency_unit == "omega_l" and par.unit != "Hz":
         raise ConfigError(f"report.frequency_unit: omega_l scales frequencies; the continued parameter {name} is in "
                           f"{par.unit or 'no unit'} (use Hz)")
-    return Plan(name, start, stop, lines, settings, sec["periods"], sec["period_doubling_switches"], second,
+    return Plan(name, start, stop, lines, settings, sec.periods, sec.period_doubling_switches, second,
                 tuple(float(v) for v in sweep.get(second, ())))
 
 
@@ -104,10 +104,10 @@ PERIOD_PROBE = 1e-7
 PERIOD_JUMP_RTOL = 1e-4
 
 
-def _period_problem(data, name, start, stop, line):
+def _period_problem(scene, name, start, stop, line):
     """Why the forcing period is not continuous in the parameter near its start ("": it is)."""
-    build = compute.builder(data)
-    values = {**compute.fixed_values(data), **line}
+    build = compute.builder(scene)
+    values = {**scene.fixed, **line}
     near = start + PERIOD_PROBE * (stop - start)
     a, b = (build({**values, name: lam}) for lam in (start, near))
     if a.periodic and b.periodic and abs(b.period / a.period - 1.0) <= PERIOD_JUMP_RTOL:
@@ -125,37 +125,37 @@ def _within(value, par):
     return above and below
 
 
-def line_family(data, pl, where):
+def line_family(scene, pl, where):
     """(arclength Family along the parameter at the line `where`, lambda -> Built)."""
-    build = compute.builder(data)
-    values = {**compute.fixed_values(data), **where}
+    build = compute.builder(scene)
+    values = {**scene.fixed, **where}
 
     def built(lam):
         return build({**values, pl.parameter: lam})
-    model = compute.model_of(data)
+    model = scene.model
     # the observables read positions, so their weights do not depend on the forcing period
     weights = extrema.observable_weights(model, built(pl.start).period)
-    family = al.Family(model, lambda lam: built(lam).p, compute.integrator_settings(data),
+    family = al.Family(model, lambda lam: built(lam).p, scene.integrator,
                        scale=pl.range[1] - pl.range[0], periods=float(pl.periods), weights=weights,
-                       peak=_plotted(model, data))
+                       peak=_plotted(model, scene.report))
     return family, built
 
 
-def _plotted(model, data):
-    """The index of the observable the report plots (its half peak-to-peak peaks are events)."""
+def _plotted(model, report):
+    """The index of the observable the report ([report] keys) plots (its half peak-to-peak peaks are events)."""
     names = [o.name for o in model.observables]
-    return names.index(data["report"]["observable"]) if data["report"]["observable"] in names else 0
+    return names.index(report.observable) if report.observable in names else 0
 
 
-def continue_line(data, where):
+def continue_line(scene, where):
     """The branches of one line (a Dask task): a list of dicts of numpy arrays (branch_record)."""
-    pl = plan(data)
-    if torus_branches.is_torus_line(data, pl.parameter, pl.start, where):
-        return torus_branches.continue_torus_line(data, pl, where)
-    family, built = line_family(data, pl, where)
+    pl = plan(scene)
+    if torus_branches.is_torus_line(scene, pl.parameter, pl.start, where):
+        return torus_branches.continue_torus_line(scene, pl, where)
+    family, built = line_family(scene, pl, where)
     model = family.model
     sol = solve_orbit(model, family.params(pl.start), family.opts, periods=pl.periods,
-                      **compute.newton_settings(model, data["numerics"]))
+                      **scene.newton.solve_orbit_args(model))
     if sol.status != 0:
         empty = al.Branch([], [], al.START_FAILED, f"no periodic orbit converged at {pl.parameter} = {pl.start!r}",
                           family.periods, sol.n_rhs)
@@ -164,7 +164,7 @@ def continue_line(data, where):
                               direction=1 if pl.stop > pl.start else -1)
     records = [branch_record(family, built, first, -1)]
     if pl.second:
-        records[0]["curves"] = line_curves(data, pl, where, first)
+        records[0]["curves"] = line_curves(scene, pl, where, first)
     queue = [(first, 0, 0)]
     while queue:
         branch, depth, index = queue.pop(0)
@@ -180,15 +180,15 @@ def continue_line(data, where):
     return records
 
 
-def line_curves(data, pl, where, branch):
+def line_curves(scene, pl, where, branch):
     """Boundary curves in (parameter, second axis) through the located fold / PD / NS points of
     a line's period-1 branch: each followed both ways from the event (once if it closes), curve
     points solved at the second axis's grid values."""
-    build = compute.builder(data)
-    values = {**compute.fixed_values(data), **where}
+    build = compute.builder(scene)
+    values = {**scene.fixed, **where}
     lo2, hi2 = min(pl.marks), max(pl.marks)
-    plane = twoparam.Plane(compute.model_of(data), lambda lam, nu: build({**values, pl.parameter: lam, pl.second: nu}).p,
-                           compute.integrator_settings(data), lam_scale=pl.range[1] - pl.range[0],
+    plane = twoparam.Plane(scene.model, lambda lam, nu: build({**values, pl.parameter: lam, pl.second: nu}).p,
+                           scene.integrator, lam_scale=pl.range[1] - pl.range[0],
                            nu_scale=hi2 - lo2, periods=float(pl.periods))
     settings = twoparam.Settings(**{k: getattr(pl.settings, k) for k in ("ds", "ds_min", "ds_max", "max_steps",
                                                                         "max_angle", "tol")})
@@ -331,13 +331,13 @@ def _torus_nodes(records, shape):
     return out
 
 
-def _omega_l_variables(data, pl, values):
+def _omega_l_variables(scene, pl, values):
     """(values, run-time attrs) of the continued frequency and the events' over omega_l
     (pipeline.modes.omega_l): the paper's nondimensional frequency, a coordinate the report draws
     its axes in."""
     from pipeline import modes
 
-    wl = modes.omega_l(data)
+    wl = modes.omega_l(scene)
     attrs = {"long_name": f"{pl.parameter} / omega_l", "omega_l": wl,
              "comment": f"omega_l = {wl:.10g} Hz: the lowest linear natural frequency with the 15 deg bearing"}
     return ({"parameter_over_omega_l": values["parameter"] / wl, "event_parameter_over_omega_l": values["event_parameter"] / wl},
@@ -372,10 +372,10 @@ def _global_records(lines, pl):
                                           for k, v in pieces.items()}
 
 
-def to_dataset(data, pl, lines, provenance):
-    """The continuation result (schema: result_kinds.CONTINUATION_VARIABLES): lines = [(where,
-    [branch records])] in plan order."""
-    spec = compute.model_of(data)
+def to_dataset(scene, pl, lines, provenance):
+    """The continuation result (schema: result_kinds.CONTINUATION_VARIABLES) of a scene: lines =
+    [(where, [branch records])] in plan order."""
+    spec = scene.model
     records = [(where, r) for where, recs in lines for r in recs]
     n_branch, n_pt = len(records), max([len(r["parameter"]) for _, r in records] + [1])
     n, n_obs = spec.n_state, len(spec.observables)
@@ -423,10 +423,10 @@ def to_dataset(data, pl, lines, provenance):
              "event_type": schema.flag_attrs(al.EVENT_TYPES),
              **{name: amp for name in ("amplitude_max", "amplitude_half_pp", "event_amplitude_max",
                                        "event_amplitude_half_pp")}}
-    rep = data["report"]
+    rep = scene.report
     tori = any("torus_status" in r for _, r in records)
     extras = ([_torus_variables(records, values["stable"])] if tori else []) + (
-        [_omega_l_variables(data, pl, values)] if rep["frequency_unit"] == "omega_l" else []) + (
+        [_omega_l_variables(scene, pl, values)] if rep.frequency_unit == "omega_l" else []) + (
         [_curve_variables(spec, pl, [c for _, r in records for c in r.get("curves", [])], par_attrs)] if pl.second else [])
     for more_values, more_attrs in extras:
         values.update(more_values)
@@ -436,7 +436,7 @@ def to_dataset(data, pl, lines, provenance):
         axis_attrs = spec.parameter(axis)
         coords[axis] = ("branch", np.array([w[axis] for w, _ in records]), {"units": axis_attrs.unit, "long_name": axis_attrs.long_name or axis})
     global_attrs = {**provenance, "result_kind": result_kinds.CONTINUATION, "parameter": pl.parameter,
-                    "curves_in": pl.second, "report_observable": rep["observable"] or spec.observables[0].name,
+                    "curves_in": pl.second, "report_observable": rep.observable or spec.observables[0].name,
                     "range": json.dumps(list(pl.range)), "Conventions": "CF-1.10"}
     return xr.Dataset(result_kinds.variables(result_kinds.CONTINUATION, values, attrs), coords=coords,
                       attrs=global_attrs)
@@ -453,11 +453,11 @@ def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.s
     """Run the continuation a config asks for into a netCDF result at `output`; returns its path.
     Each finished line is kept as a part file until the result is written (`resume`: computes
     only the lines missing, see pipeline.results)."""
-    pl = plan(cfg.data)
+    pl = plan(cfg.scene)
     with (results.result_output(cfg, output, overwrite, scheduler, resume) as (output, parts),
           runlog.log_file(output, "continue")):
         lines = _run_lines(cfg, pl, workers, scheduler, stream, parts)
-        ds = to_dataset(cfg.data, pl, lines, cluster.provenance(cfg, result_kinds.CONTINUATION))
+        ds = to_dataset(cfg.scene, pl, lines, cluster.provenance(cfg, result_kinds.CONTINUATION))
         results.say(stream, f"writing the result: {output}")
         return results.finish(ds, output, parts)
 

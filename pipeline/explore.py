@@ -243,16 +243,16 @@ def bode(ds, observable=None, **kwargs):
     """
     from pipeline.report import harmonics
     from pipeline.report.figures import bode as figure
-    from pipeline.report.points import scene_data
+    from pipeline.report.points import scene_of
     from pipeline.report.plan import axis_label
 
-    data = scene_data(ds)
-    observable = observable or figure.report_observable(data)
+    scene = scene_of(ds)
+    observable = observable or figure.report_observable(scene)
     if result_kinds.kind_of(ds).name == result_kinds.CONTINUATION:
-        lines = harmonics.continuation_lines(ds, data, observable, [f"branch {b}" for b in range(ds.sizes["branch"])])
+        lines = harmonics.continuation_lines(ds, scene, observable, [f"branch {b}" for b in range(ds.sizes["branch"])])
         xlabel = f"{ds.attrs['parameter']} [{ds['parameter'].attrs.get('units', '')}]"
     else:
-        lines = harmonics.sweep_lines(ds, data, observable)
+        lines = harmonics.sweep_lines(ds, scene, observable)
         xlabel = axis_label(ds, lines.parameter)       # as the report labels it
     unit = next(o.unit for o in schema.model_of(ds).observables if o.name == observable)
     return figure.fig_bode(lines, observable, unit, xlabel).opts(**kwargs)

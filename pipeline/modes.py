@@ -21,7 +21,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from pipeline import compute, config, fileio, gridsize
+from pipeline import config, fileio, gridsize
 from pipeline.config import ConfigError
 from rotorkernels import modal
 
@@ -30,10 +30,10 @@ from rotorkernels import modal
 ZETA_ROUNDING = 1e-12
 
 
-def scene_values(data, point):
-    """The model's values at a point {axis: value} of the scene (its fixed values filled in)."""
-    spec = compute.model_of(data)
-    return {**compute.scene_values(data, spec), **compute.fixed_values(data), **point}
+def scene_values(scene, point):
+    """The model's values at a point {axis: value} of a scene (pipeline.scene.Scene; its fixed
+    values filled in)."""
+    return {**scene.values, **scene.fixed, **point}
 
 
 def require_linearization(spec):
@@ -163,11 +163,10 @@ def disk_of(spec, values):
     return spec.disk_position(values) if spec.disk_position is not None else None
 
 
-def omega_l(data):
+def omega_l(scene):
     """omega_l [Hz] of a scene: the model's own (`ModelSpec.omega_l`) at the scene's first grid point."""
-    spec = compute.model_of(data)
-    first = {name: float(values[0]) for name, values in data["sweep"].items()}
-    return spec.omega_l(scene_values(data, first))
+    first = {name: float(values[0]) for name, values in scene.axes.items()}
+    return scene.model.omega_l(scene_values(scene, first))
 
 
 CAMPBELL_COLUMNS = ("speed_hz", "mode", "frequency_hz", "damping_ratio", "whirl", "label")
@@ -227,7 +226,7 @@ def at_point(cfg, at):
     values, each an axis of the model within its limits; ConfigError naming --at otherwise.
     (The scene's own checks of forced orbits, such as a common forcing period, do not apply to
     the linear modes.)"""
-    spec = compute.model_of(cfg.data)
+    spec = cfg.model
     for name, value in at.items():
         if name not in spec.axes:
             raise ConfigError(f"--at {name}: not an axis of model {spec.name} (axes: {', '.join(spec.axes)})")
@@ -333,13 +332,13 @@ def command(cfg, at, campbell_text=None, output=None, as_json=False):
     START:STOP:NUM [Hz] (default: the scene's speed axis) as CSV. Returns the text to print.
     Every option is checked before any work; a linearization that fails at the point asked for
     (a singular matrix, non-finite values) is one line naming --at."""
-    spec = compute.model_of(cfg.data)
+    spec = cfg.model
     require_linearization(spec)
     point = at_point(cfg, at)
     if campbell_text is not None and output is None:
         raise ConfigError(f"--campbell {campbell_text}: give -o FILE.csv too (the Campbell table is written as CSV)")
     speeds = _campbell_speeds(spec, cfg, campbell_text) if output is not None else None
-    values = scene_values(cfg.data, point)
+    values = scene_values(cfg.scene, point)
     try:
         text = json.dumps(records(spec, values), indent=1) if as_json else summary(spec, values)
         rows = campbell(spec, values, speeds) if output is not None else None

@@ -15,7 +15,7 @@ import os
 
 import numpy as np
 
-from pipeline import cluster, compute, cube, fileio, runlog, warmup, workload
+from pipeline import cluster, cube, fileio, runlog, warmup, workload
 
 
 def write(ds, path):
@@ -95,7 +95,7 @@ def finish(ds, output, parts):
 
 
 def run_lines(cfg, task, lines, workers, scheduler, stream, summary, parts, unit="continuation_line"):
-    """task(cfg.data, where) for every line {axis: value}, after compiling the scene's kernels in
+    """task(cfg.scene, where) for every line {axis: value}, after compiling the scene's kernels in
     the driver (workers load them from the cache): in this process when the estimated work of the
     lines to compute (pipeline.workload, `unit`) is small or workers == 0, else as Dask tasks. The
     lines that part files in `parts` hold already are read, not computed; each line done is saved
@@ -107,18 +107,18 @@ def run_lines(cfg, task, lines, workers, scheduler, stream, summary, parts, unit
         say(stream, f"{len(lines) - len(todo)} of {len(lines)} line(s) read from {parts}")
     if not todo:
         return results
-    model = compute.model_of(cfg.data).name
+    model = cfg.scene.model_name
     in_process = cluster.runs_in_process(workers, scheduler, workload.estimate(unit, model, len(todo)), len(todo),
-                                         cfg.data)
+                                         cfg.scene.in_process_below)
     say(stream, "computing in this process (small work: no cluster)" if in_process else
         f"connecting to the Dask scheduler at {scheduler}" if scheduler else
         f"starting {cluster.local_workers(workers)} local Dask worker(s) (127.0.0.1)")
     executor = cluster.executor(0 if in_process else workers, scheduler)
     try:
         with cluster.heap_frozen():     # the imports' and the cluster's objects (see cluster.heap_frozen)
-            warmup.compile_scene(cfg.data, lambda text: say(stream, text))
+            warmup.compile_scene(cfg.scene, lambda text: say(stream, text))
             with workload.Meter() as meter:
-                _run_tasks(executor, cfg.data, task, lines, todo, results, stream, summary,
+                _run_tasks(executor, cfg.scene, task, lines, todo, results, stream, summary,
                            lambda k: save_line(parts, config_hash, k, results[k]))
     finally:
         executor.close()
@@ -127,9 +127,9 @@ def run_lines(cfg, task, lines, workers, scheduler, stream, summary, parts, unit
     return results
 
 
-def _run_tasks(executor, data, task, lines, todo, results, stream, summary, saved):
-    """results[k] = task(data, lines[k]) for k in todo, each `saved(k)` and reported as it ends."""
-    submit = executor.submitter(task, data)
+def _run_tasks(executor, scene, task, lines, todo, results, stream, summary, saved):
+    """results[k] = task(scene, lines[k]) for k in todo, each `saved(k)` and reported as it ends."""
+    submit = executor.submitter(task, scene)
     futures = {submit(lines[k]): k for k in todo}
     bar = runlog.Progress(len(todo), stream=stream, unit="lines")
     for done, future in enumerate(executor.as_completed(futures), len(lines) - len(todo) + 1):

@@ -43,14 +43,15 @@ class SegmentGrid:
     (Fig. 13's 17 chunks pickled ~760 numpy arrays out of band otherwise: ~8 ms of submitting in
     the driver, and more frames for the scheduler and worker to pass before the first task ran)."""
 
-    def __init__(self, data, axes, along):
+    def __init__(self, scene):
+        axes, along = scene.axes, scene.along
         self.axes, self.along = axes, along
         self.names = list(axes)
         self.at = self.names.index(along)
         self.others = [n for n in self.names if n != along]
         self.shape = tuple(len(axes[n]) for n in self.others)
-        self.fixed = compute.fixed_values(data)
-        self.length = data["numerics"]["segment_length"]
+        self.fixed = scene.fixed
+        self.length = scene.segment_length
         self.values = np.asarray(axes[along], float)
         self.per_line = -(-len(self.values) // self.length)
 
@@ -85,9 +86,9 @@ class SegmentGrid:
         return Segment(line_no * self.per_line + k, index, line, self.along, self.values[steps])
 
 
-def segments(cfg):
-    """The continuation segments of a config's grid, in a fixed order (SegmentGrid's)."""
-    grid = SegmentGrid(cfg.data, cfg.axes, cfg.continued_axis)
+def segments(scene):
+    """The continuation segments of a scene's grid, in a fixed order (SegmentGrid's)."""
+    grid = SegmentGrid(scene)
     return [seg for line_no in range(grid.n_lines) for seg in grid.line_segments(line_no)]
 
 
@@ -107,14 +108,14 @@ GUIDED_SHARE_ATTRACTORS = 4
 MAX_CHUNK_POINTS = 4096
 
 
-def guided_share(data):
-    """The guided plan's share for a config's data (see GUIDED_SHARE)."""
-    return GUIDED_SHARE_ATTRACTORS if data["analysis"]["attractor"] else GUIDED_SHARE
+def guided_share(scene):
+    """The guided plan's share for a scene (see GUIDED_SHARE)."""
+    return GUIDED_SHARE_ATTRACTORS if scene.analysis.attractor else GUIDED_SHARE
 
 
-def chunks_for(cfg, segs, n_workers, chunk_points=None):
-    """The chunks a sweep of cfg makes of segs: plan_chunks with the config's guided share."""
-    return plan_chunks(segs, n_workers, chunk_points, guided_share(cfg.data))
+def chunks_for(scene, segs, n_workers, chunk_points=None):
+    """The chunks a sweep of a scene makes of segs: plan_chunks with the scene's guided share."""
+    return plan_chunks(segs, n_workers, chunk_points, guided_share(scene))
 
 
 def plan_chunks(segs, n_workers, chunk_points=None, share=GUIDED_SHARE):
@@ -146,22 +147,22 @@ def plan_chunks(segs, n_workers, chunk_points=None, share=GUIDED_SHARE):
     return chunks
 
 
-def compute_segments(data, axes, axis, ids):
-    """Worker task of a sweep: compute_chunk of the segments with these ids (SegmentGrid). A plain
-    function of an importable module so Dask ships it by reference and workers reuse Numba's
-    on-disk cache."""
-    grid = SegmentGrid(data, axes, axis)
-    return compute_chunk(data, axes, axis, [grid[i] for i in ids])
+def compute_segments(scene, ids):
+    """Worker task of a sweep: compute_chunk of the scene's segments with these ids (SegmentGrid).
+    A plain function of an importable module so Dask ships it by reference and workers reuse
+    Numba's on-disk cache."""
+    grid = SegmentGrid(scene)
+    return compute_chunk(scene, [grid[i] for i in ids])
 
 
-def compute_chunk(data, axes, axis, chunk):
+def compute_chunk(scene, chunk):
     """Solve every segment of a chunk and refine the stability changes between two of its points
-    along `axis` (boundaries.refine_within; those between two chunks are left to the driver,
-    which sees both)."""
+    along the continued axis (boundaries.refine_within; those between two chunks are left to the
+    driver, which sees both)."""
     index = np.concatenate([seg.index for seg in chunk])
-    parts = [compute.solve_segment(data, list(seg.points)) for seg in chunk]
+    parts = [compute.solve_segment(scene, list(seg.points)) for seg in chunk]
     results = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
-    return [seg.id for seg in chunk], index, results, boundaries.refine_within(data, axes, axis, index, results)
+    return [seg.id for seg in chunk], index, results, boundaries.refine_within(scene, index, results)
 
 
 def earlier_parts(parts_dir, config_hash):
@@ -200,11 +201,10 @@ def provenance(cfg):
     return cluster.provenance(cfg, result_kinds.SWEEP)
 
 
-def fixed_coords(cfg):
+def fixed_coords(scene):
     """The cube's scalar coordinates: the fixed values of the axis parameters not swept (NaN
     where a value is derived per point)."""
-    fixed = compute.fixed_values(cfg.data)
-    return {k: (np.nan if v is None else float(v)) for k, v in fixed.items() if k not in cfg.axes}
+    return {k: (np.nan if v is None else float(v)) for k, v in scene.fixed.items() if k not in scene.axes}
 
 
 def run(cfg, output, workers=None, scheduler=None, resume=False, overwrite=False, chunk_points=None,
@@ -213,7 +213,7 @@ def run(cfg, output, workers=None, scheduler=None, resume=False, overwrite=False
     The output is locked for the whole run, so two runs never share part files. Phase and
     progress lines go to `stream` (default: sys.stderr at the time of the call; progress=False:
     none) and to the log file `<output>.log` (pipeline.runlog)."""
-    compute.require_forced(cfg.data, "run")
+    compute.require_forced(cfg.model, "run")
     output = os.path.abspath(output)
     with fileio.output_lock(output, cfg.path or "<default scene>"), cluster.heap_frozen():
         if scheduler:
@@ -233,26 +233,26 @@ def run(cfg, output, workers=None, scheduler=None, resume=False, overwrite=False
 def _run_locked(cfg, output, parts, workers, scheduler, chunk_points, stream):
     say = phase_printer(stream)
     config_hash = cfg.hash()
-    segs = segments(cfg)
+    scene = cfg.scene
+    segs = segments(scene)
     done, refined = earlier_parts(parts, config_hash)
     todo = [s for s in segs if s.id not in done]
     # the cube's arrays take each chunk as it arrives (the parts of an earlier run first): no
     # part file is read back at the end (Fig. 13: 0.04-0.06 s; the 4-D atlas: 186 MB)
-    assembly = cube.Assembly(cfg.axes, cfg.data["scene"]["model"], compute.model_of(cfg.data).n_state,
-                             config_hash)
+    assembly = cube.Assembly(scene.axes, scene.model_name, scene.model.n_state, config_hash)
     for part in cube.iter_parts(parts):
         assembly.add(*part)
     executor = None
     try:
         if todo:
-            executor = _connect(cfg, workers, scheduler, sum(len(s) for s in todo), say)
+            executor = _connect(scene, workers, scheduler, sum(len(s) for s in todo), say)
             total = sum(len(s) for s in segs)
             bar = Progress(total, total - sum(len(s) for s in todo), stream)
-            refined.update(_run_chunks(executor, cfg, todo, parts, assembly, chunk_points, bar, say))
+            refined.update(_run_chunks(executor, scene, todo, parts, assembly, chunk_points, bar, say))
         say("assembling the cube and its boundary table")
-        ds = assembly.dataset(fixed_coords(cfg), provenance(cfg))
+        ds = assembly.dataset(fixed_coords(scene), provenance(cfg))
         on_cluster = isinstance(executor, cluster.DaskExecutor)
-        ds = boundaries.add_boundary_table(cfg.data, ds, _map_tasks_on(executor.client, stream) if on_cluster else None,
+        ds = boundaries.add_boundary_table(scene, ds, _map_tasks_on(executor.client, stream) if on_cluster else None,
                                            refined)
     finally:
         if executor is not None:
@@ -270,10 +270,10 @@ def _map_tasks_on(client, stream=None):
     workers is refined here instead."""
     from dask.distributed import KilledWorker
 
-    def map_tasks(data, axis, tasks):
+    def map_tasks(scene, axis, tasks):
         if not client.scheduler_info()["workers"]:      # an external cluster scaled to nothing
-            return [boundaries.refine_brackets(data, axis, task) for task in tasks]
-        refine = cluster.submitter(client, boundaries.refine_brackets, data, axis)
+            return [boundaries.refine_brackets(scene, axis, task) for task in tasks]
+        refine = cluster.submitter(client, boundaries.refine_brackets, scene, axis)
         futures = [refine(task) for task in tasks]
         bar = Progress(len(tasks), stream=stream, unit="boundary lines") if tasks else None
         out = []
@@ -281,7 +281,7 @@ def _map_tasks_on(client, stream=None):
             try:
                 out.append(future.result())
             except KilledWorker:
-                out.append(boundaries.refine_brackets(data, axis, task))
+                out.append(boundaries.refine_brackets(scene, axis, task))
             if bar:
                 bar.update(1)
         return out
@@ -307,18 +307,18 @@ def _write_failure(exc, output, parts):
 RESUBMITS = 3
 
 
-def point_unit(data):
+def point_unit(scene):
     """The unit of a sweep's work (pipeline.workload): a point, with or without attractors."""
-    return "point_attractor" if data["analysis"]["attractor"] else "point"
+    return "point_attractor" if scene.analysis.attractor else "point"
 
 
-def _connect(cfg, workers, scheduler, n_points, say):
+def _connect(scene, workers, scheduler, n_points, say):
     """The executor of a sweep of n_points (pipeline.cluster.executor: this process for small
     work or workers=0, else a cluster), with the scene's kernels compiled (or loaded) here."""
-    estimate = workload.estimate(point_unit(cfg.data), compute.model_of(cfg.data).name, n_points)
-    if cluster.runs_in_process(workers, scheduler, estimate, data=cfg.data):
+    estimate = workload.estimate(point_unit(scene), scene.model_name, n_points)
+    if cluster.runs_in_process(workers, scheduler, estimate, below=scene.in_process_below):
         say(f"computing in this process (about {estimate:.1f} s of work; a local cluster pays from "
-            f"{cluster.in_process_below_s(cfg.data):g} s)" if workers != 0 else "computing in this process (--workers 0)")
+            f"{cluster.in_process_below_s(scene.in_process_below):g} s)" if workers != 0 else "computing in this process (--workers 0)")
         executor = cluster.executor(0, None)
     else:
         say(f"connecting to the Dask scheduler at {scheduler}" if scheduler else
@@ -330,7 +330,7 @@ def _connect(cfg, workers, scheduler, n_points, say):
         # the cluster just started joins the frozen heap: with its objects in every full
         # collection, compiling the demo scene's kernels took 27.9 s of CPU instead of 19.6
         with cluster.heap_frozen():
-            warmup.compile_scene(cfg.data, say)
+            warmup.compile_scene(scene, say)
     except BaseException:
         executor.close()
         raise
@@ -342,31 +342,31 @@ def _connect(cfg, workers, scheduler, n_points, say):
 REFINE_PRIORITY = 1
 
 
-def _run_chunks(executor, cfg, todo, parts, assembly, chunk_points, bar, say):
+def _run_chunks(executor, scene, todo, parts, assembly, chunk_points, bar, say):
     """Compute the chunks into part files and `assembly`, each refining the stability changes
     between its own points; one between two chunks is refined by a task of its own as soon as
     both are done (a task and its result's round trip cost ~10 ms of CPU on the driver and the
     worker: Fig. 13 on 2 workers had 11 refinement tasks besides 31 chunks when every finished
     chunk's changes were one): {(line, i): boundary row}. An in-process run records its cost per
     point (pipeline.workload)."""
-    chunks = chunks_for(cfg, todo, executor.n_workers, chunk_points)
+    chunks = chunks_for(scene, todo, executor.n_workers, chunk_points)
     say(f"sweeping {_count(sum(len(s) for s in todo), 'point')} in {_count(len(chunks), 'chunk')}")
     bar.restart()
     with workload.Meter() as meter:
-        refined = _solve_chunks(executor, cfg, chunks, parts, assembly, bar)
+        refined = _solve_chunks(executor, scene, chunks, parts, assembly, bar)
     if isinstance(executor, cluster.InProcess):
-        workload.record(point_unit(cfg.data), compute.model_of(cfg.data).name, sum(len(s) for s in todo),
+        workload.record(point_unit(scene), scene.model_name, sum(len(s) for s in todo),
                         meter.seconds)
     return refined
 
 
-def _solve_chunks(executor, cfg, chunks, parts, assembly, bar):
-    solve = executor.submitter(compute_segments, cfg.data, cfg.axes, cfg.continued_axis)
+def _solve_chunks(executor, scene, chunks, parts, assembly, bar):
+    solve = executor.submitter(compute_segments, scene)
 
     def submit(chunk):
         return solve(tuple(seg.id for seg in chunk))
-    refine = executor.submitter(boundaries.refine_brackets, cfg.data, cfg.continued_axis, priority=REFINE_PRIORITY)
-    tracker = boundaries.Tracker(cfg.axes, cfg.continued_axis)
+    refine = executor.submitter(boundaries.refine_brackets, scene, scene.along, priority=REFINE_PRIORITY)
+    tracker = boundaries.Tracker(scene.axes, scene.along)
     futures = {submit(chunk): (chunk, 0) for chunk in chunks}
     refining, refined = {}, {}
     pending = executor.as_completed(futures)

@@ -34,27 +34,27 @@ POLISH_TOL = 1e-12      # each stored circle's residual, relative to max(1, max 
 TORUS_STATUS = {tr.UNSTABLE: 0, tr.STABLE: 1, tr.UNDECIDED: 2}
 
 
-def is_torus_line(data, parameter, start, where):
+def is_torus_line(scene, parameter, start, where):
     """Whether the line's forcing at the start is quasi-periodic (a torus, not an orbit)."""
-    spec = compute.model_of(data)
+    spec = scene.model
     if not spec.torus_forcing:
         return False
-    return not _builder(data, where, parameter)(start).periodic
+    return not _builder(scene, where, parameter)(start).periodic
 
 
-def _builder(data, where, parameter):
+def _builder(scene, where, parameter):
     """lambda -> Built with the model's torus values (tau: one first-forcing period)."""
-    build = compute.builder(data)
-    values = {**compute.fixed_values(data), **where, **compute.model_of(data).torus_forcing[2]}
+    build = compute.builder(scene)
+    values = {**scene.fixed, **where, **scene.model.torus_forcing[2]}
     return lambda lam: build({**values, parameter: lam})
 
 
-def torus_family(data, pl, where, n_nodes):
-    spec = compute.model_of(data)
+def torus_family(scene, pl, where, n_nodes):
+    spec = scene.model
     phase, freq, _ = spec.torus_forcing
-    built = _builder(data, where, pl.parameter)
+    built = _builder(scene, where, pl.parameter)
     return tori.TorusFamily(spec.kernel, lambda lam: built(lam).p, lambda lam: float(built(lam).p[freq]), phase,
-                            compute.integrator_settings(data), n_nodes, scale=pl.range[1] - pl.range[0],
+                            scene.integrator, n_nodes, scale=pl.range[1] - pl.range[0],
                             decay_tol=BREAKDOWN_TOL), built
 
 
@@ -72,12 +72,12 @@ def settled_samples(kernel, state, p, phase_index, rho, opts):
     return np.array(samples), np.array(phases), True
 
 
-def first_torus(data, pl, where):
+def first_torus(scene, pl, where):
     """(the first torus at the start, the family sized to it, built); the torus's status says
     whether it converged."""
-    spec = compute.model_of(data)
+    spec = scene.model
     phase, freq, _ = spec.torus_forcing
-    family, built = torus_family(data, pl, where, FIRST_NODES)
+    family, built = torus_family(scene, pl, where, FIRST_NODES)
     p = built(pl.start).p
     samples, phases, ok = settled_samples(spec.kernel, spec.cold_guess(p), p, phase, p[freq], family.opts)
     if not ok:
@@ -88,10 +88,10 @@ def first_torus(data, pl, where):
     return circle, family._replace(n_nodes=circle.nodes.shape[0]), built
 
 
-def continue_torus_line(data, pl, where):
+def continue_torus_line(scene, pl, where):
     """The torus branch of one line as a one-record list (branch_record's keys plus torus_*)."""
-    spec = compute.model_of(data)
-    circle, family, built = first_torus(data, pl, where)
+    spec = scene.model
+    circle, family, built = first_torus(scene, pl, where)
     direction = 1 if pl.stop > pl.start else -1
     if circle is None or circle.status != tr.CONVERGED:
         why = "the transient failed" if circle is None else f"the torus solve ended {circle.status}"

@@ -21,7 +21,6 @@ import time
 import numba
 
 import rotorkernels.attractor as diagnostics
-from pipeline import compute
 from rotorkernels import integrators as ig, models, orbits
 
 
@@ -59,14 +58,13 @@ def compile_model(spec, attractor=True, integrators=INTEGRATORS):
     return time.perf_counter() - start
 
 
-def compile_scene(data, say):
-    """Compile (or load) a scene's kernels in the driver before its workers start solving, so
-    that they load them from the disk cache instead of each compiling them again."""
-    model = compute.model_of(data)
+def compile_scene(scene, say):
+    """Compile (or load) a scene's kernels (pipeline.scene.Scene) in the driver before its workers
+    start solving, so that they load them from the disk cache instead of each compiling them again."""
+    model = scene.model
     say(f"compiling the kernels of {model.name}: under a minute the first time on a machine, then "
         f"loaded from the cache ({numba.config.CACHE_DIR})")
-    seconds = compile_model(model, attractor=data["analysis"]["attractor"],
-                            integrators=(data["numerics"]["integrator"],))
+    seconds = compile_model(model, attractor=scene.analysis.attractor, integrators=(scene.integrator_name,))
     say(f"kernels ready ({seconds:.1f} s)")
 
 

@@ -50,10 +50,10 @@ def tiny_run(tmp_path_factory):
     """(cube path, the chunk's results as the workers return them) of the TINY_SCENE sweep."""
     from pipeline import boundaries, config, cube, sweep
     cfg = config.parse_config(TINY_SCENE)
-    ids, index, results, _ = sweep.compute_chunk(cfg.data, cfg.axes, cfg.continued_axis, sweep.segments(cfg))
-    ds = cube.assemble(cfg.axes, sweep.fixed_coords(cfg), [(ids, index, results, None)],
+    ids, index, results, _ = sweep.compute_chunk(cfg.scene, sweep.segments(cfg.scene))
+    ds = cube.assemble(cfg.axes, sweep.fixed_coords(cfg.scene), [(ids, index, results, None)],
                        sweep.provenance(cfg), n_multipliers=4)
-    ds = boundaries.add_boundary_table(cfg.data, ds)
+    ds = boundaries.add_boundary_table(cfg.scene, ds)
     return cube.write_cube(ds, tmp_path_factory.mktemp("tiny") / "tiny.nc"), results
 
 

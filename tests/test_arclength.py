@@ -107,9 +107,9 @@ def test_duffing_amplitude_at_fold_against_reference():
 @pytest.fixture(scope="module")
 def bai():
     cfg = config.load_config("configs/bai2006_fig13.toml")
-    build = compute.builder(cfg.data)
-    fixed = {k: v for k, v in compute.fixed_values(cfg.data).items() if v is not None}
-    opts = compute.integrator_settings(cfg.data)
+    build = compute.builder(cfg.scene)
+    fixed = {k: v for k, v in cfg.scene.fixed.items() if v is not None}
+    opts = cfg.scene.integrator
 
     def family(clearance, scale):
         return al.Family(cfg.model, lambda speed: build({**fixed, "speed": speed, "clearance": clearance}).p,
@@ -228,9 +228,9 @@ def test_sweep_boundary_table_locates_the_fold_on_the_branch(bai):
     from pipeline import boundaries, schema
 
     cfg = config.load_config("configs/bai2006_fig13.toml")
-    fixed = {k: v for k, v in compute.fixed_values(cfg.data).items() if v is not None}
+    fixed = {k: v for k, v in cfg.scene.fixed.items() if v is not None}
     speeds = [26.0, 26.5, 27.0, 27.5, 28.0, 28.3, 28.5]   # natural continuation from 26 Hz
-    rows = compute.solve_segment(cfg.data, [{**fixed, "speed": s, "clearance": 19e-6} for s in speeds])
+    rows = compute.solve_segment(cfg.scene, [{**fixed, "speed": s, "clearance": 19e-6} for s in speeds])
     variables = schema.variables_of(cfg.model)
     ds = xr.Dataset({name: (("clearance", "speed") + variables[name][0], values[None])
                      for name, values in rows.items() if name in variables},
@@ -238,7 +238,7 @@ def test_sweep_boundary_table_locates_the_fold_on_the_branch(bai):
                             "clearance": ("clearance", [19e-6], {"units": "m", "long_name": "radial clearance"})})
     assert ds["stable"].values[0, -2:].tolist() == [1, 0]
     ds.attrs["continued_axis"] = "speed"
-    row = next(r for r in boundaries.boundary_rows(cfg.data, ds) if r["boundary_grid_low"] == 28.3)
+    row = next(r for r in boundaries.boundary_rows(cfg.scene, ds) if r["boundary_grid_low"] == 28.3)
     _, branch = bai_branch(bai, 19e-6, 26.0, 29.0)
     fold = next(e for e in branch.events if e.kind == al.FOLD)
     assert row["boundary_type"] == schema.BIFURCATION.index("fold")

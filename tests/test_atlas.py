@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline import boundaries, compute, config, cube, schema, sweep
+from pipeline import boundaries, compute, config, cube, scene, schema, sweep
 from pipeline.report.figures import atlas
 from tests.test_pipeline import SMALL
 
@@ -22,7 +22,7 @@ def test_atlas_config_is_the_fig13_grid_and_every_point_builds():
     (clearance, angle, preload) builds finite kernel parameters."""
     cfg = config.parse_config((ROOT / "configs" / "atlas4d_fig13.toml").read_text(), allow_large=True)
     assert cfg.n_points == 2401 * 5 * 8 * 8 and cfg.data["analysis"]["attractor"] is False
-    build, fixed = compute.builder(cfg.data), compute.fixed_values(cfg.data)
+    build, fixed = compute.builder(cfg.scene), cfg.scene.fixed
     for c, a in itertools.product(cfg.axes["clearance"], cfg.axes["contact_angle"]):
         used = []
         for p in cfg.axes["preload"]:
@@ -36,8 +36,8 @@ def test_segments_tile_the_grid_and_each_builds_from_its_id_alone():
     """The atlas's segments (24,320) cover every grid point once, runs of at most segment_length
     along speed on one line; a chunk task's worker builds any of them from its id (SegmentGrid)."""
     cfg = config.parse_config((ROOT / "configs" / "atlas4d_fig13.toml").read_text(), allow_large=True)
-    segs = sweep.segments(cfg)
-    grid = sweep.SegmentGrid(cfg.data, cfg.axes, cfg.continued_axis)
+    segs = sweep.segments(cfg.scene)
+    grid = sweep.SegmentGrid(cfg.scene)
     assert [s.id for s in segs] == list(range(len(grid)))
     seen = np.zeros(tuple(len(v) for v in cfg.axes.values()), int)
     for seg in segs:
@@ -82,7 +82,8 @@ def test_guided_share_is_larger_where_attractor_diagnostics_make_point_costs_une
     data = config.parse_config((ROOT / "configs" / "bai2006_fig13.toml").read_text(), allow_large=True).data
     assert data["analysis"]["attractor"] is True
     orbits = {**data, "analysis": {**data["analysis"], "attractor": False}}
-    assert sweep.guided_share(data) == sweep.GUIDED_SHARE_ATTRACTORS > sweep.guided_share(orbits) == sweep.GUIDED_SHARE
+    assert (sweep.guided_share(scene.from_data(data)) == sweep.GUIDED_SHARE_ATTRACTORS
+            > sweep.guided_share(scene.from_data(orbits)) == sweep.GUIDED_SHARE)
 
 
 def test_boundary_rows_are_the_same_for_any_map_and_rows_refined_during_the_sweep(tiny_cube):
@@ -90,7 +91,7 @@ def test_boundary_rows_are_the_same_for_any_map_and_rows_refined_during_the_swee
     rows refined earlier (as a sweep refines them while it computes) give the same rows in the
     same order; only the brackets not refined yet reach the map."""
     ds = cube.open_cube(tiny_cube)
-    data = config.parse_config(ds.attrs["config_toml"]).data
+    data = config.parse_config(ds.attrs["config_toml"]).scene
     plain = ds.drop_dims("boundary")
 
     def backwards(data, axis, tasks):
@@ -115,15 +116,15 @@ def test_a_chunk_refines_the_stability_changes_between_its_own_points_only(tmp_p
     between those segments, by neither (the driver's tracker gives it a task of its own). The rows
     survive a part file's JSON meta, from which a resumed sweep takes them."""
     cfg = config.parse_config(SMALL)
-    segs = sweep.segments(cfg)
-    ids, index, results, inside = sweep.compute_chunk(cfg.data, cfg.axes, "speed", segs)
+    segs = sweep.segments(cfg.scene)
+    ids, index, results, inside = sweep.compute_chunk(cfg.scene, segs)
     assert [(tuple(line), i) for line, i, _ in inside] == [((0,), 3)]
-    ds = cube.assemble(cfg.axes, sweep.fixed_coords(cfg), [(ids, index, results, None)],
+    ds = cube.assemble(cfg.axes, sweep.fixed_coords(cfg.scene), [(ids, index, results, None)],
                        sweep.provenance(cfg), n_multipliers=4)
-    (row,) = boundaries.boundary_rows(cfg.data, ds)
+    (row,) = boundaries.boundary_rows(cfg.scene, ds)
     assert inside[0][2].items() <= row.items()
-    assert sweep.compute_chunk(cfg.data, cfg.axes, "speed", segs[:1])[3] == []
-    assert sweep.compute_chunk(cfg.data, cfg.axes, "speed", segs[1:])[3] == []
+    assert sweep.compute_chunk(cfg.scene, segs[:1])[3] == []
+    assert sweep.compute_chunk(cfg.scene, segs[1:])[3] == []
     cube.write_part(tmp_path, "seg000000", index, results, {"config_hash": "h", "segments": ids, "boundaries": inside})
     assert sweep.earlier_parts(tmp_path, "h") == (set(ids), boundaries.keyed(inside))
 

@@ -125,14 +125,14 @@ def test_info_query_and_report_of_a_backbone_result(axial_result, capsys):
 ])
 def test_invalid_backbone_input_names_the_key_before_any_work(keys, message):
     with pytest.raises(config.ConfigError, match=message.replace("(", r"\(")):
-        backbone.plan(config.parse_config(scene(**keys)).data)
+        backbone.plan(config.parse_config(scene(**keys)).scene)
 
 
 def test_a_forced_model_has_no_backbone_and_a_conservative_one_no_sweep():
     with pytest.raises(config.ConfigError, match="scene.model: rigid_preloaded is not a conservative"):
-        backbone.plan(config.load_config("configs/filipkovsky2016_quick.toml").data)
+        backbone.plan(config.load_config("configs/filipkovsky2016_quick.toml").scene)
     with pytest.raises(config.ConfigError, match="symmetric4 is conservative.*rotorsweep backbone"):
-        compute.require_forced(config.load_config("configs/filipkovsky2010_symmetric.toml").data, "run")
+        compute.require_forced(config.load_config("configs/filipkovsky2010_symmetric.toml").model, "run")
     done = subprocess.run([sys.executable, "-m", "pipeline.cli", "run", AXIAL, "-o", "/nonexistent/x.nc"],
                           capture_output=True, text=True)
     assert done.returncode == 2 and "asymmetric5 is conservative" in done.stderr

@@ -74,7 +74,7 @@ def test_the_2010_table_is_its_papers_bearing_with_e_2e11(law):
 @pytest.mark.parametrize("path", ["configs/filipkovsky2010_symmetric.toml", "configs/filipkovsky2010_axial.toml"])
 def test_the_2010_scenes_use_their_papers_printed_bearing(path):
     cfg = config.load_config(path)
-    derived = compute.point_params(cfg.data, compute.fixed_values(cfg.data) | {"speed": 100.0}).derived
+    derived = compute.point_params(cfg.scene, cfg.scene.fixed | {"speed": 100.0}).derived
     printed = {"inner_race_radius": R1, "outer_race_radius": R2_2010, "groove_radius": RK, "ball_diameter": D,
                "youngs_modulus": E_2010, "poisson_ratio": 0.3}
     for key, value in printed.items():
@@ -112,7 +112,7 @@ SCENE = ('[scene]\nname = "x"\nmodel = "rigid_preloaded"\n[bearing]\npreload_law
 
 def derived_at(text, point):
     cfg = config.parse_config(text)
-    return compute.point_params(cfg.data, compute.fixed_values(cfg.data) | point).derived
+    return compute.point_params(cfg.scene, cfg.scene.fixed | point).derived
 
 
 @pytest.mark.parametrize("law", LAWS)

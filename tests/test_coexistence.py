@@ -15,10 +15,10 @@ from tests.reference import BaiPoint
 def bai_line(clearance):
     text = Path("configs/bai2006_fold.toml").read_text().replace(
         "clearance = [7.6e-6, 19.0e-6]", f"clearance = [{clearance!r}]")
-    data = config.parse_config(text).data
-    pl = continuation.plan(data)
-    records = continuation.continue_line(data, pl.lines[0])
-    return data, continuation.to_dataset(data, pl, [(pl.lines[0], records)], {})
+    scene = config.parse_config(text).scene
+    pl = continuation.plan(scene)
+    records = continuation.continue_line(scene, pl.lines[0])
+    return scene, continuation.to_dataset(scene, pl, [(pl.lines[0], records)], {})
 
 
 @pytest.fixture(scope="module")
@@ -69,13 +69,13 @@ def independent_count(spec, ds, clearance):
 
 
 def test_bai_15um_lists_each_orbit_once_and_claims_no_coexistence_between_copies(bai15):
-    data, ds = bai15
+    scene, ds = bai15
     distinct = continuation.distinct_events(ds)
     assert len(distinct) < ds.sizes["event"]         # the period-2 and -4 loops meet their points several times
     # the bifurcation points (response peaks on the period-2 and -4 loops sit at kinks of the
     # half peak-to-peak, located to ~1e-3 Hz only, so their copies are not matched: see the issue note)
     bifurcations = [e for e in distinct if ds["event_type"].values[e] != continuation.al.PEAK]
-    assert len(bifurcations) == independent_count(continuation.compute.model_of(data), ds, 15.2e-6)
+    assert len(bifurcations) == independent_count(scene.model, ds, 15.2e-6)
     assert len(continuation.events_table(ds)["type"]) == len(distinct)
     # the only coexistence: the period-1 fold pair (31.05-31.15 Hz), both outer arms stable
     folds = sorted(ds["event_parameter"].values[ds["event_type"].values == continuation.al.FOLD])
@@ -107,8 +107,8 @@ def test_bai_15um_lists_each_branch_once(bai15):
     and listed once by info. Independently: branches of one period whose located bifurcation
     orbits coincide as closed curves (scipy, reference_curve) are one family; a branch without
     such an event is its own."""
-    data, ds = bai15
-    spec = continuation.compute.model_of(data)
+    scene, ds = bai15
+    spec = scene.model
     copy_of = continuation.branch_copy_of(ds)
     family = list(range(ds.sizes["branch"]))
 

@@ -54,7 +54,7 @@ def test_zero_clearance_without_angle_is_radial_contact():
 
     cfg = config.parse_config(BASE.replace("clearance = [3.8e-6, 7.6e-6]", "clearance = [0.0, 1e-6]"))
     point = {"speed": 50.0, "clearance": 0.0, "contact_angle": None, "preload": 0.0}
-    assert compute.point_params(cfg.data, point).derived["contact_angle_used"] == 0.0
+    assert compute.point_params(cfg.scene, point).derived["contact_angle_used"] == 0.0
 
 
 def test_dependent_defaults_and_path():
@@ -219,15 +219,15 @@ def test_analysis_keys_are_the_attractor_settings_fields():
     attractor.Settings, and the settings built from a scene carry the scene's values."""
     from dataclasses import fields
 
-    from pipeline import compute
+    from pipeline import scene
     from rotorkernels import attractor
 
     keys = set(config.SCHEMA["analysis"]) - {"floquet", "attractor", "sweep_direction"}
     assert keys <= {f.name for f in fields(attractor.Settings)}
-    data = config.parse_config(config.DEFAULT_CONFIG_TOML).data
-    settings = compute.attractor_settings(data)
+    cfg = config.parse_config(config.DEFAULT_CONFIG_TOML)
+    data, settings = cfg.data, cfg.scene.analysis.settings
     assert {k: getattr(settings, k) for k in keys} == {k: data["analysis"][k] for k in keys}
-    assert settings.lyapunov_min_periods == min(compute.LYAPUNOV_MIN_PERIODS, data["analysis"]["lyapunov_max_periods"])
+    assert settings.lyapunov_min_periods == min(scene.LYAPUNOV_MIN_PERIODS, data["analysis"]["lyapunov_max_periods"])
 
 
 def test_continuation_messages_name_existing_keys_and_state_the_limits():
@@ -239,7 +239,7 @@ def test_continuation_messages_name_existing_keys_and_state_the_limits():
 
     def message(extra):
         with pytest.raises(config.ConfigError) as err:
-            continuation.plan(config.parse_config(DUFFING.replace("ds = 0.02", extra)).data)
+            continuation.plan(config.parse_config(DUFFING.replace("ds = 0.02", extra)).scene)
         return str(err.value)
 
     steps = message("ds = 0.5\nds_max = 0.25")

@@ -64,7 +64,7 @@ def test_invalid_settings_messages():
              "ds_min = 0.1": "ds_min <= ds <= ds_max", 'parameter = "nonsense"': "continuable: omega, zeta, gamma, force"}
     for new, message in cases.items():
         with pytest.raises(config.ConfigError, match=message.replace("(", r"\(")):
-            continuation.plan(config.parse_config(DUFFING.replace("ds = 0.02", new)).data)
+            continuation.plan(config.parse_config(DUFFING.replace("ds = 0.02", new)).scene)
 
 
 @pytest.fixture(scope="module")
@@ -96,8 +96,8 @@ def test_continue_writes_branches_and_folds(duffing_result):
     folds = np.flatnonzero(kinds == al.FOLD)
     # the same folds as the kernels' continuation in this process (the file carries them intact)
     cfg = config.parse_config(DUFFING)
-    pl = continuation.plan(cfg.data)
-    family, _ = continuation.line_family(cfg.data, pl, {})
+    pl = continuation.plan(cfg.scene)
+    family, _ = continuation.line_family(cfg.scene, pl, {})
     direct = al.continue_orbit(family, 0.5, np.zeros(2), (0.5, 2.0), pl.settings)
     np.testing.assert_allclose(ds["event_parameter"].values, [e.point.lam for e in direct.events], rtol=1e-12)
     # stable, unstable between the folds, stable: as the multipliers say
@@ -141,8 +141,8 @@ def test_branch_switching_through_the_pipeline():
     text = text.replace("speed = {start = 10.0, stop = 250.0, step = 0.1}", "speed = [27.0, 29.0]")
     text = text.replace("clearance = [3.8e-6, 7.6e-6, 11.4e-6, 15.2e-6, 19.0e-6]", "clearance = [19.0e-6]")
     cfg = config.parse_config(text + "\n[continuation]\nstart = 29.0\nstop = 27.0\nds_max = 0.5\n")
-    (where,) = continuation.plan(cfg.data).lines
-    records = continuation.continue_line(cfg.data, where)
+    (where,) = continuation.plan(cfg.scene).lines
+    records = continuation.continue_line(cfg.scene, where)
     assert [r["periods"] for r in records][:3] == [1, 2, 4]
     assert [r["parent"] for r in records][:3] == [-1, 0, 1]
     pd1 = records[0]["event_parameter"][records[0]["event_type"] == al.PERIOD_DOUBLING]
@@ -173,9 +173,9 @@ def test_boundary_curves_through_the_pipeline_match_the_sweep_boundaries():
     text = text.replace("speed = {start = 10.0, stop = 250.0, step = 0.1}", "speed = {start = 70.0, stop = 120.0, step = 1.0}")
     text = text.replace("clearance = [3.8e-6, 7.6e-6, 11.4e-6, 15.2e-6, 19.0e-6]", "clearance = [3.8e-6, 7.6e-6]")
     cfg = config.parse_config(text + '\n[continuation]\ncurves_in = "clearance"\nperiod_doubling_switches = 0\n')
-    pl = continuation.plan(cfg.data)
-    lines = [(where, continuation.continue_line(cfg.data, where)) for where in pl.lines]
-    ds = continuation.to_dataset(cfg.data, pl, lines, {})
+    pl = continuation.plan(cfg.scene)
+    lines = [(where, continuation.continue_line(cfg.scene, where)) for where in pl.lines]
+    ds = continuation.to_dataset(cfg.scene, pl, lines, {})
     pds = ds["curve_type"].values == al.PERIOD_DOUBLING
     assert pds.any()
     events_76 = sorted(ds["event_parameter"].values[(ds["event_branch"].values == 1) & (ds["event_type"].values != al.PEAK)])

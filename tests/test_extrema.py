@@ -8,7 +8,7 @@ import pytest
 from scipy.integrate import quad, solve_ivp
 from scipy.optimize import minimize_scalar
 
-from pipeline import compute, config, continuation
+from pipeline import compute, config, continuation, scene
 from rotorkernels import extrema, integrators as ig, models
 from rotorkernels.continuation import arclength as al, solve_orbit
 
@@ -118,8 +118,8 @@ def test_duffing_fold_amplitudes_match_scipy(gamma, force, lo, hi):
     state. Both integrate at rtol <= 1e-12 over one period: 1e-7 is met with room (the sampled
     amplitudes were low by 5e-4 and 1e-3 here)."""
     cfg = config.parse_config(DUFFING_SCENE.format(gamma=gamma, force=force, lo=lo, hi=hi))
-    (where,) = continuation.plan(cfg.data).lines
-    first = continuation.continue_line(cfg.data, where)[0]
+    (where,) = continuation.plan(cfg.scene).lines
+    first = continuation.continue_line(cfg.scene, where)[0]
     folds = np.flatnonzero(first["event_type"] == al.FOLD)
     assert folds.size == 2
     for k in folds:
@@ -138,8 +138,8 @@ def bai_segment():
     text = text.replace("speed = {start = 10.0, stop = 250.0, step = 0.1}", "speed = [31.0, 31.1, 31.2]")
     text = text.replace("clearance = [3.8e-6, 7.6e-6, 11.4e-6, 15.2e-6, 19.0e-6]", "clearance = [15.2e-6]")
     data = config.parse_config(text).data
-    data = {**data, "analysis": {**data["analysis"], "attractor": False}}
-    points = [{**compute.fixed_values(data), "clearance": 15.2e-6, "speed": s} for s in (31.0, 31.1, 31.2)]
+    data = scene.from_data({**data, "analysis": {**data["analysis"], "attractor": False}})
+    points = [{**data.fixed, "clearance": 15.2e-6, "speed": s} for s in (31.0, 31.1, 31.2)]
     return data, points, compute.solve_segment(data, points[-1:]), compute.solve_segment(data, points)
 
 
@@ -148,7 +148,7 @@ def test_bai_half_peak_to_peak_from_point_and_sweep_match_scipy(bai_segment):
     (the model's right-hand side, our integrator and extremum search replaced). The orbit
     integrates at rtol 1e-10 over one period: ~1e-9 relative; 1e-7 (the sampled y was low by 2e-3)."""
     data, points, point_row, sweep_rows = bai_segment
-    model = compute.model_of(data)
+    model = data.model
     built = compute.builder(data)(points[-1])
     n = model.n_state
     jbuf, du = np.empty((n, n)), np.empty(n)
@@ -165,8 +165,8 @@ def test_bai_half_peak_to_peak_from_point_and_sweep_match_scipy(bai_segment):
 
 def duffing_first_branch(gamma, force, hi):
     cfg = config.parse_config(DUFFING_SCENE.format(gamma=gamma, force=force, lo=0.5, hi=hi))
-    (where,) = continuation.plan(cfg.data).lines
-    return continuation.continue_line(cfg.data, where)[0]
+    (where,) = continuation.plan(cfg.scene).lines
+    return continuation.continue_line(cfg.scene, where)[0]
 
 
 def test_linear_oscillator_peak_is_the_closed_form():
@@ -229,9 +229,9 @@ def test_peak_in_info_events_table_and_csv():
     from pipeline import query
 
     cfg = config.parse_config(DUFFING_SCENE.format(gamma=0.0, force=0.3, lo=0.5, hi=2.0))
-    pl = continuation.plan(cfg.data)
-    lines = [(where, continuation.continue_line(cfg.data, where)) for where in pl.lines]
-    ds = continuation.to_dataset(cfg.data, pl, lines, {})
+    pl = continuation.plan(cfg.scene)
+    lines = [(where, continuation.continue_line(cfg.scene, where)) for where in pl.lines]
+    ds = continuation.to_dataset(cfg.scene, pl, lines, {})
     info = continuation.describe(ds)
     w = float(ds["event_parameter"].values[0])
     assert f"peak on branch 0: omega {w:.10g}" in info and "half peak-to-peak x 3.00375" in info and "stable" in info
@@ -274,10 +274,10 @@ def test_bai_orbit_means_from_the_sweep_match_scipy_quad(bai_segment):
     samples) against scipy quad on scipy's DOP853 solution from the orbit's state: within the
     stated error estimate plus the integration's ~10 rtol (1e-10) of the range."""
     data, points, _, sweep_rows = bai_segment
-    model = compute.model_of(data)
+    model = data.model
     built = compute.builder(data)(points[-1])
     state = sweep_rows["orbit_state"][-1]
-    opts = compute.integrator_settings(data)
+    opts = data.integrator
     hi, lo, mean, error, _ = extrema.extent(model, state, built.p, 1.0, opts, built.period)
     n = model.n_state
     jbuf, du = np.empty((n, n)), np.empty(n)

@@ -41,8 +41,8 @@ def _without_peaks(rec):
 @pytest.fixture(scope="module")
 def fig2a_line():
     cfg = _quick_fig2a()
-    (where,) = continuation.plan(cfg.data).lines
-    return cfg, where, _without_peaks(continuation.continue_line(cfg.data, where)[0])
+    (where,) = continuation.plan(cfg.scene).lines
+    return cfg, where, _without_peaks(continuation.continue_line(cfg.scene, where)[0])
 
 
 def test_fig2a_continuation_passes_the_fold_pair(fig2a_line):
@@ -77,8 +77,8 @@ def test_fig2a_bistability_between_the_folds_by_transients(fig2a_line):
     cfg, where, rec = fig2a_line
     lower, upper = rec["event_parameter"]
     f = 0.5 * (lower + upper)
-    built = compute.builder(cfg.data)({**compute.fixed_values(cfg.data), **where, "speed": f})
-    opts = compute.integrator_settings(cfg.data)
+    built = compute.builder(cfg.scene)({**cfg.scene.fixed, **where, "speed": f})
+    opts = cfg.scene.integrator
     lam, amp = rec["parameter"], rec["amplitude_half_pp"][:, 3]
     stable = np.abs(rec["multipliers"]).max(axis=1) < 1
     first, last = rec["event_index"][0], rec["event_index"][1] + 1
@@ -103,14 +103,14 @@ def test_fig2a_with_the_law_as_printed_turns_at_a_soft_fold_pair():
     text = FIG2A_PRINTED.read_text().replace("speed = {start = 50.0, stop = 700.0, step = 5.0}",
                                              "speed = {start = 370.0, stop = 430.0, step = 5.0}")
     cfg = config.parse_config(text.replace("nominal_angle = [12, 15, 26, 36, 40]", "nominal_angle = [15]"))
-    (where,) = continuation.plan(cfg.data).lines
-    rec = _without_peaks(continuation.continue_line(cfg.data, where)[0])
+    (where,) = continuation.plan(cfg.scene).lines
+    rec = _without_peaks(continuation.continue_line(cfg.scene, where)[0])
     assert [al.EVENT_LABELS[e] for e in rec["event_type"]] == ["LP", "LP"]
     lower, upper = rec["event_parameter"]
     assert 385.0 < upper < lower < 422.5
     peak = rec["amplitude_half_pp"][:, 3].max()
     assert 0.3 < peak / 24.2e-6 < 0.7
-    derived = compute.point_params(cfg.data, {**compute.fixed_values(cfg.data), **where, "speed": 400.0}).derived
+    derived = compute.point_params(cfg.scene, {**cfg.scene.fixed, **where, "speed": 400.0}).derived
     assert derived["static_thrust"] == pytest.approx(450.0, rel=1e-12)
     assert derived["axial_approach"] == pytest.approx(92.69e-6, rel=1e-3)
 
@@ -123,11 +123,11 @@ def test_continuing_a_frequency_with_both_forcings_on_follows_tori():
     from pipeline import torus_branches
 
     text = FIG2B.read_text().replace("eccentricity = 0.0", "eccentricity = 0.2e-6")
-    both = config.parse_config(text).data
+    both = config.parse_config(text).scene
     pl = continuation.plan(both)
     assert pl.parameter == "support_frequency"
     assert torus_branches.is_torus_line(both, pl.parameter, pl.start, pl.lines[0])
-    alone = config.parse_config(FIG2B.read_text()).data
+    alone = config.parse_config(FIG2B.read_text()).scene
     pl = continuation.plan(alone)
     assert pl.parameter == "support_frequency"
     assert not torus_branches.is_torus_line(alone, pl.parameter, pl.start, pl.lines[0])
@@ -223,7 +223,7 @@ def test_omega_l_is_the_axial_mode_at_15_deg():
     state, q = 0, is exact)."""
     from pipeline import modes
     data = config.parse_config(FIG2A.read_text().replace("nominal_angle = [12, 15, 26, 36, 40]",
-                                                         "nominal_angle = [40]")).data
+                                                         "nominal_angle = [40]")).scene
     wl = modes.omega_l(data)
     at15 = modes.scene_values(data, {"speed": 300.0, "nominal_angle": 15.0})
     assert wl == modes.modes(rp.SPEC, at15)[0].frequency
@@ -239,8 +239,8 @@ def test_continuation_report_draws_the_response_in_omega_l_and_the_campbell_diag
     (forward / backward whirl, the 1x line)."""
     from pipeline.report import branch_result
     cfg, where, rec = fig2a_line
-    pl = continuation.plan(cfg.data)
-    ds = continuation.to_dataset(cfg.data, pl, [(where, [rec])],
+    pl = continuation.plan(cfg.scene)
+    ds = continuation.to_dataset(cfg.scene, pl, [(where, [rec])],
                                  {"config_toml": cfg.source, "model": "rigid_preloaded", "scene": "fig2a_quick"})
     wl = ds["parameter_over_omega_l"].attrs["omega_l"]
     np.testing.assert_array_equal(ds["parameter_over_omega_l"].values, ds["parameter"].values / wl)
@@ -311,8 +311,8 @@ def ns_branch():
     text = FIG2B.read_text().replace("support_frequency = {start = 300.0, stop = 800.0, step = 5.0}",
                                      "support_frequency = {start = 590.0, stop = 700.0, step = 5.0}")
     cfg = config.parse_config(text.replace("nominal_angle = [15, 26, 36]", "nominal_angle = [15]"))
-    (where,) = continuation.plan(cfg.data).lines
-    return cfg, where, continuation.continue_line(cfg.data, where)[0]
+    (where,) = continuation.plan(cfg.scene).lines
+    return cfg, where, continuation.continue_line(cfg.scene, where)[0]
 
 
 def test_transient_leaves_the_torus_unstable_orbit_beating_and_settles_on_the_stable_one(ns_branch):
@@ -332,9 +332,9 @@ def test_transient_leaves_the_torus_unstable_orbit_beating_and_settles_on_the_st
     mult = rec["multipliers"][i]
     lead = mult[np.argmax(np.abs(mult))]
     assert abs(lead) > 1.0 and abs(lead.imag) > 0.05
-    built = compute.builder(cfg.data)({**compute.fixed_values(cfg.data), **where,
+    built = compute.builder(cfg.scene)({**cfg.scene.fixed, **where,
                                        "support_frequency": rec["parameter"][i]})
-    opts = compute.integrator_settings(cfg.data)
+    opts = cfg.scene.integrator
     u = rec["state"][i]
     start = u + 1e-4 * np.abs(u).max() * np.random.default_rng(0).standard_normal(u.size)
     strobe = shooting.sample_orbit(SPEC.kernel, start, built.p, 400.0, 400, opts)
@@ -358,10 +358,11 @@ def test_fig5_point_with_the_unbalance_on_beats_on_a_forced_torus():
     forcing is quasi-periodic: no orbit, and the attractor (Poincare once per shaft revolution)
     is the forced torus, quasi_periodic, not period-1: its y_B samples spread over a band (beats)
     while its Lyapunov exponents are all negative (a forced torus contracts)."""
-    from pipeline import schema
+    from pipeline import schema, scene
     cfg = config.load_config(FIG5)
-    data = {**cfg.data, "analysis": {**cfg.data["analysis"], "transient_periods": 200, "lyapunov_max_periods": 200}}
-    out = compute.solve_segment(data, [{**compute.fixed_values(data), "speed": 250.0, "support_frequency": 627.3,
+    data = scene.from_data({**cfg.data, "analysis": {**cfg.data["analysis"], "transient_periods": 200,
+                                                     "lyapunov_max_periods": 200}})
+    out = compute.solve_segment(data, [{**data.fixed, "speed": 250.0, "support_frequency": 627.3,
                                         "nominal_angle": 15.0}])
     assert out["periodic_forcing"][0] == 0.0
     assert schema.ATTRACTOR[int(out["attractor"][0])] == "quasi_periodic"

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from pipeline import cli, compute, config, continuation, torus_branches
+from pipeline import scene as scene_mod
 
 SCENES = {"3a": 15, "3b": 15, "4a": 26, "4b": 36}
 
@@ -15,9 +16,9 @@ def test_each_scene_is_the_paper_s_two_frequency_sweep_with_the_law_as_printed(f
     assert data["bearing"]["preload_law"] == "as_printed" and data["bearing"]["table"] == "filipkovsky2016"
     assert data["sweep"]["nominal_angle"] == [SCENES[fig]] and data["sweep"]["speed"] == [250.0]
     assert data["forcing"]["support_acceleration"] > 0 and data["forcing"]["eccentricity"] > 0
-    pl = continuation.plan(data)
+    pl = continuation.plan(scene_mod.from_data(data))
     assert pl.parameter == "support_frequency"
-    assert torus_branches.is_torus_line(data, pl.parameter, pl.start, pl.lines[0])
+    assert torus_branches.is_torus_line(scene_mod.from_data(data), pl.parameter, pl.start, pl.lines[0])
 
 
 def test_fig4b_starts_a_stable_torus_confirmed_by_a_transient(tmp_path):
@@ -35,8 +36,8 @@ def test_fig4b_starts_a_stable_torus_confirmed_by_a_transient(tmp_path):
     data = config.parse_config(text).data
     n = int(ds["branch_points"].values[0])
     assert ds["branch_kind"].values.tolist() == [1] and (ds["torus_status"].values[0, :n] == 1).all()
-    pl = continuation.plan(data)
-    _, built = torus_branches.torus_family(data, pl, pl.lines[0], 1)
+    pl = continuation.plan(scene_mod.from_data(data))
+    _, built = torus_branches.torus_family(scene_mod.from_data(data), pl, pl.lines[0], 1)
     b = built(float(ds["parameter"].values[0, n - 1]))
     p = b.p.copy()
 
@@ -49,5 +50,5 @@ def test_fig4b_starts_a_stable_torus_confirmed_by_a_transient(tmp_path):
                     t_eval=np.linspace(0.0, turns, 256 * turns + 1))
     assert sol.success
     j = list(ds["observable"].values).index("y_B")
-    y = compute.model_of(data).observe(sol.y.T, b.period)[:, j]
+    y = scene_mod.from_data(data).model.observe(sol.y.T, b.period)[:, j]
     assert ds["amplitude_half_pp"].values[0, n - 1, j] == pytest.approx(0.5 * (y.max() - y.min()), rel=1e-3)

@@ -146,7 +146,7 @@ def test_preloaded_bearing_driven_until_balls_unload(load, unloads):
     from pipeline import compute, config
 
     cfg = config.parse_config(PRELOADED_SCENE.format(load=load))
-    params = compute.point_params(cfg.data, {"speed": 350.0, "clearance": 0.0, "contact_angle": None,
+    params = compute.point_params(cfg.scene, {"speed": 350.0, "clearance": 0.0, "contact_angle": None,
                                              "preload": 300.0})
     point = preloaded_reference(350.0, load)
     p, period = params.p, params.period

@@ -55,7 +55,7 @@ def jump_sweep(request, tmp_path_factory):
 def _reference_folds(cfg, clearance):
     """The folds of `rotorsweep continue` on the same scene: the branch from the range's lower
     end, followed through the fold pair (another start and other steps than the sweep's)."""
-    (first, *_) = continuation.continue_line(cfg.data, {"clearance": clearance})
+    (first, *_) = continuation.continue_line(cfg.scene, {"clearance": clearance})
     return np.sort(first["event_parameter"][first["event_type"] == al.FOLD])
 
 
@@ -132,7 +132,7 @@ def test_stability_changes_next_to_jumps_are_unchanged(tmp_path, start, stop, st
     (row,) = boundaries.boundary_frame(ds)
     assert schema.BIFURCATION[row["type"]] == kind and row["direction"] == 0 and row["status"] == 0
     assert query.bistable_intervals(ds) == []
-    (first, *_) = continuation.continue_line(cfg.data, {"clearance": clearance})
+    (first, *_) = continuation.continue_line(cfg.scene, {"clearance": clearance})
     code = al.FOLD if kind == "fold" else al.PERIOD_DOUBLING
     (reference,) = first["event_parameter"][first["event_type"] == code][:1]
     assert row["speed"] == pytest.approx(reference, rel=1e-8)
@@ -171,14 +171,15 @@ def test_the_bistable_interval_names_its_two_coexisting_orbits(jump_sweep):
     cfg, ds, clearance = jump_sweep
     (iv,) = query.bistable_intervals(ds)
     assert iv["start"] < iv["orbits_at"] < iv["end"]
-    model = compute.model_of(cfg.data)
-    built = compute.builder(cfg.data)({**compute.fixed_values(cfg.data), "clearance": clearance, "speed": iv["orbits_at"]})
-    opts = compute.integrator_settings(cfg.data)
+    scene = cfg.scene
+    model = scene.model
+    built = compute.builder(scene)({**scene.fixed, "clearance": clearance, "speed": iv["orbits_at"]})
+    opts = scene.integrator
     speeds = ds["speed"].values
     found = []
     for grid in (iv["grid_low"], iv["grid_high"]):
         state = ds["orbit_state"].values.reshape(speeds.size, -1)[int(np.argmin(abs(speeds - grid)))]
-        sol = solve_orbit(model, built.p, opts, [state], **compute.newton_settings(model, cfg.data["numerics"]))
+        sol = solve_orbit(model, built.p, opts, [state], **scene.newton.solve_orbit_args(model))
         assert sol.status == 0 and sol.stable
         found.append(extrema.amplitudes(model, sol.state, built.p, 1.0, opts, built.period)[1])
     found.sort(key=lambda a: a[0])

@@ -80,9 +80,10 @@ def test_the_scene_sets_the_threshold_and_keeps_its_hash(monkeypatch):
     monkeypatch.setenv(cluster.IN_PROCESS_VARIABLE, "0")
     plain = config.parse_config(DUFFING)
     scene = config.parse_config(DUFFING + '\n[run]\nin_process_below = "1 min"\n')
-    assert cluster.in_process_below_s(plain.data) == 0 and cluster.in_process_below_s(scene.data) == 60
-    assert cluster.runs_in_process(None, None, 59.0, data=scene.data)
-    assert not cluster.runs_in_process(None, None, 59.0, data=plain.data)
+    assert cluster.in_process_below_s(plain.scene.in_process_below) == 0
+    assert cluster.in_process_below_s(scene.scene.in_process_below) == 60
+    assert cluster.runs_in_process(None, None, 59.0, below=scene.scene.in_process_below)
+    assert not cluster.runs_in_process(None, None, 59.0, below=plain.scene.in_process_below)
     assert scene.hash() == plain.hash()        # where a scene runs is not what it computes: --resume works
     with pytest.raises(config.ConfigError, match="run.in_process_below: must be >= 0"):
         config.parse_config(DUFFING + "\n[run]\nin_process_below = -1\n")

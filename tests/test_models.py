@@ -168,12 +168,12 @@ def test_warmup_compiles_what_a_point_with_attractor_then_runs(capsys):
     from numba.core import event
 
     import pipeline
-    from pipeline import cli, compute
+    from pipeline import cli, compute, scene
 
     assert cli.main(["warmup", "duffing", "--integrator", "dop853"]) == 0
     assert "duffing (kernel group duffing)" in capsys.readouterr().out
     cfg = pipeline.as_config(str(ROOT / "configs" / "duffing_resonance.toml"))
-    data = {**cfg.data, "analysis": {**cfg.data["analysis"], "attractor": True}}
+    data = scene.from_data({**cfg.data, "analysis": {**cfg.data["analysis"], "attractor": True}})
     compiled = event.RecordingListener()
     with event.install_listener("numba:compile", compiled):
         compute.point_detail(data, compute.point_values(cfg, {"omega": 1.0}), periods=4, steps_per_period=8)
@@ -186,7 +186,7 @@ _WARM_THEN_RUN = """
 import sys
 from numba.core import event
 import pipeline
-from pipeline import backbone, compute, sweep, warmup
+from pipeline import backbone, compute, scene as scenes, sweep, warmup
 from workflows.bench.scaling_scene import scene_config
 
 def compiled_by(run):
@@ -199,15 +199,15 @@ def scene(data):
     warmup.compile_scene(data, lambda text: None)   # what the driver does before the workers start
 
 fig13 = scene_config()                          # orbits only
-segs = sweep.segments(fig13)
-scene(fig13.data)
-chunk = lambda: sweep.compute_chunk(fig13.data, fig13.axes, fig13.continued_axis, segs[:2])
+segs = sweep.segments(fig13.scene)
+scene(fig13.scene)
+chunk = lambda: sweep.compute_chunk(fig13.scene, segs[:2])
 print("sweep", compiled_by(chunk))
 sym = pipeline.as_config(sys.argv[1])
-scene(sym.data)
-print("backbone", compiled_by(lambda: backbone.backbone_line(sym.data, backbone.plan(sym.data).lines[0])))
+scene(sym.scene)
+print("backbone", compiled_by(lambda: backbone.backbone_line(sym.scene, backbone.plan(sym.scene).lines[0])))
 duff = pipeline.as_config(sys.argv[2])
-data = {**duff.data, "analysis": {**duff.data["analysis"], "attractor": True}}
+data = scenes.from_data({**duff.data, "analysis": {**duff.data["analysis"], "attractor": True}})
 scene(data)
 print("attractor", compiled_by(lambda: compute.point_detail(data, compute.point_values(duff, {"omega": 1.0}),
                                                             periods=4, steps_per_period=8)))

@@ -227,9 +227,9 @@ def test_mode_shapes_figure_has_a_panel_per_mode():
     from pipeline import config
     from pipeline.report import style
     from pipeline.report.figures import mode_shapes
-    data = config.load_config(ROOT_CONFIGS / "filipkovsky2010_symmetric.toml").data
-    found, coordinates, disk = mode_shapes.scene_modes(data)
-    fig = mode_shapes.fig_mode_shapes(data, "bokeh")
+    scene = config.load_config(ROOT_CONFIGS / "filipkovsky2010_symmetric.toml").scene
+    found, coordinates, disk = mode_shapes.scene_modes(scene)
+    fig = mode_shapes.fig_mode_shapes(scene, "bokeh")
     assert len(fig) == len(found) == 4 and disk == (0.25, 0.5)
     assert [c.label for c in fig.values()[0].values() if c.label] == ["station 1", "station 2", "disc"]
     with style.backend("bokeh") as hv:

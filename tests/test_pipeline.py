@@ -188,7 +188,7 @@ def test_boundary_table_refines_each_stability_change(small_cube):
     # refined on the workers (one task per line) as the driver would refine it alone
     from pipeline import config
     plain = ds.drop_dims("boundary")
-    serial = boundaries.add_boundary_table(config.parse_config(ds.attrs["config_toml"]).data, plain)
+    serial = boundaries.add_boundary_table(config.parse_config(ds.attrs["config_toml"]).scene, plain)
     assert boundaries.boundary_frame(serial) == table
 
 

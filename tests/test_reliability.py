@@ -11,7 +11,7 @@ import time
 import numpy as np
 import pytest
 
-from pipeline import compute, config, cube, schema, sweep
+from pipeline import compute, config, cube, scene, schema, sweep
 from pipeline.cluster import connect
 from tests.test_pipeline import CLI, SMALL, data_vars, rotorsweep
 
@@ -66,8 +66,8 @@ def test_resume_refuses_parts_of_a_changed_config(long_config, tmp_path):
     out = tmp_path / "c.nc"
     parts = cube.parts_dir(out)
     cfg = config.load_config(long_config)
-    seg = sweep.segments(cfg)[0]
-    cube.write_part(parts, "seg000000", seg.index, compute.solve_segment(cfg.data, list(seg.points)),
+    seg = sweep.segments(cfg.scene)[0]
+    cube.write_part(parts, "seg000000", seg.index, compute.solve_segment(cfg.scene, list(seg.points)),
                     {"config_hash": cfg.hash(), "segments": [seg.id]})
     changed = tmp_path / "changed.toml"
     changed.write_text(LONG.replace('stiffness = "bai2006"', 'stiffness = "hertz"'))
@@ -107,7 +107,7 @@ def test_numerical_faults_are_statuses_not_crashes():
     data["numerics"]["max_newton_iter"] = 2               # too few iterations: not_converged
     data["numerics"]["amplitude_limit"] = 1e-9            # 1 nm: every orbit 'diverges'
     pts = [{"speed": s, "clearance": 19e-6, "contact_angle": None, "preload": 0.0} for s in (40.0, 120.0)]
-    rows = compute.solve_segment(data, pts)
+    rows = compute.solve_segment(scene.from_data(data), pts)
     statuses = {schema.ORBIT_STATUS[s] for s in rows["orbit_status"]}
     assert statuses <= {"not_converged", "diverged"} and statuses
     assert np.isnan(rows["max_abs_multiplier"]).all()

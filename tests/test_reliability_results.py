@@ -125,12 +125,12 @@ def test_a_backbone_result_from_part_files_is_bitwise_the_computed_one(tmp_path)
     from tests.test_backbone_command import scene
 
     bb = config.parse_config(scene(modes="1", amplitude_max=4e-6, amplitude_points=9, surface_mode=1))
-    pl = backbone.plan(bb.data)
-    lines = [backbone.backbone_line(bb.data, where) for where in pl.lines]
+    pl = backbone.plan(bb.scene)
+    lines = [backbone.backbone_line(bb.scene, where) for where in pl.lines]
     for k, line in enumerate(lines):
         results.save_line(tmp_path / "parts", bb.hash(), k, line)
     read = results.earlier_lines(tmp_path / "parts", bb.hash(), len(lines))
     provenance = cluster.provenance(bb, result_kinds.BACKBONE)
-    a = results.write(backbone.to_dataset(bb.data, pl, lines, provenance), tmp_path / "computed.nc")
-    b = results.write(backbone.to_dataset(bb.data, pl, read, provenance), tmp_path / "read.nc")
+    a = results.write(backbone.to_dataset(bb.scene, pl, lines, provenance), tmp_path / "computed.nc")
+    b = results.write(backbone.to_dataset(bb.scene, pl, read, provenance), tmp_path / "read.nc")
     assert_same_result(a, b)

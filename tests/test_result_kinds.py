@@ -27,13 +27,13 @@ def paths(tiny_cube, tmp_path_factory):
     line task does and written with the command's provenance (no Dask cluster)."""
     d = tmp_path_factory.mktemp("kinds")
     cont = config.parse_config(DUFFING)
-    line = continuation.continue_line(cont.data, {})
-    ds = continuation.to_dataset(cont.data, continuation.plan(cont.data), [({}, line)],
+    line = continuation.continue_line(cont.scene, {})
+    ds = continuation.to_dataset(cont.scene, continuation.plan(cont.scene), [({}, line)],
                                  cluster.provenance(cont, result_kinds.CONTINUATION))
     bb = config.parse_config(scene(modes="1", amplitude_max=4e-6, amplitude_points=9, surface_mode=1))
-    pl = backbone.plan(bb.data)
-    lines = [backbone.backbone_line(bb.data, where) for where in pl.lines]
-    bds = backbone.to_dataset(bb.data, pl, lines, cluster.provenance(bb, result_kinds.BACKBONE))
+    pl = backbone.plan(bb.scene)
+    lines = [backbone.backbone_line(bb.scene, where) for where in pl.lines]
+    bds = backbone.to_dataset(bb.scene, pl, lines, cluster.provenance(bb, result_kinds.BACKBONE))
     return {result_kinds.SWEEP: tiny_cube, result_kinds.CONTINUATION: results.write(ds, d / "continuation.nc"),
             result_kinds.BACKBONE: results.write(bds, d / "backbone.nc")}
 

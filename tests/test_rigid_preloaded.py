@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from pipeline import compute, config, modes
+from pipeline import compute, config, modes, scene
 from rotorkernels import integrators as ig, modal, models, shooting, continuation
 from rotorkernels.attractor.poincare import _poincare
 from rotorkernels.models import rigid_preloaded as rp
@@ -312,8 +312,8 @@ def test_quasi_periodic_point_has_no_orbit_and_its_samples_run_on_in_time():
     NaN; the stroboscopic samples of a quasi-periodic point follow the continuous-time flow
     (not a flow restarted at tau = 0 each period), to the integration tolerance."""
     cfg = config.load_config(QUICK)
-    data = {**cfg.data, "analysis": {**cfg.data["analysis"], "attractor": False}}
-    pts = [{**compute.fixed_values(data), "speed": 250.0, "support_frequency": f} for f in cfg.axes["support_frequency"]]
+    data = scene.from_data({**cfg.data, "analysis": {**cfg.data["analysis"], "attractor": False}})
+    pts = [{**data.fixed, "speed": 250.0, "support_frequency": f} for f in cfg.axes["support_frequency"]]
     out = compute.solve_segment(data, pts)
     from pipeline import schema
     status = [schema.ORBIT_STATUS[k] for k in out["orbit_status"]]
@@ -323,7 +323,7 @@ def test_quasi_periodic_point_has_no_orbit_and_its_samples_run_on_in_time():
     assert np.isnan(out["multiplier_real"][1]).all() and np.isfinite(out["multiplier_real"][0]).all()
     assert list(out["periodic_forcing"]) == [1.0, 0.0, 1.0]
     built = compute.point_params(data, pts[1])
-    opts = compute.integrator_settings(data)
+    opts = data.integrator
     u0 = np.zeros(10)
     samples, status, _ = _poincare(SPEC.kernel, u0, built.p, opts, 0, 6, 0.0, 1.0)
     flow = shooting.sample_orbit(SPEC.kernel, u0, built.p, 5.0, 5, opts)

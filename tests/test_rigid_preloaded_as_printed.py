@@ -223,7 +223,7 @@ def test_a_cube_written_with_the_removed_hybrid_opens_and_says_what_it_was(tmp_p
     opened = cube.open_cube(path)
     assert 'stiffness = "paper"' in cube.describe(opened)
     with pytest.raises(Exception, match=r"K x 1.5.*as_printed"):
-        points.scene_data(opened)
+        points.scene_of(opened)
 
 
 def test_the_printed_scene_config_validates():
@@ -241,7 +241,7 @@ def test_jeffcott_preload_constant_filipkovsky_is_the_law_as_printed_without_cle
         config.parse_config(text.format(extra="clearance = 1e-6\n"))
     cfg = config.parse_config(text.format(extra=""))
     from pipeline import compute
-    derived = compute.point_params(cfg.data, {**compute.fixed_values(cfg.data), "speed": 100.0}).derived
+    derived = compute.point_params(cfg.scene, {**cfg.scene.fixed, "speed": 100.0}).derived
     geom = bearing.preset("angular_contact_medium", 15)
     want = bearing.as_printed_state(geom, 300.0, math.radians(15.0))
     assert derived["contact_angle_used"] == pytest.approx(math.degrees(want.contact_angle), rel=1e-15)

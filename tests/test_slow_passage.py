@@ -23,8 +23,8 @@ def test_stable_orbit_just_past_the_fold_is_found_and_is_the_attractor():
     row = pipeline.point(speed=31.2, clearance=15.2e-6, config=cfg)
     assert row["orbit_status"] == 0 and row["stable"] == 1
     spec = cfg.model
-    built = compute.point_params(cfg.data, {**compute.fixed_values(cfg.data), "speed": 31.2, "clearance": 15.2e-6})
-    opts = compute.integrator_settings(cfg.data)
+    built = compute.point_params(cfg.scene, {**cfg.scene.fixed, "speed": 31.2, "clearance": 15.2e-6})
+    opts = cfg.scene.integrator
     end, status, _ = shooting.settle(spec.kernel, spec.cold_guess(built.p), built.p, 2000.0, opts)
     assert status == 0
     np.testing.assert_allclose(end, row["orbit_state"], rtol=0, atol=1e-5 * np.abs(end).max())

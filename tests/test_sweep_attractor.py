@@ -70,9 +70,9 @@ def test_derived_exponents_of_stable_points_match_the_integrated_ones():
     stretch: largest exponent to 1e-3 relative (or its stated uncertainty), and the sum of the spectrum is the flow's
     divergence -2 D / M (D = 300 N s/m, M = 2 kg) in both."""
     cfg = scene(66.0, 70.0, 2.0, "19.0e-6")       # leading multiplier real (-0.88 at 66 Hz)
-    fast = compute.solve_segment(cfg.data, points(cfg))
+    fast = compute.solve_segment(cfg.scene, points(cfg))
     slow_cfg = scene(66.0, 70.0, 2.0, "19.0e-6", "derive_when_stable = false")
-    slow = compute.solve_segment(slow_cfg.data, points(slow_cfg))
+    slow = compute.solve_segment(slow_cfg.scene, points(slow_cfg))
     assert np.all(fast["stable"] == 1) and np.all(fast["attractor"] == at.PERIODIC)
     assert np.all(fast["lle_method"] == schema.LLE_METHOD.index("derived"))
     assert np.all(slow["lle_method"] == schema.LLE_METHOD.index("integrated"))
@@ -98,7 +98,7 @@ def test_lyapunov_run_stops_at_the_scenes_tolerance():
     runs = {}
     for rtol in (0.1, 0.01):
         cfg = scene(30.0, 30.0, 1.0, "19.0e-6", f"lyapunov_rtol = {rtol}\nmax_period = 8\npoincare_samples = 32")
-        runs[rtol] = compute.solve_segment(cfg.data, points(cfg))
+        runs[rtol] = compute.solve_segment(cfg.scene, points(cfg))
     fast, long = runs[0.1], runs[0.01]
     assert fast["attractor"][0] == long["attractor"][0] == at.CHAOTIC
     assert 300 <= fast["lyapunov_periods"][0] < long["lyapunov_periods"][0]
@@ -113,7 +113,7 @@ def test_up_and_down_sweeps_expose_coexisting_attractors():
     a state on the chaotic attractor one step above may lie in the orbit's basin (measured: 3 of
     16 starts 1e-11 apart at 28.6 Hz ended on the orbit at 27.8 Hz, none of 16 at 28.0 Hz)."""
     cfg = scene(28.0, 28.6, 0.3, "19.0e-6", 'sweep_direction = "both"\nlyapunov_max_periods = 300')
-    r = compute.solve_segment(cfg.data, points(cfg))
+    r = compute.solve_segment(cfg.scene, points(cfg))
     P, C = at.PERIODIC, at.CHAOTIC
     assert list(r["attractor"]) == [P, P, C] and list(r["period"]) == [1, 1, 0]
     assert list(r["attractor_down"]) == [C, C, C]

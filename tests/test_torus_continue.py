@@ -4,7 +4,7 @@ map from its circle (a second method: the map iterated, not the collocation solv
 import numpy as np
 import pytest
 
-from pipeline import cli, compute, config, continuation, result_kinds, torus_branches
+from pipeline import cli, config, continuation, result_kinds, torus_branches
 
 SCENE = "configs/filipkovsky2016_fig2b_tori.toml"
 
@@ -15,7 +15,7 @@ def result(tmp_path_factory):
     text = open(SCENE).read().replace("stop = 315.0", "stop = 308.0")
     (d / "tori.toml").write_text(text)
     assert cli.main(["continue", str(d / "tori.toml"), "-o", str(d / "tori.nc"), "--workers", "0"]) in (0, None)
-    return d, config.parse_config(text).data
+    return d, config.parse_config(text).scene
 
 
 def test_the_result_holds_a_torus_branch_with_stability_and_error(result, capsys):
@@ -48,7 +48,7 @@ def test_a_torus_point_against_a_long_scipy_transient(result):
 
     d, data = result
     ds = continuation.open_result(d / "tori.nc")
-    spec = compute.model_of(data)
+    spec = data.model
     pl = continuation.plan(data)
     _, built = torus_branches.torus_family(data, pl, pl.lines[0], 1)
     k = 1
@@ -79,7 +79,7 @@ def test_a_torus_line_that_does_not_start_is_an_empty_branch_with_a_reason(resul
     pl = continuation.plan(data)
     fam, built = torus_branches.torus_family(data, pl, pl.lines[0], 15)
     run = engine.Run([], [], engine.START_FAILED, "no torus")
-    rec = torus_branches.torus_record(compute.model_of(data), fam, built, run, 0)
+    rec = torus_branches.torus_record(data.model, fam, built, run, 0)
     ds = continuation.to_dataset(data, pl, [(pl.lines[0], [rec])], {})
     assert ds["branch_points"].values.tolist() == [0] and ds["branch_end"].values.tolist() == [engine.START_FAILED]
     assert "no torus" in continuation.describe(ds)

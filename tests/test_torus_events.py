@@ -23,7 +23,7 @@ def result(tmp_path_factory):
         "support_frequency = [305.0]", "support_frequency = [145.0]")
     (d / "locked.toml").write_text(text)
     assert cli.main(["continue", str(d / "locked.toml"), "-o", str(d / "locked.nc"), "--workers", "0"]) in (0, None)
-    return continuation.open_result(d / "locked.nc"), config.parse_config(text).data
+    return continuation.open_result(d / "locked.nc"), config.parse_config(text).scene
 
 
 def test_the_branch_lists_the_locked_ratio_in_the_events_and_info(result, capsys, tmp_path):
@@ -51,7 +51,7 @@ def test_the_linked_orbit_lies_on_an_independently_solved_torus(result):
     state = ds["event_state"].values[k]
     pl = continuation.plan(data)
     family, _ = torus_branches.torus_family(data, pl, pl.lines[0], 15)
-    spec = compute.model_of(data)
+    spec = data.model
     lam = 0.6 * OMEGA
     p = np.array(family.params(lam), float)
     circle = tr.solve_torus(spec.kernel, tr.periodic_guess(state, 15), p, family.phase_index, family.rotation(lam),
@@ -128,7 +128,7 @@ def test_each_stored_circle_lies_within_its_error_estimate_of_a_finer_torus(resu
     ds, data = result
     pl = continuation.plan(data)
     family, _ = torus_branches.torus_family(data, pl, pl.lines[0], 15)
-    spec = compute.model_of(data)
+    spec = data.model
     fine = family.opts._replace(rtol=family.opts.rtol / 100, atol=family.opts.atol / 100)
     n = int(ds["branch_points"].values[0])
     err = ds["torus_error"].values[0, :n]

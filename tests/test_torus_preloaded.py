@@ -31,11 +31,11 @@ def strobe(kernel, p, u, first, n, opts):
 
 @pytest.fixture(scope="module")
 def point():
-    data = config.load_config(FIG5).data
-    built = compute.builder(data)({**compute.fixed_values(data), "speed": 250.0, "support_frequency": 627.3,
+    data = config.load_config(FIG5).scene
+    built = compute.builder(data)({**data.fixed, "speed": 250.0, "support_frequency": 627.3,
                                    "nominal_angle": 15.0})
     assert not built.periodic
-    kernel = compute.model_of(data).kernel
+    kernel = data.model.kernel
     transient, n_fit = 300, 60
     samples = strobe(kernel, built.p, np.zeros(kernel.n_state), 0, transient + n_fit, OPTS)[transient - 1:-1]
     phases = np.fmod(np.arange(transient, transient + n_fit) * built.p[rp.P_WS], 2.0 * np.pi)

@@ -20,7 +20,7 @@ def result(tmp_path_factory):
         "support_frequency = [305.0]", f"support_frequency = [{SUPPORT}]")
     (d / "speed.toml").write_text(text)
     assert cli.main(["continue", str(d / "speed.toml"), "-o", str(d / "speed.nc"), "--workers", "0"]) in (0, None)
-    return continuation.open_result(d / "speed.nc"), config.parse_config(text).data
+    return continuation.open_result(d / "speed.nc"), config.parse_config(text).scene
 
 
 def test_tori_are_followed_in_the_shaft_speed_through_a_locked_ratio(result):
@@ -45,7 +45,7 @@ def test_the_last_point_against_a_long_scipy_transient(result):
     from rotorkernels.models import rigid_preloaded as rp
 
     ds, data = result
-    spec = compute.model_of(data)
+    spec = data.model
     pl = continuation.plan(data)
     _, built = torus_branches.torus_family(data, pl, pl.lines[0], 1)
     k = int(ds["branch_points"].values[0]) - 1

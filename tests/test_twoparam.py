@@ -22,11 +22,11 @@ TIGHT = ig.settings("dop853", rtol=1e-12, atol=1e-14, amplitude_limit=1e3)
 @pytest.fixture(scope="module")
 def fig13():
     cfg = config.load_config("configs/bai2006_fig13.toml")
-    build = compute.builder(cfg.data)
-    fixed = {k: v for k, v in compute.fixed_values(cfg.data).items() if v is not None}
+    build = compute.builder(cfg.scene)
+    fixed = {k: v for k, v in cfg.scene.fixed.items() if v is not None}
     plane = tp.Plane(cfg.model, lambda speed, c: build({**fixed, "speed": speed, "clearance": c}).p,
-                     compute.integrator_settings(cfg.data), lam_scale=20.0, nu_scale=1e-5)
-    return cfg.data, plane
+                     cfg.scene.integrator, lam_scale=20.0, nu_scale=1e-5)
+    return cfg.scene, plane
 
 
 def branch_events(plane, nu, lo, hi):
@@ -38,13 +38,13 @@ def branch_events(plane, nu, lo, hi):
     return branch.events
 
 
-def grid_boundary(data, point):
+def grid_boundary(scene, point):
     """The grid's refined boundary next to a curve point by Brent's method, the boundary table's
     fallback (pipeline.boundaries; the table itself now refines on the branch by arclength, so
     this is a second, independent method): the bracketing grid speeds, their orbits by
     solve_orbit from a neighbour, Brent on max|multiplier| - 1 with natural continuation
     (events.locate_boundary)."""
-    solve, _ = boundaries.axis_solver(data, {**compute.fixed_values(data), "clearance": point.nu}, "speed")
+    solve, _ = boundaries.axis_solver(scene, {**scene.fixed, "clearance": point.nu}, "speed")
     low = GRID_START + GRID_STEP * math.floor((point.lam - GRID_START) / GRID_STEP)
     a, b = solve(low, point.state), solve(low + GRID_STEP, point.state)
     assert a.status == b.status == 0 and a.stable != b.stable     # the grid sees this boundary

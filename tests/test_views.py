@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline import compute, config, modes
+from pipeline import config, modes
 from pipeline.report import style
 from pipeline.report.figures import mode_campbell
 from tests.figure_checks import WINDOW
@@ -26,7 +26,7 @@ def _plots(model):
 
 @pytest.fixture(scope="module")
 def symmetric():
-    return config.load_config(CONFIGS / "filipkovsky2010_symmetric.toml").data
+    return config.load_config(CONFIGS / "filipkovsky2010_symmetric.toml").scene
 
 
 def test_campbell_diagram_marks_and_lists_the_critical_speeds(symmetric):
@@ -41,8 +41,8 @@ def test_campbell_diagram_marks_and_lists_the_critical_speeds(symmetric):
     labels = {item.label["value"] for legend in plot.select({"type": Legend}) for item in legend.items}
     assert {"forward whirl (solid)", "backward whirl (dashed)", "1x (shaft speed)", "critical speed"} <= labels
     assert plot.select({"type": HoverTool})
-    spec = compute.model_of(symmetric)
-    first = {name: float(v[0]) for name, v in symmetric["sweep"].items()}
+    spec = symmetric.model
+    first = {name: float(v[0]) for name, v in symmetric.axes.items()}
     fine = np.linspace(0.0, speeds[-1], modes.CRITICAL_GRID + 1)[1:]
     found = modes.scene_critical_speeds(spec, modes.scene_values(symmetric, first), fine)
     assert found and all(c.line == "1x" for c in found)
@@ -87,8 +87,8 @@ def linear_cube():
     (duffing with gamma = 0), built in-process as tests/conftest.py builds its tiny cube."""
     from pipeline import cube, sweep
     cfg = config.parse_config(LINEAR_DUFFING)
-    ids, index, results, _ = sweep.compute_chunk(cfg.data, cfg.axes, cfg.continued_axis, sweep.segments(cfg))
-    return cfg, cube.assemble(cfg.axes, sweep.fixed_coords(cfg), [(ids, index, results, None)],
+    ids, index, results, _ = sweep.compute_chunk(cfg.scene, sweep.segments(cfg.scene))
+    return cfg, cube.assemble(cfg.axes, sweep.fixed_coords(cfg.scene), [(ids, index, results, None)],
                               sweep.provenance(cfg), n_multipliers=2)
 
 
@@ -110,7 +110,7 @@ def test_bode_of_the_linear_oscillator_against_the_closed_form(linear_cube):
     from pipeline.report import harmonics
     from pipeline.report.figures import bode
     cfg, ds = linear_cube
-    lines = harmonics.sweep_lines(ds, cfg.data, "x")
+    lines = harmonics.sweep_lines(ds, cfg.scene, "x")
     (w,), (x,) = lines.x, lines.harmonic
     expected = 0.1 / (1 - w ** 2 + 2j * 0.05 * w)
     np.testing.assert_allclose(np.abs(x), np.abs(expected), rtol=1e-8)
@@ -137,7 +137,7 @@ def _width(plot):
 
 def _bode_inputs(cfg, ds):
     from pipeline.report import harmonics
-    return harmonics.sweep_lines(ds, cfg.data, "x"), "x", "1", "omega [rad s-1]"
+    return harmonics.sweep_lines(ds, cfg.scene, "x"), "x", "1", "omega [rad s-1]"
 
 
 def test_accessor_draws_bode_and_says_why_no_campbell(linear_cube):

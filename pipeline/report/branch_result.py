@@ -10,7 +10,7 @@ import html
 
 import numpy as np
 
-from pipeline import compute, continuation, query, schema
+from pipeline import continuation, query, schema
 from pipeline.report import branches, harmonics, page, style
 from pipeline.report.figures import bode, mode_campbell, mode_shapes, torus_detail
 from rotorkernels.continuation import arclength as al
@@ -193,14 +193,14 @@ def figures(ds, backend):
 
 def _bode(ds, observable, backend):
     """The Bode and polar plots of the branches, along the parameter as the other panels draw it."""
-    from pipeline.report.points import scene_data
+    from pipeline.report.points import scene_of
 
-    data = scene_data(ds)
+    scene = scene_of(ds)
     names = [_branch_label(ds, b) for b in range(ds.sizes["branch"])]
-    lines = harmonics.continuation_lines(ds, data, observable, names)
+    lines = harmonics.continuation_lines(ds, scene, observable, names)
     xs, _, xlabel = parameter_axis(ds)
     lines = lines._replace(x=[row[:len(x)] for row, x in zip(xs, lines.x)])
-    unit = next(o.unit for o in compute.model_of(data).observables if o.name == observable)
+    unit = next(o.unit for o in scene.model.observables if o.name == observable)
     return bode.fig_bode(lines, observable, unit, xlabel, backend)
 
 

@@ -9,7 +9,7 @@ from pipeline.report.cubeinfo import scene_name
 from pipeline.report.figures.point import fig_point
 from pipeline.report.plan import axes_plan
 from pipeline.report.points import (compute_point, point_filename, point_rows, point_title,
-                                    resolve_point, scene_data)
+                                    resolve_point, scene_of)
 from pipeline.report.registry import figures_for
 from pipeline.report.tables import bistable_rows, interval_rows, write_csv
 
@@ -57,7 +57,7 @@ def make_report(ds, out_dir, title=None, points=None, parallel=None, say=None):
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     with pngs.drawer(parallel) as draw_pngs:
-        scene = scene_data(ds) if resolved else None
+        scene = scene_of(ds) if resolved else None
         data = _load(ds)
         title = title or f"Stability report: {scene_name(ds)}"
         intervals = query.unstable_intervals(data)

@@ -60,12 +60,13 @@ def _observable_index(spec, observable):
     return names.index(observable)
 
 
-def sweep_lines(ds, data, observable):
+def sweep_lines(ds, scene, observable):
     """Lines of a sweep cube along its continued axis, one per value of the first other axis
-    with several values (the other axes at their first value): the grid's converged orbits."""
-    spec = compute.model_of(data)
+    with several values (the other axes at their first value): the grid's converged orbits
+    (scene: the cube's pipeline.scene.Scene)."""
+    spec = scene.model
     j = _observable_index(spec, observable)
-    build, fixed, opts = compute.builder(data), compute.fixed_values(data), compute.integrator_settings(data)
+    build, fixed, opts = compute.builder(scene), scene.fixed, scene.integrator
     x = continued_axis(ds)
     by = next((a for a in other_axes(ds) if ds.sizes[a] > 1), None)
     rest = {a: 0 for a in other_axes(ds) if a != by}
@@ -86,11 +87,11 @@ def sweep_lines(ds, data, observable):
     return out
 
 
-def continuation_lines(ds, data, observable, names):
+def continuation_lines(ds, scene, observable, names):
     """Lines of a continuation result, one per branch (names: the branches' legend names)."""
-    spec = compute.model_of(data)
+    spec = scene.model
     j = _observable_index(spec, observable)
-    build, fixed, opts = compute.builder(data), compute.fixed_values(data), compute.integrator_settings(data)
+    build, fixed, opts = compute.builder(scene), scene.fixed, scene.integrator
     par = ds.attrs["parameter"]
     out = Lines([], [], [], [], par)
     for b in range(ds.sizes["branch"]):

@@ -88,8 +88,9 @@ def resolve_point(ds, spec):
     return {"values": values, "index": index, "asked": dict(asked)}
 
 
-def scene_data(ds):
-    """The validated scene of a cube (config_toml), which --point needs to recompute a point."""
+def scene_of(ds):
+    """The scene (pipeline.scene.Scene) of a result's config_toml, which --point and the figures
+    that integrate orbits again need."""
     from pipeline import config as config_mod
 
     text = ds.attrs.get("config_toml")
@@ -97,7 +98,7 @@ def scene_data(ds):
         raise query.QueryError("point: this cube stores no scene (config_toml attribute); "
                                "a point cannot be recomputed")
     try:
-        return config_mod.parse_config(text, path="<cube config_toml>", allow_large=True).data
+        return config_mod.parse_config(text, path="<cube config_toml>", allow_large=True).scene
     except config_mod.ConfigError as exc:
         raise query.QueryError(f"point: the cube's scene (config_toml) is not a valid config, "
                                f"so the point cannot be recomputed: {exc}") from None
@@ -113,17 +114,17 @@ def point_filename(ds, resolved):
     return "point_" + "_".join(parts).replace("+", "") + ".png"
 
 
-def compute_point(ds, data, resolved):
+def compute_point(ds, scene, resolved):
     """Recompute one grid point for the report (pipeline.compute.point_detail): a trajectory on
     the attractor the sweep found there (started from the cube's attractor_state; a second one
     from attractor_state_down where the down sweep ended elsewhere), plus the cube's values."""
     from pipeline import compute
 
-    fixed = compute.fixed_values(data)
+    fixed = scene.fixed
     values = resolved["values"]
     point = {**fixed, **values}
     sub = ds.isel(resolved["index"])
-    pair = orbit_pair([o.name for o in compute.model_of(data).observables], data["report"]["observable"])
+    pair = orbit_pair([o.name for o in scene.model.observables], scene.report.observable)
     names = [n + sfx for n in (*_POINT_CUBE_VARS, *(f"poincare_{o}" for o in pair)) for sfx in ("", schema.DOWN_SUFFIX)
              if n + sfx in sub.variables] + (["hysteresis"] if "hysteresis" in sub.variables else [])
     cube_values = {n: np.asarray(sub[n].values) for n in names}
@@ -135,7 +136,7 @@ def compute_point(ds, data, resolved):
     for suffix, label in sweeps:
         state = cube_values.get("attractor_state" + suffix)
         start = state if state is not None and np.all(np.isfinite(state)) else None
-        detail = compute.point_detail(data, point, start_state=start, periods=POINT_PERIODS,
+        detail = compute.point_detail(scene, point, start_state=start, periods=POINT_PERIODS,
                                       steps_per_period=POINT_STEPS)
         runs.append({"suffix": suffix, "label": label, "detail": detail, "from_cube": start is not None})
     return {"resolved": resolved, "point": point, "cube": cube_values, "runs": runs,

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline import backbone as pb, compute, config
+from pipeline import backbone as pb, config, scene as scenes
 from rotorkernels import nnm
 from workflows.bench import render
 from workflows.bench.common import DOCS, best_time, loadavg, log, provenance
@@ -30,13 +30,14 @@ def mode_rows(path, repeats, grid_points=None):
     data = config.load_config(path).data
     if grid_points:
         data["backbone"]["amplitude_points"] = grid_points
-    pl = pb.plan(data)
-    spec = compute.model_of(data)
-    values = pb.line_values(data, pl.lines[0])
+    scene = scenes.from_data(data)
+    pl = pb.plan(scene)
+    spec = scene.model
+    values = pb.line_values(scene, pl.lines[0])
     system = spec.polynomial(values)
     grid = pb.amplitudes(pl, spec.build(values).derived["axial_approach"])
     modes = nnm.linear_modes(system)
-    opts = compute.integrator_settings(data)
+    opts = scene.integrator
     pb.continued_backbone(spec, values, modes, 0, grid, pl, opts)      # compiles (or loads) the kernels
     rows = []
     for k in range(len(modes)):

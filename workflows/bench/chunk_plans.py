@@ -39,7 +39,7 @@ def swept_costs(cfg, work_dir):
 
     cluster, client = start_cluster(2)
     try:
-        client.run(worker_calls()[0], cfg.data, first_point(cfg))
+        client.run(worker_calls()[0], cfg.scene, first_point(cfg))
         path = pipeline.run(cfg, str(Path(work_dir) / "costs.nc"), scheduler=cluster,
                             overwrite=True, progress=False)
     finally:
@@ -47,7 +47,7 @@ def swept_costs(cfg, work_dir):
         cluster.close()
     with pipeline.open_cube(path) as ds:
         times = ds["compute_time"].transpose(*cfg.axes).values
-    return [(seg, float(times[tuple(seg.index.T)].sum())) for seg in sweep.segments(cfg)]
+    return [(seg, float(times[tuple(seg.index.T)].sum())) for seg in sweep.segments(cfg.scene)]
 
 
 def lines_of(costs):
@@ -101,7 +101,7 @@ def scene_record(name, cfg, work_dir, rng):
     seg_costs = np.array([c for line in lines for _, c in line])
     line_totals = np.array([sum(c for _, c in line) for line in lines])
     return {"scene": name, "attractor": bool(cfg.data["analysis"]["attractor"]),
-            "share": sweep.guided_share(cfg.data), "points": cfg.n_points, "segments": len(seg_costs),
+            "share": sweep.guided_share(cfg.scene), "points": cfg.n_points, "segments": len(seg_costs),
             "lines": len(lines), "work_s": round(float(seg_costs.sum()), 3),
             "segment_mean_s": round(float(seg_costs.mean()), 4),
             "segment_max_over_mean": round(float(seg_costs.max() / seg_costs.mean()), 2),

@@ -31,10 +31,19 @@ from pipeline import compute, config
 text = Path('configs/bai2006_fig13.toml').read_text()
 CLEARANCES = (7.6e-6, 15.2e-6, 19.0e-6)
 
+def scene_of(data):
+    # (what compute.solve_segment takes, the fixed values): the scene object where the tree has
+    # one (pipeline.scene), else the config dict (trees before it)
+    try:
+        from pipeline import scene
+    except ImportError:
+        return data, compute.fixed_values(data)
+    built = scene.from_data(data)
+    return built, dict(built.fixed)
+
 def per_point(attractor, lo, n):
     data = config.parse_config(text).data
-    data = {**data, 'analysis': {**data['analysis'], 'attractor': attractor}}
-    fixed = compute.fixed_values(data)
+    data, fixed = scene_of({**data, 'analysis': {**data['analysis'], 'attractor': attractor}})
     for c in CLEARANCES:     # warm-up: every kernel these segments call compiled or loaded
         compute.solve_segment(data, [{**fixed, 'clearance': c, 'speed': lo + 0.1 * i} for i in range(2)])
     out = {}

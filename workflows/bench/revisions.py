@@ -22,7 +22,8 @@ CHILD = """
 import json, sys, time
 from pipeline import compute, config
 text = open('configs/bai2006_fig13.toml').read().replace('attractor = true', 'attractor = false')
-data = config.parse_config(text, allow_large=True).data
+cfg = config.parse_config(text, allow_large=True)
+data = cfg.scene if hasattr(cfg, 'scene') else cfg.data   # revisions before the scene object take the dict
 points = [dict(speed=60.0 + 0.5 * k, clearance=7.6e-6, contact_angle=None, preload=0.0) for k in range(32)]
 compute.solve_segment(data, points)   # compile, or load the Numba cache
 best = float('inf')

@@ -124,16 +124,16 @@ def task_costs(cfg, n_workers=2):
 
     from pipeline import sweep
 
-    chunks = sweep.chunks_for(cfg, sweep.segments(cfg), n_workers)
+    chunks = sweep.chunks_for(cfg.scene, sweep.segments(cfg.scene), n_workers)
     chunk = sorted(chunks, key=lambda c: sum(len(s) for s in c))[len(chunks) // 2]
     n = sum(len(s) for s in chunk)
     t0 = time.perf_counter()
-    args = pickle.dumps((cfg.data, cfg.axes, cfg.continued_axis, tuple(s.id for s in chunk)), protocol=5)
+    args = pickle.dumps((cfg.scene, tuple(s.id for s in chunk)), protocol=5)
     dumps_s = time.perf_counter() - t0
     t0 = time.perf_counter()
     pickle.loads(args)
     loads_s = time.perf_counter() - t0
-    one = sweep.compute_chunk(cfg.data, cfg.axes, cfg.continued_axis, chunk[:1])
+    one = sweep.compute_chunk(cfg.scene, chunk[:1])
     result_per_point = len(pickle.dumps(one, protocol=5)) / len(chunk[0])
     sizes = [sum(len(s) for s in c) for c in chunks]
     return dict(n_chunks=len(chunks), chunk_points_first=sizes[0], chunk_points_median=int(statistics.median(sizes)),

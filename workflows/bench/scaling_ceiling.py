@@ -11,11 +11,11 @@ import time
 from workflows.bench.common import since, steal_seconds
 
 
-def _warm(data, point):
+def _warm(scene, point):
     """Pool initializer: imports and Numba's on-disk cache loaded once per process, untimed."""
     from pipeline import compute
 
-    compute.solve_segment(data, [point])
+    compute.solve_segment(scene, [point])
 
 
 def _solve(args):
@@ -30,7 +30,7 @@ def _timed(pool, cfg, chunks):
     """(wall, CPU seconds of the pool's processes, hypervisor steal or None) of solving every
     chunk, the next chunk going to whichever process is free."""
     steal, start = steal_seconds(), time.perf_counter()
-    cpu = sum(pool.imap_unordered(_solve, [(cfg.data, cfg.axes, cfg.continued_axis, [s.id for s in c]) for c in chunks], chunksize=1))
+    cpu = sum(pool.imap_unordered(_solve, [(cfg.scene, [s.id for s in c]) for c in chunks], chunksize=1))
     return time.perf_counter() - start, cpu, since(steal, steal_seconds())
 
 
@@ -40,16 +40,16 @@ def measure(cfg, repeats=3):
     pipeline's default chunk plan for that many workers."""
     from pipeline import sweep
 
-    segs = sweep.segments(cfg)
+    segs = sweep.segments(cfg.scene)
     # spawn: the benchmark process runs Dask's threads, which a forked child would inherit locked
     ctx = multiprocessing.get_context("spawn")
     point = segs[0].points[0]
-    pools = {k: ctx.Pool(k, initializer=_warm, initargs=(cfg.data, point)) for k in (1, 2)}
+    pools = {k: ctx.Pool(k, initializer=_warm, initargs=(cfg.scene, point)) for k in (1, 2)}
     try:
         runs = {k: [] for k in pools}
         for _ in range(repeats):
             for k, pool in pools.items():
-                runs[k].append(_timed(pool, cfg, sweep.chunks_for(cfg, segs, k)))
+                runs[k].append(_timed(pool, cfg, sweep.chunks_for(cfg.scene, segs, k)))
     finally:
         for pool in pools.values():
             pool.terminate()

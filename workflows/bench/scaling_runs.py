@@ -121,9 +121,9 @@ def worker_calls():
     """Functions run on the workers: warm and cpu_seconds are closures, which cloudpickle ships by
     value (the workers need not import this module); peak_rss_kib is imported there from
     workflows.bench.common (worker processes start with the driver's sys.path)."""
-    def warm(data, point):
+    def warm(scene, point):
         from pipeline import compute, sweep  # noqa: F401  (what a real run's worker preload imports)
-        compute.solve_segment(data, [point])
+        compute.solve_segment(scene, [point])
         return True
 
     def cpu_seconds():
@@ -146,7 +146,7 @@ def measure_run(cfg, n_workers, chunk_points, work_dir, label, repeat=0):
     cluster_start = time.perf_counter() - t0
     try:
         t0 = time.perf_counter()
-        client.run(warm, cfg.data, first_point(cfg))
+        client.run(warm, cfg.scene, first_point(cfg))
         worker_warmup = time.perf_counter() - t0
         rss_before = list(client.run(max_rss).values())
         cpu_before = client.run(cpu_seconds)
@@ -199,7 +199,7 @@ def warm_up(work_dir):
 
     cfg = scene_config(speed=(100.0, 101.0, 0.5), clearances=(7.6e-6,), name="bench_warmup")
     t0 = time.perf_counter()
-    compute.solve_segment(cfg.data, [first_point(cfg)])
+    compute.solve_segment(cfg.scene, [first_point(cfg)])
     kernels = time.perf_counter() - t0
     t0 = time.perf_counter()
     cluster, client = start_cluster(1)

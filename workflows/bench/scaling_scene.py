@@ -48,7 +48,7 @@ def full_config():
 def scene_info(cfg):
     from pipeline import sweep
 
-    segs = sweep.segments(cfg)
+    segs = sweep.segments(cfg.scene)
     return dict(name=cfg.data["scene"]["name"], n_points=cfg.n_points,
                 axes={k: len(v) for k, v in cfg.axes.items()},
                 speed_range=[float(cfg.axes["speed"][0]), float(cfg.axes["speed"][-1])],
@@ -62,7 +62,7 @@ def chunk_plan(cfg, n_workers, chunk_points):
     scene's segments for n_workers (chunk_points None: the pipeline's default)."""
     from pipeline import sweep
 
-    chunks = sweep.chunks_for(cfg, sweep.segments(cfg), n_workers, chunk_points)
+    chunks = sweep.chunks_for(cfg.scene, sweep.segments(cfg.scene), n_workers, chunk_points)
     sizes = [sum(len(seg) for seg in chunk) for chunk in chunks]
     return len(chunks), int(statistics.median(sizes)) if sizes else 0
 
@@ -82,4 +82,4 @@ def chunk_sizes_for(cfg, n_workers=2):
 def first_point(cfg):
     from pipeline import sweep
 
-    return dict(sweep.segments(cfg)[0].points[0])
+    return dict(sweep.segments(cfg.scene)[0].points[0])

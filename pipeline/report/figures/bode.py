@@ -5,10 +5,10 @@ stable solid, unstable dashed, one colour per line (a value of the first other s
 continuation branch). The sweep report registers it; the continuation report calls fig_bode."""
 import numpy as np
 
-from pipeline import compute, query
+from pipeline import query
 from pipeline.report import harmonics, style
 from pipeline.report.branches import branch_elements
-from pipeline.report.points import scene_data
+from pipeline.report.points import scene_of
 from pipeline.report.registry import Figure, register
 
 
@@ -59,18 +59,18 @@ def fig_bode(lines, observable, unit, xlabel, backend="bokeh"):
     return hv.Layout([]).opts(backend=backend, **opts).clone([amp, phase, polar]).cols(2)
 
 
-def report_observable(data):
+def report_observable(scene):
     """The scene's [report] observable, else the model's first."""
-    return data["report"]["observable"] or compute.model_of(data).observables[0].name
+    return scene.report.observable or scene.model.observables[0].name
 
 
 def _sweep_figure(ds, backend):
     from pipeline.report.plan import axis_label
 
-    data = scene_data(ds)
-    spec = compute.model_of(data)
-    observable = report_observable(data)
-    lines = harmonics.sweep_lines(ds, data, observable)
+    scene = scene_of(ds)
+    spec = scene.model
+    observable = report_observable(scene)
+    lines = harmonics.sweep_lines(ds, scene, observable)
     unit = next(o.unit for o in spec.observables if o.name == observable)
     return fig_bode(lines, observable, unit, axis_label(ds, lines.parameter), backend)
 
@@ -80,7 +80,7 @@ def has_orbits_and_scene(ds):
     if "orbit_state" not in ds or not (ds["orbit_status"].values == harmonics.CONVERGED).any():
         return False
     try:
-        return compute.model_of(scene_data(ds)).forced
+        return scene_of(ds).model.forced
     except query.QueryError:
         return False
 

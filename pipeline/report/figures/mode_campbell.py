@@ -10,7 +10,7 @@ import json
 
 import numpy as np
 
-from pipeline import compute, modes
+from pipeline import modes
 from pipeline.report import style
 from pipeline.report.registry import Figure, register
 from rotorkernels import models
@@ -27,13 +27,13 @@ SPEED_LABEL, FREQUENCY_LABEL = "shaft speed [Hz]", "damped natural frequency [Hz
 CRITICAL_COLUMNS = ("shaft speed [Hz]", "frequency [Hz]", "line", "mode", "whirl", "label", "damping ratio [1]")
 
 
-def campbell_speeds(data, top=None):
+def campbell_speeds(scene, top=None):
     """Shaft speeds [Hz] above 0 (where the whirl directions are not defined) to the top:
     `top`, else 1.25 x the scene's highest grid speed."""
     if top is None:
-        name = compute.model_of(data).speed
-        first = {axis: float(v[0]) for axis, v in data["sweep"].items()}
-        top = 1.25 * max(float(s) for s in data["sweep"].get(name, [modes.scene_values(data, first)[name]]))
+        name = scene.model.speed
+        first = {axis: float(v[0]) for axis, v in scene.axes.items()}
+        top = 1.25 * max(float(s) for s in scene.axes.get(name, [modes.scene_values(scene, first)[name]]))
     top = float(top)
     return np.linspace(0.0, top, CAMPBELL_SPEEDS + 1)[1:]
 
@@ -112,15 +112,15 @@ def critical_table(hv, found):
     return table.opts(width=1100, height=30 + 26 * len(rows), backend="bokeh")
 
 
-def fig_mode_campbell(data, backend="bokeh", speeds=None, marks=()):
-    """The Campbell diagram of a scene (data: a validated config's data) over `speeds` [Hz]
+def fig_mode_campbell(scene, backend="bokeh", speeds=None, marks=()):
+    """The Campbell diagram of a scene (pipeline.scene.Scene) over `speeds` [Hz]
     (default campbell_speeds), its excitation lines and critical speeds (table below when
     there are any), and vertical lines at `marks`."""
     hv = style.holoviews()
-    speeds = campbell_speeds(data) if speeds is None else np.asarray(speeds, float)
-    spec = compute.model_of(data)
-    first = {name: float(v[0]) for name, v in data["sweep"].items()}
-    values = modes.scene_values(data, first)
+    speeds = campbell_speeds(scene) if speeds is None else np.asarray(speeds, float)
+    spec = scene.model
+    first = {name: float(v[0]) for name, v in scene.axes.items()}
+    values = modes.scene_values(scene, first)
     rows = modes.campbell(spec, values, speeds)
     fine = np.linspace(0.0, speeds[-1], modes.CRITICAL_GRID + 1)[1:]
     found = modes.scene_critical_speeds(spec, values, fine)
@@ -146,14 +146,14 @@ def fig_mode_campbell(data, backend="bokeh", speeds=None, marks=()):
 def result_figure(ds, backend):
     """The Campbell diagram of a cube's or a continuation result's scene: to 1.25 x the top
     speed of the grid (or of the continued range), the grid's or the lines' speeds marked."""
-    from pipeline.report.points import scene_data
+    from pipeline.report.points import scene_of
 
-    data = scene_data(ds)
-    speed = compute.model_of(data).speed
+    scene = scene_of(ds)
+    speed = scene.model.speed
     if ds.attrs.get("parameter") == speed:
         top = 1.25 * max(json.loads(ds.attrs["range"]))
-        return fig_mode_campbell(data, backend, campbell_speeds(data, top))
-    return fig_mode_campbell(data, backend, marks=sorted({float(s) for s in np.atleast_1d(ds[speed].values)}))
+        return fig_mode_campbell(scene, backend, campbell_speeds(scene, top))
+    return fig_mode_campbell(scene, backend, marks=sorted({float(s) for s in np.atleast_1d(ds[speed].values)}))
 
 
 def has_linear_analysis(ds):

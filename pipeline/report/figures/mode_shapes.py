@@ -6,7 +6,7 @@ amplitude is 1, a dot where theta = 0 (the whirl direction runs from it). For th
 linearization whose coordinates name stations ("x1", "y1", ...); drawn beside the Campbell diagram."""
 import numpy as np
 
-from pipeline import compute, modes
+from pipeline import modes
 from pipeline.report import style
 from pipeline.report.registry import Figure, register
 from pipeline.report.figures.mode_campbell import has_linear_analysis
@@ -14,12 +14,12 @@ from pipeline.report.figures.mode_campbell import has_linear_analysis
 THETA = np.linspace(0.0, 2.0 * np.pi, 73)
 
 
-def scene_modes(data):
+def scene_modes(scene):
     """(modes at the scene's first grid point, the model's coordinate names, its disc (xi_D, l)
     or None)."""
-    spec = compute.model_of(data)
-    first = {name: float(v[0]) for name, v in data["sweep"].items()}
-    values = modes.scene_values(data, first)
+    spec = scene.model
+    first = {name: float(v[0]) for name, v in scene.axes.items()}
+    values = modes.scene_values(scene, first)
     _, system = spec.linear_system(values)
     return modes.modes(spec, values), system.coordinates, modes.disk_of(spec, values)
 
@@ -46,10 +46,10 @@ def _station_label(station):
     return "disc" if station == modes.DISK_STATION else f"station {station}"
 
 
-def fig_mode_shapes(data, backend="bokeh"):
+def fig_mode_shapes(scene, backend="bokeh"):
     """One square panel per mode with the stations' orbits, three a row."""
     hv = style.holoviews()
-    found, coordinates, disk = scene_modes(data)
+    found, coordinates, disk = scene_modes(scene)
     panels = [_mode_panel(hv, m, coordinates, disk, k, backend) for k, m in enumerate(found)]
     rows = -(-len(panels) // 3)
     return style.layout(hv, panels, backend, min(3, len(panels)), "Mode shapes: the stations' orbits",
@@ -60,16 +60,16 @@ def has_stations(ds):
     """has_linear_analysis and the model's coordinates name at least one station."""
     if not has_linear_analysis(ds):
         return False
-    from pipeline.report.points import scene_data
+    from pipeline.report.points import scene_of
 
-    found, coordinates, _ = scene_modes(scene_data(ds))
+    found, coordinates, _ = scene_modes(scene_of(ds))
     return bool(found) and bool(modes.station_shapes(found[0], coordinates))
 
 
 def result_figure(ds, backend):
-    from pipeline.report.points import scene_data
+    from pipeline.report.points import scene_of
 
-    return fig_mode_shapes(scene_data(ds), backend)
+    return fig_mode_shapes(scene_of(ds), backend)
 
 
 CAPTION = "Mode shapes at the scene's first grid point: each bearing station's and the disc's orbit (a dot at phase 0)"

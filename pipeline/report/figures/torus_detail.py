@@ -14,7 +14,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from pipeline import compute
 from pipeline.report import style
 from rotorkernels import shooting, torus as tr
 
@@ -57,19 +56,19 @@ def chosen_point(ds, value=None):
     return int(b), int(k)
 
 
-def torus_detail(ds, data):
+def torus_detail(ds, scene):
     """The Detail of the chosen torus (module docstring), from the result and its scene."""
     from pipeline import continuation, torus_branches
 
-    b, k = chosen_point(ds, data["report"].get("torus_detail"))
+    b, k = chosen_point(ds, scene.report.torus_detail)
     nodes = ds["torus_nodes"].values[b, k]
     nodes = nodes[~np.isnan(nodes).any(axis=1)]
     lam = float(ds["parameter"].values[b, k])
     where = {c: float(ds[c].values[b]) for c in ds.coords if ds[c].dims == ("branch",)}
-    family, built = torus_branches.torus_family(data, continuation.plan(data), where, nodes.shape[0])
+    family, built = torus_branches.torus_family(scene, continuation.plan(scene), where, nodes.shape[0])
     circle = tr.Torus(nodes, float(family.rotation(lam)), family.period, tr.CONVERGED, 0, np.nan,
                       tr.fourier_tail(nodes), np.nan, np.empty(0), 0)
-    spec = compute.model_of(data)
+    spec = scene.model
     p = np.array(family.params(lam), float)
     p[family.phase_index] = 0.0
     states = shooting.sample_orbit(spec.kernel, circle.at(0.0)[0], p, TURNS * family.period, TURNS * SAMPLES_PER_TURN,
@@ -134,10 +133,10 @@ def _spectrum(hv, d, backend):
 
 
 def result_figure(ds, backend):
-    from pipeline.report.points import scene_data
+    from pipeline.report.points import scene_of
 
     hv = style.holoviews()
-    d = torus_detail(ds, scene_data(ds))
+    d = torus_detail(ds, scene_of(ds))
     size = {"width": 440, "height": 400} if backend == "bokeh" else {"aspect": 1.1}
     panels = [f(hv, d, backend).opts(**size, backend=backend) for f in (_section, _history, _spectrum)]
     title = (f"Torus at {ds.attrs['parameter']} = {d.parameter:.6g} {ds['parameter'].attrs.get('units', '')} "
