@@ -104,6 +104,26 @@ def build(cfg):
     return from_data(cfg.data, cfg.axes)
 
 
+def of_result(text, written_version):
+    """The Scene of a result file's config_toml, as the model version that wrote it (model_version
+    attribute) read it: a key the text does not give takes the default of that version where it
+    has changed since (ModelSpec.older_defaults)."""
+    data = config.parse_config(text, path="<result config_toml>", allow_large=True).data
+    given = config.tomllib.loads(text)
+    for version, section, key, value in models.get(data["scene"]["model"]).older_defaults:
+        if _version(written_version) < _version(version) and key not in given.get(section, {}):
+            value = value(data[section]) if callable(value) else value
+            data = {**data, section: {**data[section], key: value}}
+    return from_data(data)
+
+
+def _version(text):
+    try:
+        return int(text)
+    except (TypeError, ValueError):
+        return 1        # files before model versions were recorded
+
+
 def from_data(data, axes=None):
     """The Scene of a validated config dict (a Config's `data`, or one a result file stores);
     axes: the Config's grid arrays (default: the dict's [sweep] values, the same numbers)."""

@@ -204,3 +204,25 @@ def test_info_shows_each_bearing_value_and_whether_it_was_given():
     assert line("bearing_youngs_modulus").endswith("[Pa] = 2.1e+11")
     assert line("bearing_youngs_modulus_given").endswith("= 0")
     assert line("contact_constant_given").endswith("= 0")
+
+
+# --- results written before version 2 are recomputed as they were --------------------------------
+
+@pytest.mark.parametrize("bearing_keys, before", [("", "nominal"), ("outer_race_radius = 27.52e-3", "geometry")])
+def test_a_result_of_model_version_1_keeps_the_free_angle_it_was_computed_with(bearing_keys, before):
+    """A Hertz scene on the 2016 table that gives no free_angle meant the row's label before model
+    version 2 unless a groove dimension was given (aace0b1's free_angle_source); a result file of
+    version 1 is rebuilt that way (pipeline.scene.of_result), one of version 2 from the geometry.
+    Checked against the same scene with free_angle given explicitly."""
+    from pipeline import scene
+
+    text = SCENE.format(law="hertz", bearing=bearing_keys, sweep="nominal_angle = [15.0]")
+    explicit = {src: config.parse_config(SCENE.format(law="hertz", bearing=f'{bearing_keys}\nfree_angle = "{src}"',
+                                                      sweep="nominal_angle = [15.0]")).scene
+                for src in ("nominal", "geometry")}
+
+    def free(sc):
+        return compute.point_params(sc, sc.fixed | {"speed": 250.0}).derived["free_contact_angle"]
+    assert free(scene.of_result(text, "1")) == free(explicit[before])
+    assert free(scene.of_result(text, "2")) == free(explicit["geometry"])
+    assert free(explicit["nominal"]) != free(explicit["geometry"])

@@ -91,14 +91,14 @@ def resolve_point(ds, spec):
 def scene_of(ds):
     """The scene (pipeline.scene.Scene) of a result's config_toml, which --point and the figures
     that integrate orbits again need."""
-    from pipeline import config as config_mod
+    from pipeline import config as config_mod, scene as scene_mod
 
     text = ds.attrs.get("config_toml")
     if not text:
         raise query.QueryError("point: this cube stores no scene (config_toml attribute); "
                                "a point cannot be recomputed")
     try:
-        return config_mod.parse_config(text, path="<cube config_toml>", allow_large=True).scene
+        return scene_mod.of_result(text, ds.attrs.get("model_version"))
     except config_mod.ConfigError as exc:
         raise query.QueryError(f"point: the cube's scene (config_toml) is not a valid config, "
                                f"so the point cannot be recomputed: {exc}") from None

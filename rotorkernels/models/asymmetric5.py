@@ -46,6 +46,7 @@ def polynomial(v):
 
 SPEC = ModelSpec(
     name="asymmetric5", id=6, module=__name__, version="2",   # 2: the 2010 papers' bearing (E = 2e11 Pa) by default
+    older_defaults=sr.OLDER_DEFAULTS,
     n_position=N_POS, forced=False, continuation=("speed",),
     description="Filipkovsky 2010: asymmetric 5-DOF rotor (transverse-axial coupling) on preloaded ball "
                 "bearings, cubic series law, conservative",

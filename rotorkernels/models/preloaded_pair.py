@@ -82,6 +82,16 @@ def free_angle_source(inputs):
     return inputs.free_angle or "geometry"
 
 
+def free_angle_before_version_2(section):
+    """The free-angle source a scene giving none meant before model version 2 ([bearing] section,
+    validated): the row's label under the Hertz law on a labelled table without groove overrides,
+    else the geometry (ModelSpec.older_defaults)."""
+    labelled = None not in bearing.ANGULAR_TABLES[section["table"]].outer_race_radius
+    groove = any(section.get(k) is not None for k in ("inner_race_radius", "outer_race_radius", "groove_radius",
+                                                      "ball_diameter"))
+    return "nominal" if section["preload_law"] == "hertz" and labelled and not groove else "geometry"
+
+
 def free_angle(inputs):
     """The free contact angle [rad] (see free_angle_source)."""
     if free_angle_source(inputs) == "geometry":

@@ -52,8 +52,8 @@ from rotorkernels.cubic_law import cubic_coefficients, cubic_load
 from rotorkernels.models.spec import Built, Equilibrium, LinearSystem, ModelSpec, Observable, Parameter
 from rotorkernels.models.preloaded_pair import (  # noqa: F401 (the pair's API, read as rp.*)
     ARRANGEMENTS, BEARING_DERIVED, BEARING_KEYS, DEFAULT_NOMINAL_ANGLE, NOMINAL_ANGLES,
-    arrangement_of, bearing_derived, bearing_problems, bearing_state, geometry, n_balls_of, preload_of,
-    table_geometry, with_row)
+    arrangement_of, bearing_derived, bearing_problems, bearing_state, free_angle_before_version_2, geometry,
+    n_balls_of, preload_of, table_geometry, with_row)
 from rotorkernels.models.velocity import upper_rows, velocity_rows
 
 LENGTH_SCALE = 1e-6
@@ -504,6 +504,7 @@ SPEC = ModelSpec(
     name="rigid_preloaded",
     id=4,
     version="2",    # 2: the table rows' free angle from their groove geometry under both preload laws
+    older_defaults=(("2", "bearing", "free_angle", free_angle_before_version_2),),
     module=__name__,
     n_position=N_POS,
     description="Filipkovsky 2016: 5-DOF rigid rotor on two preloaded angular-contact ball bearings",

@@ -54,6 +54,11 @@ STEEL_DENSITY = 7800.0      # kg/m^3 (not in the papers)
 SHAFT_DIAMETER = 0.025      # m (papers)
 COORDINATES = ("x1", "y1", "x2", "y2", "z")
 
+# version 2 took the 2010 papers' table as the default (it was the 2016 one, 15 deg row) and the
+# free angle from the groove geometry (ModelSpec.older_defaults)
+OLDER_DEFAULTS = (("2", "bearing", "table", "filipkovsky2016"),
+                  ("2", "bearing", "free_angle", rp.free_angle_before_version_2))
+
 
 def p_layout(n):
     """Offsets in the kernel vector of an n-position model: gain T^2 M^-1 (n x n), gyroscopic

@@ -105,6 +105,11 @@ class ModelSpec:
     n_position: int
     description: str
     version: str = "1"
+    # (version, section, key, value): a scene written by a model version below `version` that
+    # gives no section.key meant `value` (the default then; a callable: value(the scene's section)),
+    # so that results written before a default changed are recomputed as they were
+    # (pipeline.scene.of_result)
+    older_defaults: tuple = ()
     velocity_form: bool = True      # u = (q, q'), dq/dtau = q': Jacobian [[0, I], [A, B]]
     n_state_override: int = 0       # only for models not in velocity form
     forced: bool = True             # periodic forcing of known period (shooting over it)

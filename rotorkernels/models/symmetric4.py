@@ -60,6 +60,7 @@ def polynomial(v):
 
 SPEC = ModelSpec(
     name="symmetric4", id=5, module=__name__, version="2",   # 2: the 2010 papers' bearing (E = 2e11 Pa) by default
+    older_defaults=sr.OLDER_DEFAULTS,
     n_position=N_POS, forced=False, continuation=("speed",),
     description="Filipkovsky 2010: symmetric 4-DOF rotor on preloaded ball bearings, cubic series law, conservative",
     parameters=sr.ROTOR_PARAMETERS + sr.BEARING_PARAMETERS,
