@@ -11,7 +11,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from pipeline import schema
+from pipeline import schema, torus_points
 from rotorkernels import attractor, continuation, extrema, integrators, models, shooting
 
 
@@ -82,8 +82,9 @@ def point_values(cfg, given):
 
 def solve_segment(data, points):
     """Solve a continuation segment. points: list of dicts {axis: value} (SI, angles in degrees).
-    Returns schema variables, one row per point: the periodic orbit ([analysis] floquet) and the
-    attractor ([analysis] attractor)."""
+    Returns schema variables, one row per point: the periodic orbit ([analysis] floquet; at a
+    quasi-periodically forced point its torus, pipeline.torus_points) and the attractor
+    ([analysis] attractor)."""
     model = model_of(data)
     ana = data["analysis"]
     opts = integrator_settings(data)
@@ -102,6 +103,9 @@ def solve_segment(data, points):
         start = time.perf_counter()
         rows.append(point_variables(model, sol, par, 0.0, opts))
         seconds[i] += time.perf_counter() - start
+    if ana["floquet"]:
+        for i, sec in enumerate(torus_points.segment_rows(model, params, rows, opts, data["numerics"]["newton_tol"])):
+            seconds[i] += sec
     if ana["attractor"]:
         settings = attractor_settings(data)
         for direction, suffix in _directions(ana["sweep_direction"]):
