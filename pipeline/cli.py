@@ -14,7 +14,7 @@ import numpy as np
 
 import pipeline
 from pipeline import config as config_mod
-from pipeline import cluster, fileio, preflight, schema
+from pipeline import cluster, fileio, preflight, schema, torus_points
 
 EXIT_USAGE = 2
 
@@ -187,10 +187,15 @@ def cmd_point(args):
         result["contact_angle"] = float(row["contact_angle_used"])
     if args.attractor:
         result["attractor"] = _attractor_result(row)
+    torus = torus_points.summary(row)
+    if torus:
+        result["torus"] = torus
     if args.json:
         print(json.dumps(result, indent=2))
     else:
         print(_point_text(result))
+        if torus:
+            print(torus_points.summary_text(torus))
         if args.attractor:
             print(_attractor_text(result["attractor"]))
     return 0

@@ -106,3 +106,31 @@ def segment_rows(model, params, rows, opts, tol):
         row.update(variables(model, circle, par, opts))
         seconds[i] = time.perf_counter() - start
     return seconds
+
+
+def summary(row):
+    """`rotorsweep point`'s torus of a row (plain values, None where absent), or None where the
+    point has no torus (periodic forcing)."""
+    if row.get("torus_status", schema.INT_FILL) < 0:
+        return None
+    stab = int(row["torus_stability"])
+
+    def num(name):
+        x = float(row[name])
+        return x if np.isfinite(x) else None
+    return {"status": schema.TORUS_STATUS[int(row["torus_status"])],
+            "stability": schema.TORUS_STABILITY[stab] if stab >= 0 else None,
+            "exponent": num("torus_exponent"), "exponent_error": num("torus_exponent_error"),
+            "rotation_number": num("torus_rotation_number"), "modes": int(row["torus_modes"]),
+            "error": num("torus_error"), "amplitude_error": num("torus_amplitude_error")}
+
+
+def summary_text(t):
+    def g(x, fmt=".3g"):
+        return "-" if x is None else format(x, fmt)
+    exponent = "-" if t["exponent"] is None else f"{t['exponent']:+.6g} +- {t['exponent_error']:.2g} 1/s"
+    return "\n".join([
+        f"torus             {t['status']}, {t['stability'] or '-'} (largest normal exponent {exponent})",
+        f"torus rotation    {g(t['rotation_number'], '.12g')}, {t['modes']} Fourier modes, error estimate "
+        f"{g(t['error'], '.2g')} (scaled state)",
+        f"amplitudes        over the torus, relative sampling error {g(t['amplitude_error'], '.2g')}"])

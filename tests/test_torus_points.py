@@ -116,3 +116,15 @@ def test_a_failed_torus_is_a_status_not_a_traceback(result):
     out = torus_points.variables(model, circle, built, opts)
     assert out["torus_status"] == schema.TORUS_STATUS.index("integration_failed")
     assert out["torus_stability"] == schema.INT_FILL and np.isnan(out["torus_exponent"])
+
+
+def test_point_prints_the_torus_of_a_quasi_periodic_point(capsys):
+    """`rotorsweep point` at the quick scene's golden-ratio point: its torus, converged and stable
+    (the attractor there is that torus: tests/test_torus_preloaded.py's kind of check)."""
+    import json
+
+    assert cli.main(["point", "--config", "configs/filipkovsky2016_quick.toml", "--at", "speed=250",
+                     "--at", "support_frequency=404.508497187474", "--json"]) in (0, None)
+    torus = json.loads(capsys.readouterr().out)["torus"]
+    assert torus["status"] == "converged" and torus["stability"] == "stable" and torus["exponent"] < 0
+    assert torus["rotation_number"] == pytest.approx((5 ** 0.5 + 1) / 2, rel=1e-12)

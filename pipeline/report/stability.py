@@ -14,6 +14,7 @@ CLASSES = ("stable", "fold", "period doubling", "Neimark-Sacker", "no periodic o
            "quasi-periodic stable", "quasi-periodic unstable", "quasi-periodic undecided", "torus failed")
 PALETTE = ("#D6E4F0", "#E69F00", "#0072B2", "#CC79A7", "#333333", "#009E73",
            "#56B4E9", "#D55E00", "#F0E442", "#777777")
+TORUS_CLASSES = CLASSES.index("quasi-periodic stable")     # the first of the torus points' classes
 UNCLASSIFIED = "unclassified"   # converged but unstable with no bifurcation code (should not occur)
 UNCLASSIFIED_COLOUR = "#BBBBBB"
 
@@ -60,7 +61,8 @@ def counts(ds):
     if missing:
         by_status["missing"] = missing
     cls = stability_class(ds).ravel()
-    by_class = {name: int((cls == i).sum()) for i, name in enumerate(CLASSES)}
+    shown = CLASSES if "torus_status" in ds else CLASSES[:TORUS_CLASSES]    # no torus classes without tori
+    by_class = {name: int((cls == i).sum()) for i, name in enumerate(shown)}
     if np.isnan(cls).any():
         by_class[UNCLASSIFIED] = int(np.isnan(cls).sum())
     return by_status, by_class
