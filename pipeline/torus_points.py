@@ -7,8 +7,10 @@ The circle comes from a settled transient (torus.torus_from_transient: SETTLE_PE
 the stroboscopic map, FIT_PERIODS samples fitted by FIRST_NODES nodes, then Newton on all nodes
 with the node count grown until the Fourier tail is below DECAY_TOL, at most MAX_NODES); along a
 segment a point first tries the previous quasi-periodic point's circle as its guess (natural
-continuation, ~50x cheaper than the transient), the transient only where that fails. The same
-settings serve the torus lines of `rotorsweep continue` (pipeline.torus_branches).
+continuation, as the orbits are chained: it keeps following one torus where tori coexist, and
+reaches tori a transient leaves; not cheaper: a few variational Newton steps cost about what the
+~500 plain stroboscopic steps of the transient do), the transient only where that fails. The
+same settings serve the torus lines of `rotorsweep continue` (pipeline.torus_branches).
 
 Per point (schema.TORUS_VARIABLES): status, normal stability and largest normal Lyapunov
 exponent [1/s], rotation number, Fourier modes, error estimate, and the half peak-to-peak of each
