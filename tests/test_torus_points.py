@@ -128,3 +128,14 @@ def test_point_prints_the_torus_of_a_quasi_periodic_point(capsys):
     torus = json.loads(capsys.readouterr().out)["torus"]
     assert torus["status"] == "converged" and torus["stability"] == "stable" and torus["exponent"] < 0
     assert torus["rotation_number"] == pytest.approx((5 ** 0.5 + 1) / 2, rel=1e-12)
+
+
+def test_cf_checkers_find_no_error_with_the_torus_variables(result, tmp_path):
+    """The cube with torus variables under cfchecker and the IOOS compliance-checker
+    (tests/cfcheck.py; skipped where they are not installed)."""
+    from tests import cfcheck
+
+    path = result[0].encoding["source"]
+    messages = cfcheck.cfchecker_messages(path, tmp_path)
+    assert messages["FATAL"] == messages["ERROR"] == []
+    assert cfcheck.ioos_failures(path, tmp_path) == []

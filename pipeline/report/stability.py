@@ -28,7 +28,7 @@ CLASS_MEANING = ("stable and no periodic orbit say what the grid point is; fold,
                  "(the same class as `rotorsweep query --unstable`); bistable: a stable orbit between the "
                  "folds of a jump, where another stable orbit coexists (`rotorsweep query --bistable`); "
                  "quasi-periodic: the point's forcing has two incommensurate frequencies, its response a torus "
-                 "(stable, unstable or undecided by its largest normal Lyapunov exponent; torus failed: not solved)")
+                 "(stable, unstable or undecided by the sign of its largest normal exponent; torus failed: not solved)")
 
 
 def stability_class(ds):
