@@ -172,7 +172,7 @@ def _attractor_result(row):
 
 
 def cmd_point(args):
-    from pipeline import schema
+    from pipeline import schema, torus_points
 
     cfg = pipeline.as_config(args.config, whole_grid=False)
     if args.attractor:
@@ -197,10 +197,15 @@ def cmd_point(args):
         result["contact_angle"] = float(row["contact_angle_used"])
     if args.attractor:
         result["attractor"] = _attractor_result(row)
+    torus = torus_points.summary(row)
+    if torus:
+        result["torus"] = torus
     if args.json:
         print(json.dumps(result, indent=2))
     else:
         print(_point_text(result))
+        if torus:
+            print(torus_points.summary_text(torus))
         if args.attractor:
             print(_attractor_text(result["attractor"]))
     return 0

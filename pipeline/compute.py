@@ -11,7 +11,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from pipeline import schema
+from pipeline import schema, torus_points
 from rotorkernels import attractor, continuation, extrema, integrators, shooting
 
 
@@ -57,7 +57,8 @@ def point_values(cfg, given):
 def solve_segment(scene, points):
     """Solve a continuation segment of a scene (pipeline.scene.Scene). points: list of dicts
     {axis: value} (SI, angles in degrees). Returns schema variables, one row per point: the
-    periodic orbit ([analysis] floquet) and the attractor ([analysis] attractor)."""
+    periodic orbit ([analysis] floquet; at a quasi-periodically forced point its torus,
+    pipeline.torus_points) and the attractor ([analysis] attractor)."""
     model = scene.model
     ana = scene.analysis
     opts = scene.integrator
@@ -76,6 +77,9 @@ def solve_segment(scene, points):
         start = time.perf_counter()
         rows.append(point_variables(model, sol, par, 0.0, opts))
         seconds[i] += time.perf_counter() - start
+    if ana.floquet:
+        for i, sec in enumerate(torus_points.segment_rows(model, params, rows, opts, scene.newton.tol)):
+            seconds[i] += sec
     if ana.attractor:
         settings = ana.settings
         for direction, suffix in _directions(ana.sweep_direction):

@@ -264,6 +264,8 @@ def describe(ds):
     if "orbit_status" in ds:
         lines += ["", "points per orbit_status:"] + _flag_counts(ds["orbit_status"])
         lines += _describe_classes(ds)
+    if "torus_status" in ds:
+        lines += ["", "points per torus_status:"] + _flag_counts(ds["torus_status"])
     lines += ["", "provenance:"]
     lines += [f"  {k}: {v}" for k, v in ds.attrs.items() if k not in ("title", "config_toml")]
     if "config_toml" in ds.attrs:

@@ -282,7 +282,9 @@ def point_classes(ds):
     / none): how stability was lost before it (unstable_intervals). A point without orbit is
     "no_orbit" wherever it lies; an unstable orbit in an interval that began without orbit has
     its own bifurcation code's name. A stable point inside a bistable interval
-    (bistable_intervals: another stable orbit coexists there) is "bistable"."""
+    (bistable_intervals: another stable orbit coexists there) is "bistable". A
+    quasi-periodically forced point with its torus is "quasi_periodic_stable" / "_unstable" /
+    "_undecided", or "torus_failed" (_torus_classes)."""
     import xarray as xr
 
     status = ds["orbit_status"]
@@ -309,6 +311,7 @@ def point_classes(ds):
         inside = grid[(grid >= iv["start"]) & (grid <= iv["end"])]
         line = cls.loc[{**sel, along: inside}]
         cls.loc[{**sel, along: inside}] = np.where(line.values == "stable", "bistable", line.values)
+    _torus_classes(ds, cls.values)
     return cls
 
 
@@ -330,6 +333,19 @@ def class_runs(ds):
             out.append({**{a: float(v) for a, v in where.items()}, "start": float(grid[i0]),
                         "end": float(grid[i1]), "n_points": int(i1 - i0 + 1), "class": str(names[i0])})
     return out
+
+
+def _torus_classes(ds, values):
+    """A point without orbit by design that has its torus (pipeline.torus_points) is
+    "quasi_periodic_<stable|unstable|undecided>", or "torus_failed" where its torus did not converge."""
+    if "torus_status" not in ds:
+        return
+    status, stab = ds["torus_status"].values, ds["torus_stability"].values
+    solved = (ds["orbit_status"].values == NOT_APPLICABLE) & (status >= 0)
+    names = np.array([f"quasi_periodic_{name}" for name in schema.TORUS_STABILITY] + ["torus_failed"], dtype=object)
+    converged = status == schema.TORUS_STATUS.index("converged")
+    pick = np.where(converged & (stab >= 0), stab, len(schema.TORUS_STABILITY))
+    values[solved] = names[pick[solved]]
 
 
 def attractor_label(code, k):

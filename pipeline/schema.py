@@ -106,6 +106,26 @@ ATTRACTOR_VARIABLES = {
         "units": "1", "comment": "the start of the next speed in the continuation; see orbit_state for the units"}),
     "lyapunov_periods": ((), "float64", {"long_name": "forcing periods integrated for the Lyapunov estimate (0 when derived)", "units": "1"}),
 }
+# Tori at quasi-periodically forced grid points (models with torus_forcing; pipeline.torus_points):
+# the invariant circle of the stroboscopic map, its normal stability and its Fourier resolution.
+TORUS_STATUS = ("converged", "not_converged", "fourier_decay_failed", "integration_failed")
+TORUS_STABILITY = ("unstable", "stable", "undecided")
+TORUS_VARIABLES = {
+    "torus_status": ((), "int8", {"long_name": "invariant torus (quasi-periodic shooting) status", **flag_attrs(TORUS_STATUS),
+                                  "comment": "integration_failed includes a transient (the torus's first guess) that could not be integrated"}),
+    "torus_stability": ((), "int8", {"long_name": "normal stability of the torus (sign of its largest normal Lyapunov exponent)",
+                                     **flag_attrs(TORUS_STABILITY)}),
+    "torus_exponent": ((), "float64", {"long_name": "largest normal Lyapunov exponent of the torus", "units": "s-1"}),
+    "torus_exponent_error": ((), "float64", {"long_name": "convergence error of torus_exponent (its two halves' difference)", "units": "s-1"}),
+    "torus_rotation_number": ((), "float64", {"long_name": "rotation number of the torus: second forcing's phase advance per forcing_period / 2 pi", "units": "1"}),
+    "torus_modes": ((), "int16", {"long_name": "Fourier modes K of the invariant circle (2 K + 1 collocation nodes)", "units": "1"}),
+    "torus_error": ((), "float64", {"long_name": "error estimate of the invariant circle, scaled state (lengths in units of length_scale)", "units": "1"}),
+    "torus_amplitude_error": ((), "float64", {
+        "long_name": "estimated relative shortfall of the half peak-to-peak amplitudes over the torus (largest over the observables)",
+        "units": "1", "comment": "the amplitudes are exact extrema along trajectories from equally spaced phases of the circle; "
+                                 "the phase sampling's shortfall is estimated by the parabola through the extreme samples"}),
+}
+
 # sweep_direction = "both": the same diagnostics sweeping the continued axis downwards, as
 # <name>_down, plus where the two directions end on different attractors (hysteresis).
 DOWN_SUFFIX = "_down"
@@ -114,9 +134,11 @@ DOWN_SUFFIX = "_down"
 def observable_variables(spec):
     """Per-orbit and per-sample variables of the model's observables (SI units)."""
     out = {}
+    where = " (over the torus where torus_status is set)" if spec.torus_forcing else ""
     for o in spec.observables:
         out[f"{o.name}_mean"] = ((), "float64", {"long_name": f"mean {o.long_name} over the orbit", "units": o.unit})
-        out[f"amplitude_{o.name}"] = ((), "float64", {"long_name": f"half peak-to-peak {o.long_name} over the orbit", "units": o.unit})
+        out[f"amplitude_{o.name}"] = ((), "float64", {"long_name": f"half peak-to-peak {o.long_name} over the orbit{where}",
+                                                      "units": o.unit})
     out.update({name: ((), "float64", {"long_name": long_name, "units": unit})
                 for name, (unit, long_name) in spec.derived.items()})
     return out
@@ -158,7 +180,7 @@ def _fill_comments(table):
 
 def variables_of(spec):
     """Every variable a cube of this model may hold: name -> (extra dims, dtype, attrs)."""
-    return _fill_comments({**VARIABLES, **observable_variables(spec),
+    return _fill_comments({**VARIABLES, **observable_variables(spec), **(TORUS_VARIABLES if spec.torus_forcing else {}),
                            **_with_down({**ATTRACTOR_VARIABLES, **poincare_variables(spec)})})
 
 # The boundary table: one entry per stability change between neighbouring values of the

@@ -20,16 +20,11 @@ relative for a swing varying over the phase by O(1) of itself, less for weak pha
 import numpy as np
 
 from pipeline import compute, torus_events
-from rotorkernels import extrema, torus as tr
+from pipeline.torus_points import AMPLITUDE_PHASES, DECAY_TOL, FIRST_NODES, FIT_PERIODS, MAX_NODES, SETTLE_PERIODS
+from rotorkernels import torus as tr
 from rotorkernels.continuation import engine, events as ev, tori
 
-SETTLE_PERIODS = 400
-FIT_PERIODS = 120
-FIRST_NODES = 15
-MAX_NODES = 63
-DECAY_TOL = 1e-9        # the first torus's Fourier tail (node count grown to reach it)
 BREAKDOWN_TOL = 1e-7    # a branch point's tail above it: the circle is no longer resolved
-AMPLITUDE_PHASES = 64
 POLISH_TOL = 1e-12      # each stored circle's residual, relative to max(1, max |U|) (tori.polish)
 TORUS_STATUS = {tr.UNSTABLE: 0, tr.STABLE: 1, tr.UNDECIDED: 2}
 
@@ -58,20 +53,6 @@ def torus_family(scene, pl, where, n_nodes):
                             decay_tol=BREAKDOWN_TOL), built
 
 
-def settled_samples(kernel, state, p, phase_index, rho, opts):
-    """(samples (FIT_PERIODS, n), their phases, ok) of the stroboscopic map after SETTLE_PERIODS."""
-    samples, phases, theta = [], [], 0.0
-    for k in range(SETTLE_PERIODS + FIT_PERIODS):
-        if k >= SETTLE_PERIODS:
-            samples.append(state.copy())
-            phases.append(theta)
-        ends, _, ok, _ = tr.node_maps(kernel, state[None, :], [theta], p, phase_index, 1.0, opts, False)
-        if not ok:
-            return None, None, False
-        state, theta = ends[0], (theta + rho) % (2.0 * np.pi)
-    return np.array(samples), np.array(phases), True
-
-
 def first_torus(scene, pl, where):
     """(the first torus at the start, the family sized to it, built); the torus's status says
     whether it converged."""
@@ -79,12 +60,11 @@ def first_torus(scene, pl, where):
     phase, freq, _ = spec.torus_forcing
     family, built = torus_family(scene, pl, where, FIRST_NODES)
     p = built(pl.start).p
-    samples, phases, ok = settled_samples(spec.kernel, spec.cold_guess(p), p, phase, p[freq], family.opts)
-    if not ok:
+    circle = tr.torus_from_transient(spec.kernel, spec.cold_guess(p), p, phase, p[freq], family.opts, SETTLE_PERIODS,
+                                     FIT_PERIODS, FIRST_NODES, tol=pl.settings.tol, decay_tol=DECAY_TOL,
+                                     max_nodes=MAX_NODES)
+    if circle is None:
         return None, family, built
-    guess = tr.fitted_guess(samples, phases, FIRST_NODES)
-    circle = tr.solve_torus(spec.kernel, guess, p, phase, p[freq], family.opts, tol=pl.settings.tol,
-                            decay_tol=DECAY_TOL, max_nodes=MAX_NODES)
     return circle, family._replace(n_nodes=circle.nodes.shape[0]), built
 
 
@@ -171,14 +151,9 @@ def torus_error(family, point):
 def torus_amplitudes(model, family, built, point):
     """(max |o|, half peak-to-peak of o) over the torus for each observable, SI (module docstring)."""
     lam = family.lam(point.X)
-    phases = tr.node_phases(AMPLITUDE_PHASES)
-    starts = family.torus(point).at(phases)
-    p = np.array(family.params(lam), float)
-    hi, lo = np.full(len(model.observables), -np.inf), np.full(len(model.observables), np.inf)
-    for theta, u in zip(phases, starts):
-        p[family.phase_index] = theta
-        h, l = extrema.extremes(model, u, p, family.period, family.opts, built(lam).period)
-        hi, lo = np.maximum(hi, h), np.minimum(lo, l)
+    hi, lo = tr.phase_extremes(model, family.torus(point), family.params(lam), family.phase_index, family.opts,
+                               built(lam).period, AMPLITUDE_PHASES)
+    hi, lo = hi.max(axis=0), lo.min(axis=0)
     return np.maximum(hi, -lo), 0.5 * (hi - lo)
 
 

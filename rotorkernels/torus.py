@@ -31,7 +31,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rotorkernels import integrators as ig, shooting
+from rotorkernels import extrema, integrators as ig, shooting
 
 CONVERGED, NOT_CONVERGED, FOURIER_DECAY_FAILED, INTEGRATION_FAILED = (
     "converged", "not_converged", "fourier_decay_failed", "integration_failed")
@@ -225,6 +225,32 @@ def fitted_guess(samples, phases, n_nodes):
     return np.linalg.lstsq(basis, np.asarray(samples, float), rcond=None)[0]
 
 
+def settled_samples(kernel, state, p, phase_index, rho, opts, n_settle, n_fit):
+    """(samples (n_fit, n), their phases, ok) of the stroboscopic map (period 1) iterated n_fit
+    times after n_settle iterates from `state` at phase 0."""
+    samples, phases, theta = [], [], 0.0
+    for k in range(n_settle + n_fit):
+        if k >= n_settle:
+            samples.append(state.copy())
+            phases.append(theta)
+        ends, _, ok, _ = node_maps(kernel, state[None, :], [theta], p, phase_index, 1.0, opts, False)
+        if not ok:
+            return None, None, False
+        state, theta = ends[0], (theta + rho) % (2.0 * np.pi)
+    return np.array(samples), np.array(phases), True
+
+
+def torus_from_transient(kernel, state, p, phase_index, rho, opts, n_settle, n_fit, n_nodes, **solve):
+    """The torus an attracting transient from `state` settles on: its stroboscopic samples
+    (settled_samples) fitted by n_nodes nodes (fitted_guess), then solve_torus(**solve). None
+    where the transient could not be integrated."""
+    samples, phases, ok = settled_samples(kernel, np.asarray(state, float), p, phase_index, rho, opts,
+                                          n_settle, n_fit)
+    if not ok:
+        return None
+    return solve_torus(kernel, fitted_guess(samples, phases, n_nodes), p, phase_index, rho, opts, **solve)
+
+
 def periodic_guess(state, n_nodes):
     """Node values (n_nodes, n) of a constant circle through one periodic state."""
     return np.tile(np.asarray(state, float), (n_nodes, 1))
@@ -273,3 +299,33 @@ def surface_samples(kernel, circle, p, phase_index, opts, n_phases=64, n_per_per
         pj[phase_index] = theta
         out[j] = shooting.sample_orbit(kernel, starts[j], pj, circle.period, n_per_period, opts)
     return out
+
+
+def phase_extremes(model, circle, p, phase_index, opts, period, n_phases):
+    """(hi, lo) (n_phases, n_observables) SI: the exact extrema (rotorkernels.extrema) of each
+    observable along the trajectory over one period T from each of n_phases equally spaced phases
+    of the circle (period: T in seconds, for the observables' units). Their max / min over the
+    phases is the torus's to the phase sampling (see phase_sampling_error)."""
+    phases = node_phases(n_phases)
+    starts = circle.at(phases)
+    pj = np.array(p, float)
+    hi = np.empty((n_phases, len(model.observables)))
+    lo = np.empty_like(hi)
+    for j, theta in enumerate(phases):
+        pj[phase_index] = theta
+        hi[j], lo[j] = extrema.extremes(model, starts[j], pj, circle.period, opts, period)
+    return hi, lo
+
+
+def phase_sampling_error(values):
+    """Estimated shortfall of max over the phase samples (n_phases, ...) below the sup over the
+    circle: the rise of the parabola through the largest sample and its two (cyclic) neighbours
+    to its vertex, (d1 - d2)^2 / (8 (d1 + d2)) with d1, d2 >= 0 the drops to the neighbours (an
+    error O(h^2) in the phase spacing h, bounded by (d1 + d2) / 8 at a kink)."""
+    k = np.argmax(values, axis=0)
+    cols = np.arange(values.shape[1])
+    n = values.shape[0]
+    top = values[k, cols]
+    d1, d2 = top - values[(k - 1) % n, cols], top - values[(k + 1) % n, cols]
+    total = d1 + d2
+    return np.where(total > 0, (d1 - d2) ** 2 / (8.0 * np.where(total > 0, total, 1.0)), 0.0)

@@ -119,7 +119,7 @@ def default_observable(ds):
 
 def branch_values(line, observable):
     """The observable at every point of (a line of) the cube, an array over its point dims (SI
-    units; NaN where no orbit was found). A section_o value is the periodic orbit's state at
+    units; NaN where no orbit was found; an amplitude at a converged torus is over the torus). A section_o value is the periodic orbit's state at
     t = 0 (orbit_state) seen through o."""
     spec = schema.model_of(line)
     if observable.startswith("section_"):
@@ -130,4 +130,14 @@ def branch_values(line, observable):
         values = np.reshape(flat, periods.shape)
     else:
         values = line[observable].values.astype(float)
-    return np.where(line["orbit_status"].values == 0, values, np.nan)
+    found = line["orbit_status"].values == 0
+    if "torus_status" in line and not observable.startswith("section_"):
+        found = found | (line["torus_status"].values == 0)     # a torus point's amplitude: over its torus
+    return np.where(found, values, np.nan)
+
+
+def stable_response(line):
+    """Where a point's response is stable (bool over the point dims): its periodic orbit, or at a
+    quasi-periodically forced point its torus (pipeline.torus_points)."""
+    stable = line["stable"].values == 1
+    return stable | (line["torus_stability"].values == 1) if "torus_stability" in line else stable

@@ -8,19 +8,27 @@ from pipeline.report.cubeinfo import axis_edges, continued_axis, select
 # Stability classes of a grid point, in colour order. Okabe-Ito colours (colour-blind safe) for
 # the instabilities, a pale grey-blue for the stable background, near-black for "no orbit".
 # Bistable (a stable orbit where another stable one coexists, between a jump's folds): bluish green.
-CLASSES = ("stable", "fold", "period doubling", "Neimark-Sacker", "no periodic orbit", "bistable")
-PALETTE = ("#D6E4F0", "#E69F00", "#0072B2", "#CC79A7", "#333333", "#009E73")
+# Quasi-periodically forced points with their torus (pipeline.torus_points): sky blue stable,
+# vermillion unstable, yellow undecided, mid grey where the torus failed.
+CLASSES = ("stable", "fold", "period doubling", "Neimark-Sacker", "no periodic orbit", "bistable",
+           "quasi-periodic stable", "quasi-periodic unstable", "quasi-periodic undecided", "torus failed")
+PALETTE = ("#D6E4F0", "#E69F00", "#0072B2", "#CC79A7", "#333333", "#009E73",
+           "#56B4E9", "#D55E00", "#F0E442", "#777777")
+TORUS_CLASSES = CLASSES.index("quasi-periodic stable")     # the first of the torus points' classes
 UNCLASSIFIED = "unclassified"   # converged but unstable with no bifurcation code (should not occur)
 UNCLASSIFIED_COLOUR = "#BBBBBB"
 
 
 # query.point_classes' names -> CLASSES (NaN: unclassified)
 NAME_CLASS = {"stable": 0, "fold": 1, "period_doubling": 2, "neimark_sacker": 3, "no_orbit": 4, "not_applicable": 4,
-              "bistable": 5}
+              "bistable": 5, "quasi_periodic_stable": 6, "quasi_periodic_unstable": 7, "quasi_periodic_undecided": 8,
+              "torus_failed": 9}
 CLASS_MEANING = ("stable and no periodic orbit say what the grid point is; fold, period doubling and "
                  "Neimark-Sacker say how stability was lost at the start of the point's unstable interval "
                  "(the same class as `rotorsweep query --unstable`); bistable: a stable orbit between the "
-                 "folds of a jump, where another stable orbit coexists (`rotorsweep query --bistable`)")
+                 "folds of a jump, where another stable orbit coexists (`rotorsweep query --bistable`); "
+                 "quasi-periodic: the point's forcing has two incommensurate frequencies, its response a torus "
+                 "(stable, unstable or undecided by the sign of its largest normal exponent; torus failed: not solved)")
 
 
 def stability_class(ds):
@@ -77,7 +85,8 @@ def counts(ds):
     if missing:
         by_status["missing"] = missing
     cls = stability_class(ds).ravel()
-    by_class = {name: int((cls == i).sum()) for i, name in enumerate(CLASSES)}
+    shown = CLASSES if "torus_status" in ds else CLASSES[:TORUS_CLASSES]    # no torus classes without tori
+    by_class = {name: int((cls == i).sum()) for i, name in enumerate(shown)}
     if np.isnan(cls).any():
         by_class[UNCLASSIFIED] = int(np.isnan(cls).sum())
     return by_status, by_class

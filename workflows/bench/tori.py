@@ -25,6 +25,7 @@ import numpy as np
 from rotorkernels import integrators as ig, torus as tr
 from rotorkernels.continuation import engine, tori
 from rotorkernels.models import duffing2, get
+from workflows.bench import torus_threads
 from workflows.bench.common import machine_info
 
 MODEL = get("duffing2")
@@ -145,8 +146,10 @@ def render(rows, machine, whole):
 def main():
     machine = machine_info()
     text = render([row(c) for c in (0.1, 0.02)], machine, curve())
+    with open(OUT) as fh:     # keeps workflows.bench.torus_threads' section
+        threads = fh.read().partition(torus_threads.HEADING)
     with open(OUT, "w") as fh:
-        fh.write(text)
+        fh.write(text + ("\n" + threads[1] + threads[2] if threads[1] else ""))
     print(text)
 
 

@@ -12,7 +12,7 @@ from pipeline import schema
 from pipeline.report.branches import SPECIAL_LABELS, branch_elements
 from pipeline.report.cubeinfo import (branch_observables, branch_values, continued_axis,
                                       default_observable, has_attractor, has_down, select,
-                                      sweep_labels)
+                                      stable_response, sweep_labels)
 from pipeline.report.figures.panels import line_figure, panel_opts
 from pipeline.report.plan import axis_label, unit_display
 from pipeline.report.poincare import THIN_LEVELS, bif_range, sweep_dots
@@ -46,7 +46,7 @@ def _branch_panel(hv, ds, where, backend, slot, observable):
     if observable.startswith("section_") and has_attractor(line):
         tooltips = [(labels[0], f"@{{{x}}}"), (f"attractor: {labels[1]}", f"@{{{observable}}}")]
         elements += _attractor_dots(hv, ds, line, observable, factor, backend, tooltips)
-    elements += branch_elements(grid, y, line["stable"].values == 1, specials, backend, dims=(x, observable),
+    elements += branch_elements(grid, y, stable_response(line), specials, backend, dims=(x, observable),
                                 labels=labels, colour="#0072B2")
     return hv.Overlay(elements).opts(**panel_opts(ds, slot, backend, labels[1], grid))
 

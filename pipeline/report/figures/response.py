@@ -6,7 +6,7 @@ Not hvplot: drawn in the branch style (report/branches.py), which hvplot has no 
 from pipeline import schema
 from pipeline.report import style
 from pipeline.report.branches import branch_elements
-from pipeline.report.cubeinfo import branch_values, continued_axis, select
+from pipeline.report.cubeinfo import branch_values, continued_axis, select, stable_response
 from pipeline.report.figures.panels import Slot, panel_opts
 from pipeline.report.plan import (MAX_PANELS, axes_plan, axis_display, axis_label, figure_title,
                                   unit_display, where_label)
@@ -23,7 +23,7 @@ def _response_panel(hv, ds, where, backend, slot, observable, y):
     for i, v in enumerate(sub[y].values if y else [None]):
         line = sub.sel({y: v}) if y else sub
         elements += branch_elements(line[x].values, branch_values(line, f"amplitude_{o.name}") * factor,
-                                    line["stable"].values == 1, (), backend, dims=(x, f"amplitude_{o.name}"),
+                                    stable_response(line), (), backend, dims=(x, f"amplitude_{o.name}"),
                                     labels=labels, colour=style.LINE_COLOURS[i % len(style.LINE_COLOURS)],
                                     name=where_label(ds, {y: v}) if y else o.name, legend_unstable=False)
     return hv.Overlay(elements).opts(show_grid=True, **panel_opts(ds, slot, backend, labels[1]))
