@@ -217,12 +217,21 @@ def test_a_result_of_model_version_1_keeps_the_free_angle_it_was_computed_with(b
     from pipeline import scene
 
     text = SCENE.format(law="hertz", bearing=bearing_keys, sweep="nominal_angle = [15.0]")
-    explicit = {src: config.parse_config(SCENE.format(law="hertz", bearing=f'{bearing_keys}\nfree_angle = "{src}"',
-                                                      sweep="nominal_angle = [15.0]")).scene
-                for src in ("nominal", "geometry")}
+
+    def explicit(src):
+        keys = bearing_keys if src == "geometry" else ""
+        return config.parse_config(SCENE.format(law="hertz", bearing=f'{keys}\nfree_angle = "{src}"',
+                                                sweep="nominal_angle = [15.0]")).scene
 
     def free(sc):
         return compute.point_params(sc, sc.fixed | {"speed": 250.0}).derived["free_contact_angle"]
-    assert free(scene.of_result(text, "1")) == free(explicit[before])
-    assert free(scene.of_result(text, "2")) == free(explicit["geometry"])
-    assert free(explicit["nominal"]) != free(explicit["geometry"])
+    assert free(scene.of_result(text, "1")) == free(explicit(before))
+    assert free(scene.of_result(text, "2")) == free(explicit("geometry"))
+    assert free(explicit("nominal")) == pytest.approx(15.0, rel=1e-14)      # degrees(radians(15)): a rounding
+    assert abs(free(explicit("nominal")) - free(explicit("geometry"))) > 1e-3
+
+
+def test_a_nominal_free_angle_with_a_groove_dimension_is_refused():
+    with pytest.raises(config.ConfigError, match="bearing.free_angle: \"nominal\" .* bearing.outer_race_radius"):
+        config.parse_config(SCENE.format(law="hertz", bearing='outer_race_radius = 27.52e-3\nfree_angle = "nominal"',
+                                         sweep=""))

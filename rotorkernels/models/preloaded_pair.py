@@ -27,6 +27,7 @@ FREE_ANGLES = ("geometry", "nominal")
 # Sign s of the axial coordinate in each bearing: bearing A is shifted by s z, B by -s z.
 ARRANGEMENTS = {"back_to_back": 1.0, "face_to_face": -1.0}
 GEOMETRY_KEYS = bearing.GEOMETRY_OVERRIDES
+GROOVE_KEYS = ("inner_race_radius", "outer_race_radius", "groove_radius", "ball_diameter")   # what fixes the free angle
 REMOVED_STIFFNESS = (
     "bearing.stiffness: removed. \"hertz\" is now bearing.preload_law = \"hertz\" (the default); "
     "\"paper\" was the Hertz model with K x 1.5 (z0 the Hertz approach w / sin a), which no longer "
@@ -87,8 +88,7 @@ def free_angle_before_version_2(section):
     validated): the row's label under the Hertz law on a labelled table without groove overrides,
     else the geometry (ModelSpec.older_defaults)."""
     labelled = None not in bearing.ANGULAR_TABLES[section["table"]].outer_race_radius
-    groove = any(section.get(k) is not None for k in ("inner_race_radius", "outer_race_radius", "groove_radius",
-                                                      "ball_diameter"))
+    groove = any(section.get(k) is not None for k in GROOVE_KEYS)
     return "nominal" if section["preload_law"] == "hertz" and labelled and not groove else "geometry"
 
 
@@ -237,6 +237,10 @@ def bearing_problems(data, axes):
     if len(set(angles)) > 1 and b.get("outer_race_radius") is not None:
         errors.append("bearing.outer_race_radius: replaces the R2 of every row of sweep.nominal_angle, whose rows "
                       "would then differ only in their label: sweep the rows or give R2, not both")
+    groove = [k for k in GROOVE_KEYS if b.get(k) is not None]
+    if b.get("free_angle") == "nominal" and groove:
+        errors.append(f"bearing.free_angle: \"nominal\" takes the row's label as the free angle, which then does not "
+                      f"follow from bearing.{groove[0]}: give free_angle = \"nominal\" or groove dimensions, not both")
     if b.get("preload_law") == "hertz" and b.get("contact_constant") is not None \
             and b.get("axial_approach") is not None:
         errors.append("bearing.axial_approach: preload_law \"hertz\" derives z0 from K and the preload (or K "
