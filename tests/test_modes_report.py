@@ -60,7 +60,7 @@ def _figures():
 def test_every_plot_has_a_legend_and_a_hover_and_the_critical_speeds_are_listed(quick_report):
     """The Campbell diagram (its colour bar, the 1x and support lines in the legend) and one
     mode-shape panel per mode; its table lists the critical speeds `modes --json` gives (the same
-    bracketing grid and root solve: to the table's 6 rounded digits)."""
+    bracketing grid and root solve; the table rounds to 1e-6 Hz)."""
     from bokeh.models import ColorBar, ColumnDataSource, DataTable, Legend
 
     _, rec = quick_report
@@ -116,3 +116,16 @@ def test_the_json_and_a_campbell_range_go_with_the_report(tmp_path, capsys):
 @needs_chromium
 def test_modes_report_renders_in_a_browser(quick_report, tmp_path):
     assert_renders(quick_report[0], tmp_path / "shot.png", kind="modes")
+
+
+@needs_chromium
+def test_the_reference_catches_a_missing_mode_shapes_plot(quick_report, tmp_path):
+    """The page with its mode-shape figure drawn blank (its slot kept) differs from the reference."""
+    from tests import browser
+    from workflows import screenshots
+
+    if browser.helvetica() != browser.REFERENCE_FONT:
+        pytest.skip(f"the references are drawn with {browser.REFERENCE_FONT}")
+    page = browser.blank_figure(quick_report[0] / "report.html", tmp_path / "blank.html", 1)
+    screenshots.capture(page, tmp_path / "blank.png")
+    assert browser.difference(tmp_path / "blank.png", browser.REFERENCES / "modes.png")[0] > browser.FRACTION_TOL
