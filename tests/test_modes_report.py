@@ -105,6 +105,22 @@ def test_a_model_without_shaft_speed_or_stations_gets_the_table_alone(tmp_path):
     assert float(row["damped frequency [Hz]"]) == pytest.approx(np.sqrt(1 - 0.05 ** 2) / (2 * np.pi), rel=1e-12)
 
 
+def test_at_moves_the_table_and_the_mode_shapes_to_the_point(tmp_path):
+    """--at speed=500 (off the scene's grid): the table and every mode-shape title give the
+    modes of the point, as the text summary there does."""
+    out = tmp_path / "report"
+    assert cli.main(["modes", QUICK, "--at", "speed=500", "--report", str(out)]) == 0
+    cfg = config.load_config(QUICK, whole_grid=False)
+    rec = modes.records(cfg.model, modes.scene_values(cfg.scene, modes.at_point(cfg, {"speed": 500.0})))
+    page = (out / "report.html").read_text(encoding="utf-8")
+    assert "at speed = 500" in page
+    for k, mode in enumerate(rec["modes"]):
+        assert f"mode {k}: {mode['damped_frequency_hz']:.4g} Hz" in page
+    with open(out / "modes.csv") as fh:
+        got = [float(row["damped frequency [Hz]"]) for row in csv.DictReader(fh)]
+    np.testing.assert_allclose(got, [m["damped_frequency_hz"] for m in rec["modes"]], rtol=1e-12)
+
+
 def test_the_json_and_a_campbell_range_go_with_the_report(tmp_path, capsys):
     """--json prints only the JSON; --campbell sets the diagram's speeds (no -o needed)."""
     out = tmp_path / "report"
