@@ -62,8 +62,8 @@ check-cf: $(STAMP)  ## CF checks of every result kind with cfchecker and the IOO
 screenshots: demo fold screenshot-references  ## the demo and fold reports in headless Chromium (apt-get install chromium) -> docs/screenshots/*.png, and the tests' references
 	$(BIN)/python -m workflows.screenshots out/demo_report out/bai2006_fold_report -o docs/screenshots
 
-screenshot-references: $(STAMP)  ## the reference screenshots the browser tests compare with (sweep, continuation, backbone report; ~3 min) -> tests/screenshots/*.png
-	ROTORSWEEP_UPDATE_SCREENSHOTS=1 $(BIN)/python -m pytest -q -k renders_in_a_browser tests/test_screenshots.py tests/test_continue_command.py tests/test_backbone_command.py
+screenshot-references: $(STAMP)  ## the reference screenshots the browser tests compare with (sweep, continuation, backbone, modes report; ~3 min) -> tests/screenshots/*.png
+	ROTORSWEEP_UPDATE_SCREENSHOTS=1 $(BIN)/python -m pytest -q -k renders_in_a_browser tests/test_screenshots.py tests/test_continue_command.py tests/test_backbone_command.py tests/test_modes_report.py
 
 bench-scaling: $(STAMP)  ## 1 vs 2 workers, chunk sizes, memory of the Fig. 13 sweep (5 repeats, ~7 min, quiet machine) -> docs/benchmarks/scaling.*
 	$(BIN)/python -m workflows.bench.scaling --repeats 5

@@ -149,7 +149,10 @@ def cmd_modes(args):
     cfg = pipeline.as_config(args.config, whole_grid=False)
     if args.output:
         preflight.check(args.output)
-    print(modes.command(cfg, config_mod.flag_values(_at(args.at), cfg.model), args.campbell, args.output, args.json))
+    if args.report:
+        preflight.check_report(args.report)
+    print(modes.command(cfg, config_mod.flag_values(_at(args.at), cfg.model), args.campbell, args.output, args.json,
+                        args.report))
     return 0
 
 
@@ -447,6 +450,8 @@ def build_parser():
     m.add_argument("--campbell", metavar="START:STOP:NUM", help="shaft speeds [Hz, or with a unit: \"600 rpm:3000 rpm:5\"] of the Campbell table")
     m.add_argument("-o", "--output", help="Campbell table CSV (speed_hz, mode, frequency_hz, damping_ratio, whirl, label)")
     m.add_argument("--json", action="store_true", help="print the equilibrium and the modes as JSON")
+    m.add_argument("--report", metavar="DIR", help="write an HTML report (modes table, Campbell diagram with the "
+                                                   "critical speeds, mode shapes; PNGs, modes.csv) into DIR")
     m.set_defaults(func=cmd_modes)
 
     w = sub.add_parser("warmup", help="compile the kernels of models into the Numba cache (a cluster "

@@ -326,22 +326,26 @@ def critical_lines(rec):
     return [head] + rows
 
 
-def command(cfg, at, campbell_text=None, output=None, as_json=False):
+def command(cfg, at, campbell_text=None, output=None, as_json=False, report=None):
     """`rotorsweep modes`: the summary at the scene's first grid point (axis values from `at`
     {axis: value} where given) and, with `output`, the Campbell table over `--campbell`
-    START:STOP:NUM [Hz] (default: the scene's speed axis) as CSV. Returns the text to print.
-    Every option is checked before any work; a linearization that fails at the point asked for
-    (a singular matrix, non-finite values) is one line naming --at."""
+    START:STOP:NUM [Hz] (default: the scene's speed axis) as CSV; with `report` (a directory),
+    the HTML report (pipeline.report.modes_report; its Campbell diagram over `--campbell`, default
+    the critical-speed search range). Returns the text to print. Every option is checked before
+    any work; a linearization that fails at the point asked for (a singular matrix, non-finite
+    values) is one line naming --at."""
     spec = cfg.model
     require_linearization(spec)
     point = at_point(cfg, at)
-    if campbell_text is not None and output is None:
-        raise ConfigError(f"--campbell {campbell_text}: give -o FILE.csv too (the Campbell table is written as CSV)")
+    if campbell_text is not None and output is None and report is None:
+        raise ConfigError(f"--campbell {campbell_text}: give -o FILE.csv (the Campbell table as CSV) or --report DIR")
     speeds = _campbell_speeds(spec, cfg, campbell_text) if output is not None else None
+    diagram = _campbell_speeds(spec, cfg, campbell_text) if report is not None and campbell_text is not None else None
     values = scene_values(cfg.scene, point)
     try:
         text = json.dumps(records(spec, values), indent=1) if as_json else summary(spec, values)
         rows = campbell(spec, values, speeds) if output is not None else None
+        files = _report(cfg, point, report, diagram) if report is not None else None
     except (np.linalg.LinAlgError, ValueError, FloatingPointError) as exc:
         where = ", ".join(f"{k}={v:g}" for k, v in point.items())
         raise ConfigError(f"--at: no linearization at {where}"
@@ -350,12 +354,20 @@ def command(cfg, at, campbell_text=None, output=None, as_json=False):
         write_campbell(rows, output)
         if not as_json:
             text += f"\nCampbell table ({len(speeds)} speeds): {output}"
+    if files is not None and not as_json:
+        text += f"\nreport: {files['html']}" + "".join(f"\nfigure: {png}" for png in files["png"])
     return text
+
+
+def _report(cfg, point, out_dir, speeds):
+    from pipeline.report import modes_report    # on first use: the text summary loads no plotting
+
+    return modes_report.make_report(cfg, point, out_dir, speeds)
 
 
 def _campbell_speeds(spec, cfg, given):
     if not spec.speed:
-        raise ConfigError(f"modes --output: model {spec.name} has no shaft speed, so no Campbell table")
+        raise ConfigError(f"modes --campbell/--output: model {spec.name} has no shaft speed, so no Campbell table")
     if given is not None:
         return campbell_speeds(given, spec, cfg.data)
     if spec.speed not in cfg.axes:

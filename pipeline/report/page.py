@@ -109,11 +109,14 @@ def save_html(path, title, header, figs, intervals, config_toml, points=()):
     hv = holoviews()
     models = [hv.render(fig, backend="bokeh") for _, fig in figs]
     models += [hv.render(fig, backend="bokeh") for _, fig, _ in points]
-    script, divs = components(models)
-    # only the JavaScript these models need (bokeh's INLINE.render() would add every registered
-    # extension, Panel's included, some of which load relative URLs)
-    bundle = bundle_for_objs_and_resources(models, INLINE)
-    resources = bundle.scripts() + "".join(f"<style>{css}</style>" for css in bundle.css_raw)
+    # a page without figures (the modes of a model with no shaft speed and no stations): no bokeh
+    script, divs, resources = "", (), ""
+    if models:
+        script, divs = components(models)
+        # only the JavaScript these models need (bokeh's INLINE.render() would add every registered
+        # extension, Panel's included, some of which load relative URLs)
+        bundle = bundle_for_objs_and_resources(models, INLINE)
+        resources = bundle.scripts() + "".join(f"<style>{css}</style>" for css in bundle.css_raw)
     body = [header]
     for (caption, _), div in zip(figs, divs):
         body.append(f'<h2>{html.escape(caption)}</h2>\n<div class="figure">{div}</div>')
