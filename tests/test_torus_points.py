@@ -20,8 +20,8 @@ def result(tmp_path_factory):
                                       f"[{PERIODIC}, {QUASI}]").replace("[15, 26]", "[15]")
     (d / "map.toml").write_text(text)
     assert cli.main(["run", str(d / "map.toml"), "-o", str(d / "map.nc"), "--in-process"]) in (0, None)
-    data = config.parse_config(text).data
-    built = compute.builder(data)({**compute.fixed_values(data), "speed": 250.0, "support_frequency": QUASI,
+    data = config.parse_config(text).scene
+    built = compute.builder(data)({**data.fixed, "speed": 250.0, "support_frequency": QUASI,
                                    "nominal_angle": 15.0})
     return cube.open_cube(d / "map.nc"), data, built
 
@@ -57,12 +57,12 @@ def test_the_sweep_amplitude_is_the_torus_solvers(result):
     """The sweep's first torus of a segment is solved from the transient (no neighbour's circle):
     the same as the torus solver and extrema run directly, to round-off."""
     ds, data, built = result
-    model = compute.model_of(data)
-    opts = compute.integrator_settings(data)
+    model = data.model
+    opts = data.integrator
     phase, freq, _ = model.torus_forcing
     circle = tr.torus_from_transient(model.kernel, model.cold_guess(built.p), built.p, phase, built.p[freq], opts,
                                      torus_points.SETTLE_PERIODS, torus_points.FIT_PERIODS, torus_points.FIRST_NODES,
-                                     tol=data["numerics"]["newton_tol"], decay_tol=torus_points.DECAY_TOL)
+                                     tol=data.newton.tol, decay_tol=torus_points.DECAY_TOL)
     hi, lo = tr.phase_extremes(model, circle, built.p, phase, opts, built.period, torus_points.AMPLITUDE_PHASES)
     j = [o.name for o in model.observables].index("y_B")
     direct = 0.5 * (hi[:, j].max() - lo[:, j].min())
@@ -83,9 +83,9 @@ def test_the_torus_amplitude_against_a_long_dop853_run(result):
     from rotorkernels.models import rigid_preloaded as rp
 
     ds, data, built = result
-    model = compute.model_of(data)
-    opts = compute.integrator_settings(data)
-    circle = torus_points.solve(model, built, opts, data["numerics"]["newton_tol"])
+    model = data.model
+    opts = data.integrator
+    circle = torus_points.solve(model, built, opts, data.newton.tol)
     p = built.p.copy()
 
     def f(tau, u):
@@ -110,9 +110,9 @@ def test_a_failed_torus_is_a_status_not_a_traceback(result):
     """A transient that cannot be integrated (the amplitude limit hit at once) leaves the point
     integration_failed with no values, its class torus_failed."""
     _, data, built = result
-    model = compute.model_of(data)
-    opts = compute.integrator_settings(data)._replace(amplitude_limit=1e-12)
-    circle = torus_points.solve(model, built, opts, data["numerics"]["newton_tol"])
+    model = data.model
+    opts = data.integrator._replace(amplitude_limit=1e-12)
+    circle = torus_points.solve(model, built, opts, data.newton.tol)
     out = torus_points.variables(model, circle, built, opts)
     assert out["torus_status"] == schema.TORUS_STATUS.index("integration_failed")
     assert out["torus_stability"] == schema.INT_FILL and np.isnan(out["torus_exponent"])
