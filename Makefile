@@ -24,7 +24,7 @@ $(DOCS_STAMP): $(STAMP)
 	touch $(DOCS_STAMP)
 
 docs: $(DOCS_STAMP)  ## the documentation site -> docs/_build/html/index.html (config reference regenerated first)
-	$(BIN)/python -m pipeline.config_reference
+	$(BIN)/python -m rotorsweep.pipeline.config_reference
 	$(BIN)/python -m sphinx -W --keep-going -q -b html docs docs/_build/html
 	@echo "docs: docs/_build/html/index.html"
 

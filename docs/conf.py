@@ -1,7 +1,7 @@
 """Sphinx configuration of the documentation site (`make docs`: warnings are errors).
 
 Pages are Markdown (myst-parser): the guides, the model pages, the generated config reference
-(`python -m pipeline.config_reference`), the gallery and the benchmark pages as the benchmarks write
+(`python -m rotorsweep.pipeline.config_reference`), the gallery and the benchmark pages as the benchmarks write
 them; the API reference comes from the docstrings of `rotorsweep` (autodoc)."""
 import sys
 from pathlib import Path

@@ -2,7 +2,7 @@
 
 The Python API mirrors the command line:
 
-    import pipeline
+    import rotorsweep.pipeline as pipeline
     path = pipeline.run("configs/demo.toml", "out/demo.nc")        # rotorsweep run
     ds = pipeline.open_cube(path)                                  # an xarray.Dataset
     pipeline.unstable_intervals(ds)                                # rotorsweep query --unstable
@@ -24,8 +24,8 @@ import sys
 
 
 def _accessor(ds):
-    """ds.rotorsweep: pipeline.explore.CubeAccessor, imported on the first use of an accessor."""
-    from pipeline import explore
+    """ds.rotorsweep: rotorsweep.pipeline.explore.CubeAccessor, imported on the first use of an accessor."""
+    from rotorsweep.pipeline import explore
 
     return explore.CubeAccessor(ds)
 
@@ -108,7 +108,7 @@ _around_import("numba.np.arraymath", _quick_blas_check)
 def as_config(cfg, allow_large=False, whole_grid=True):
     """A validated Config from a path, a Config (as it is) or None (the embedded demo scene).
     whole_grid: the caller computes the whole sweep grid (`run`), whose size is then checked."""
-    from pipeline import config as config_mod
+    from rotorsweep.pipeline import config as config_mod
 
     if isinstance(cfg, config_mod.Config):
         return cfg
@@ -147,7 +147,7 @@ def run(config=None, output=None, *, allow_large=False, **kwargs):
     >>> dict(rotorsweep.open_cube(path).sizes)["speed"]
     2
     """
-    from pipeline import sweep
+    from rotorsweep.pipeline import sweep
 
     cfg = as_config(config, allow_large)
     return sweep.run(cfg, output or f"out/{cfg.data['scene']['name']}.nc", **kwargs)
@@ -156,7 +156,7 @@ def run(config=None, output=None, *, allow_large=False, **kwargs):
 def continue_branches(config=None, output=None, **kwargs):
     """Pseudo-arclength branches of a config's [continuation] (rotorsweep continue); returns the
     result's path. kwargs: workers (as for run), scheduler, overwrite, stream."""
-    from pipeline import continuation
+    from rotorsweep.pipeline import continuation
 
     cfg = as_config(config, whole_grid=False)
     return continuation.run(cfg, output or f"out/{cfg.data['scene']['name']}_continuation.nc", **kwargs)
@@ -171,40 +171,40 @@ def open_cube(path):
     >>> ds["stable"].values.ravel().tolist()      # stable at 79 Hz, period-doubled at 82 Hz
     [1, 0]
     """
-    from pipeline import cube
+    from rotorsweep.pipeline import cube
 
     return cube.open_cube(path)
 
 
 def unstable_intervals(cube_or_path):
     """The unstable runs of the continued axis (`rotorsweep query --unstable`), from a cube or
-    its path: see pipeline.query.unstable_intervals.
+    its path: see rotorsweep.pipeline.query.unstable_intervals.
 
     >>> (run,) = rotorsweep.unstable_intervals(cube_path)
     >>> run["start"], run["type"], round(run["onset"], 2)
     (82.0, 'period_doubling', 80.88)
     """
-    from pipeline import query
+    from rotorsweep.pipeline import query
 
     return query.unstable_intervals(_dataset(cube_or_path))
 
 
 def open_result(path):
     """(dataset, its result kind) of any result file: a sweep cube, a continuation or a backbone
-    result (pipeline.result_kinds), opened once into memory.
+    result (rotorsweep.pipeline.result_kinds), opened once into memory.
 
     >>> ds, kind = rotorsweep.open_result(cube_path)
     >>> kind.name
     'sweep'
     """
-    from pipeline import result_kinds
+    from rotorsweep.pipeline import result_kinds
 
     return result_kinds.open_result(path)
 
 
 def make_report(cube_or_path, out_dir, points=None, overwrite=False, over=None, stream=None):
     """HTML + PNG report of a result (rotorsweep report); returns the written paths. The result:
-    a path, or an opened dataset of any kind (pipeline.result_kinds).
+    a path, or an opened dataset of any kind (rotorsweep.pipeline.result_kinds).
     points: grid points of a sweep cube to show in detail (orbit, Poincare section, spectrum,
     table), each a dict {axis: value} or "speed=36 clearance=19e-6" (nearest grid point). A
     directory holding the report of another cube is refused unless overwrite; the report is built
@@ -218,7 +218,7 @@ def make_report(cube_or_path, out_dir, points=None, overwrite=False, over=None, 
     >>> files["html"].name
     'report.html'
     """
-    from pipeline import fileio, result_kinds, sweep
+    from rotorsweep.pipeline import fileio, result_kinds, sweep
 
     if _is_path(cube_or_path):
         ds, kind = result_kinds.open_result(cube_or_path)
@@ -229,7 +229,7 @@ def make_report(cube_or_path, out_dir, points=None, overwrite=False, over=None, 
     result_kinds.refuse_options(kind, {"point": points, "over": over is not None}, "report_options")
     forced = None
     if over is not None:
-        from pipeline.report import backbone_result
+        from rotorsweep.pipeline.report import backbone_result
 
         forced = result_kinds.open_kind(over, result_kinds.CONTINUATION)
         backbone_result.check_forced(ds, forced)
@@ -242,7 +242,7 @@ def make_report(cube_or_path, out_dir, points=None, overwrite=False, over=None, 
 def backbones(config=None, output=None, **kwargs):
     """Backbone curves of a conservative model's nonlinear normal modes (rotorsweep backbone):
     manifold and continuation; returns the result's path."""
-    from pipeline import backbone
+    from rotorsweep.pipeline import backbone
 
     cfg = as_config(config, whole_grid=False)
     return backbone.run(cfg, output or f"out/{cfg.data['scene']['name']}_backbone.nc", **kwargs)
@@ -260,7 +260,7 @@ def point(speed=None, clearance=None, contact_angle=None, preload=None, config=N
     """
     from dataclasses import replace
 
-    from pipeline import compute
+    from rotorsweep.pipeline import compute
 
     cfg = as_config(config, whole_grid=False)
     given = {"speed": speed, "clearance": clearance, "contact_angle": contact_angle, "preload": preload, **values}

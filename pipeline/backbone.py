@@ -4,10 +4,10 @@ asymmetric5: Filipkovsky 2010) and their backbone curves, two ways, into a netCD
 For every mode asked for ([backbone] modes) and every combination of the swept axes (a *line*,
 one Dask task):
 
-- the Shaw-Pierre invariant manifold to cubic order (rotorkernels.nnm): its coefficients, the
+- the Shaw-Pierre invariant manifold to cubic order (rotorsweep.kernels.nnm): its coefficients, the
   reduced one-DOF oscillator, its backbone omega(A) = omega_0 + kappa A^2 on the amplitude grid;
 - the reference backbone by pseudo-arclength continuation of the full model's periodic orbits
-  (rotorkernels.continuation.backbone), its frequency at the same amplitudes, their difference
+  (rotorsweep.kernels.continuation.backbone), its frequency at the same amplitudes, their difference
   and the amplitude where they part by 1 %.
 
 Amplitude: the first harmonic of the master coordinate's displacement [m] (the manifold's
@@ -29,11 +29,11 @@ import numpy as np
 import xarray as xr
 from scipy.interpolate import CubicSpline
 
-from pipeline import cluster, result_kinds, results, runlog
-from pipeline.config import ConfigError, settings_problems
-from rotorkernels import nnm
-from rotorkernels.continuation import backbone as cb
-from rotorkernels.continuation.arclength import Settings
+from rotorsweep.pipeline import cluster, result_kinds, results, runlog
+from rotorsweep.pipeline.config import ConfigError, settings_problems
+from rotorsweep.kernels import nnm
+from rotorsweep.kernels.continuation import backbone as cb
+from rotorsweep.kernels.continuation.arclength import Settings
 
 AUTO_FRACTION = 0.25        # default amplitude_max: this fraction of the model's amplitude bound (series: z0)
 PART_RTOL = 0.01            # the manifold and the continuation "part" at this relative difference
@@ -55,7 +55,7 @@ class Plan:
 
 
 def plan(scene, check_lines=True):
-    """The backbones a scene (pipeline.scene.Scene) asks for; raises ConfigError naming every key
+    """The backbones a scene (rotorsweep.pipeline.scene.Scene) asks for; raises ConfigError naming every key
     that cannot work (before any work starts). check_lines: also check every line's modes and
     amplitudes (the driver does; a line's task need not repeat it for all the others)."""
     spec = scene.model
@@ -85,7 +85,7 @@ def plan(scene, check_lines=True):
 
 
 def _conservative_models():
-    from rotorkernels import models
+    from rotorsweep.kernels import models
     return [name for name, spec in models.REGISTRY.items() if spec.polynomial is not None]
 
 
@@ -402,7 +402,7 @@ def open_result(path):
 def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr, resume=False):
     """Compute the backbones a config asks for into a netCDF result at `output`; returns its path.
     Each finished line is kept as a part file until the result is written (`resume`: computes
-    only the lines missing, see pipeline.results)."""
+    only the lines missing, see rotorsweep.pipeline.results)."""
     pl = plan(cfg.scene)
     with (results.result_output(cfg, output, overwrite, scheduler, resume) as (output, parts),
           runlog.log_file(output, "backbone")):

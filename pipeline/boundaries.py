@@ -3,13 +3,13 @@ continued axis (shaft speed for jeffcott_clearance) on a line, refined far below
 and stored in the cube along a `boundary` dimension.
 
 Refinement follows the branch of the stable grid point by pseudo-arclength continuation
-(rotorkernels.continuation.arclength) towards the unstable one and takes the first event where
+(rotorsweep.kernels.continuation.arclength) towards the unstable one and takes the first event where
 a multiplier leaves the unit circle, located by its own test function: a fold (+1), where the
 orbit ceases to exist and the unstable grid point's orbit lies on another branch, is located as
 accurately as a period doubling or a Neimark-Sacker point. (Brent's method on max|lambda| - 1
 between the two grid points cannot locate a fold: there is no continuous function to bracket.)
 Only if the branch shows no such event within a grid step beyond the bracket does Brent's
-method on the grid's natural continuation (rotorkernels.continuation.events) refine it.
+method on the grid's natural continuation (rotorsweep.kernels.continuation.events) refine it.
 
 A jump (hysteresis) is a pair of neighbouring points, both stable or both unstable, that lie on
 different branches (`jump_brackets` says how it is told from a steep smooth branch): the branch of
@@ -22,9 +22,9 @@ from collections import namedtuple
 
 import numpy as np
 
-from pipeline import coexistence, compute, schema
-from rotorkernels import continuation, extrema, floquet
-from rotorkernels.continuation import arclength, events as boundary
+from rotorsweep.pipeline import coexistence, compute, schema
+from rotorsweep.kernels import continuation, extrema, floquet
+from rotorsweep.kernels.continuation import arclength, events as boundary
 
 XTOL_REL = 1e-8
 # The branch is followed at most a grid step beyond the bracket, in steps a fraction of it.
@@ -40,8 +40,8 @@ def _others(ds, axis):
 def axis_solver(scene, values, axis):
     """solve(value of `axis`, guess) -> the orbit there, the other axes at `values`;
     family(scale) -> the arclength family along `axis`; and half_pp(value, state, periods) -> the
-    half peak-to-peak amplitude of each observable over the orbit (SI, exact: rotorkernels.extrema)
-    (scene: pipeline.scene.Scene)."""
+    half peak-to-peak amplitude of each observable over the orbit (SI, exact: rotorsweep.kernels.extrema)
+    (scene: rotorsweep.pipeline.scene.Scene)."""
     model = scene.model
     opts = scene.integrator
     newton = scene.newton.solve_orbit_args(model)

@@ -12,22 +12,22 @@ import threading
 
 import numpy as np
 
-import pipeline
-from pipeline import cluster, fileio, preflight
+import rotorsweep.pipeline as pipeline
+from rotorsweep.pipeline import cluster, fileio, preflight
 
 EXIT_USAGE = 2
 
 # The user errors of the modules a command may import, by module: a command that did not import
 # a module cannot raise its error, so `point` never imports xarray, pandas or Dask (cube, query,
 # sweep) only to name their errors (a warm one-point command is mostly its imports).
-USER_ERRORS = (("pipeline.config", "ConfigError"), ("pipeline.cube", "CubeError"), ("pipeline.query", "QueryError"),
-               ("pipeline.cluster", "SweepError"), ("rotorkernels.continuation.events", "BoundaryError"),
-               ("pipeline.fileio", "FileIOError"))
+USER_ERRORS = (("rotorsweep.pipeline.config", "ConfigError"), ("rotorsweep.pipeline.cube", "CubeError"), ("rotorsweep.pipeline.query", "QueryError"),
+               ("rotorsweep.pipeline.cluster", "SweepError"), ("rotorsweep.kernels.continuation.events", "BoundaryError"),
+               ("rotorsweep.pipeline.fileio", "FileIOError"))
 
 
 def _confirm_large(args):
     """--yes, or on a terminal a yes/no question, lets a grid above numerics.max_points run."""
-    from pipeline import config as config_mod
+    from rotorsweep.pipeline import config as config_mod
 
     if args.yes:
         return True
@@ -56,7 +56,7 @@ def _scheduler(args):
 
 
 def _preflight(args, cfg, out, need_bytes):
-    """The checks before any work of a command writing `out` from cfg (pipeline.preflight), and
+    """The checks before any work of a command writing `out` from cfg (rotorsweep.pipeline.preflight), and
     the scheduler's answer."""
     identity = fileio.result_identity(out, cfg.hash())
     preflight.check(out, need_bytes, lock=True, report=args.report, report_identity=identity,
@@ -75,7 +75,7 @@ def cmd_run(args):
                         overwrite=args.overwrite, chunk_points=args.chunk_points, progress=not args.quiet)
     print(f"cube: {path}")
     if args.report:
-        from pipeline import sweep
+        from rotorsweep.pipeline import sweep
         stream = None if args.quiet else sys.stderr
         sweep.phase_printer(stream)(f"writing the report into {args.report}")
         files = pipeline.make_report(path, args.report, overwrite=args.overwrite, stream=stream)
@@ -99,13 +99,13 @@ def _run_result(args, module, suffix, label):
 
 
 def cmd_backbone(args):
-    from pipeline import backbone
+    from rotorsweep.pipeline import backbone
 
     return _run_result(args, backbone, "backbone", "backbones")
 
 
 def cmd_continue(args):
-    from pipeline import continuation
+    from rotorsweep.pipeline import continuation
 
     return _run_result(args, continuation, "continuation", "continuation")
 
@@ -113,7 +113,7 @@ def cmd_continue(args):
 def _attractor_row(args, cfg):
     """The point's cube variables with the attractor diagnostics (compute.point_detail; the
     trajectory it also returns is not needed here, so it is kept short)."""
-    from pipeline import compute
+    from rotorsweep.pipeline import compute
 
     pt = compute.point_values(cfg, _given(args, cfg))
     return compute.point_detail(cfg.scene, pt, periods=16, steps_per_period=8)["row"]
@@ -122,7 +122,7 @@ def _attractor_row(args, cfg):
 def _given(args, cfg):
     """The point's axis values from --speed/--clearance/--contact-angle/--preload and --at: SI
     numbers, or unit strings in the axis's unit ("7.6 um", "600 rpm")."""
-    from pipeline import config as config_mod
+    from rotorsweep.pipeline import config as config_mod
 
     flags = {"speed": ("--speed", args.speed), "clearance": ("--clearance", args.clearance),
              "contact_angle": ("--contact-angle", args.contact_angle), "preload": ("--preload", args.preload)}
@@ -131,7 +131,7 @@ def _given(args, cfg):
 
 def _at(items):
     """{axis: (flag, text)} from --at AXIS=VALUE options (VALUE: SI number or unit string)."""
-    from pipeline import config as config_mod
+    from rotorsweep.pipeline import config as config_mod
 
     given = {}
     for item in items or []:
@@ -143,8 +143,8 @@ def _at(items):
 
 
 def cmd_modes(args):
-    from pipeline import config as config_mod
-    from pipeline import modes
+    from rotorsweep.pipeline import config as config_mod
+    from rotorsweep.pipeline import modes
 
     cfg = pipeline.as_config(args.config, whole_grid=False)
     if args.output:
@@ -157,7 +157,7 @@ def cmd_modes(args):
 
 
 def _attractor_result(row):
-    from pipeline import schema
+    from rotorsweep.pipeline import schema
 
     code, k, method = int(row["attractor"]), int(row["period"]), int(row["lle_method"])
     lam = [[_num(re), _num(im)] for re, im in zip(row["attractor_multiplier_real"], row["attractor_multiplier_imag"])]
@@ -175,7 +175,7 @@ def _attractor_result(row):
 
 
 def cmd_point(args):
-    from pipeline import schema, torus_points
+    from rotorsweep.pipeline import schema, torus_points
 
     cfg = pipeline.as_config(args.config, whole_grid=False)
     if args.attractor:
@@ -268,7 +268,7 @@ def _point_text(r):
 
 
 def cmd_query(args):
-    from pipeline import result_kinds
+    from rotorsweep.pipeline import result_kinds
 
     ds, kind = result_kinds.open_result(args.cube)
     options = {"where": args.where, "var": args.var, "unstable": args.unstable, "attractors": args.attractors,
@@ -279,7 +279,7 @@ def cmd_query(args):
 
 
 def cmd_report(args):
-    from pipeline import report as report_mod
+    from rotorsweep.pipeline import report as report_mod
 
     out = args.output or str(args.cube).rsplit(".", 1)[0] + "_report"
     points = [report_mod.parse_point(items) for items in args.point or []]
@@ -293,7 +293,7 @@ def cmd_report(args):
 
 
 def cmd_info(args):
-    from pipeline import result_kinds
+    from rotorsweep.pipeline import result_kinds
 
     ds, kind = result_kinds.open_result(args.cube)
     print(kind.describe(ds))
@@ -325,7 +325,7 @@ def _worker_count(text):
 def cmd_warmup(args):
     import numba
 
-    from pipeline import warmup
+    from rotorsweep.pipeline import warmup
 
     print(f"Numba cache: {numba.config.CACHE_DIR}")
     warmup.warmup(args.models, integrators=args.integrator or warmup.INTEGRATORS)
@@ -509,7 +509,7 @@ def main(argv=None):
 
 
 def _dispatch(args, interrupts):
-    from rotorkernels import models
+    from rotorsweep.kernels import models
 
     if models.PLUGIN_ERRORS:
         return _error(args, "; ".join(models.PLUGIN_ERRORS))
@@ -532,7 +532,7 @@ def _dispatch(args, interrupts):
 def error_text(exc):
     """The one line for an error the user can act on, or None for a bug (a traceback): the
     modules' user errors; OS errors (read-only directory, disk full, a file where a directory
-    goes, a lost scheduler connection) and netCDF/HDF write errors name the path (pipeline.fileio
+    goes, a lost scheduler connection) and netCDF/HDF write errors name the path (rotorsweep.pipeline.fileio
     names the output, never its temp file); Dask giving up on a task whose workers kept dying."""
     if isinstance(exc, user_errors()):
         return str(exc)

@@ -4,7 +4,7 @@ given by address (its Dask handshake checked first, under a timeout; TLS files),
 closing quietly, submitting tasks, the driver's frozen heap, and the provenance every result
 file records (the version, the command, the model, the config).
 
-The sweep (pipeline.sweep) and the per-line commands (pipeline.results) use this module; none of
+The sweep (rotorsweep.pipeline.sweep) and the per-line commands (rotorsweep.pipeline.results) use this module; none of
 them starts or closes a cluster another way. It imports only the standard library at import time
 (the command line reads the version here; Dask is imported where a cluster starts).
 
@@ -70,7 +70,7 @@ def local_workers(workers):
 
 def local_cluster(n_workers):
     """A LocalCluster of n_workers single-threaded worker processes on 127.0.0.1 (dashboard on a
-    free port), as every command starts it; pipeline.workerinit sets each worker up. Its
+    free port), as every command starts it; rotorsweep.pipeline.workerinit sets each worker up. Its
     scheduler, nannies and workers speak TLS with a certificate made for this cluster alone
     (Security.temporary(), both ends present it): a process that does not hold it (another
     local user's) cannot connect, so cannot run code in the workers (plain TCP let any local
@@ -83,7 +83,7 @@ def local_cluster(n_workers):
     with dask.config.set(LOCAL_CLUSTER_CONFIG):
         return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, host="127.0.0.1",
                             dashboard_address="127.0.0.1:0", env=dict(WORKER_ENV),
-                            preload=["pipeline.workerinit"], security=Security.temporary(),
+                            preload=["rotorsweep.pipeline.workerinit"], security=Security.temporary(),
                             protocol="tls://")
 
 
@@ -205,7 +205,7 @@ class InProcess:
         pass
 
 
-# Below this estimate of a command's work (CPU seconds, pipeline.workload) it runs in the driver
+# Below this estimate of a command's work (CPU seconds, rotorsweep.pipeline.workload) it runs in the driver
 # process: a local cluster of 2 workers took 2-3 s to start and load the kernels (2 cores), and
 # halves at best the time of the work, so it pays from about twice its start-up. Overridden by
 # the scene's [run] in_process_below, else $ROTORSWEEP_IN_PROCESS_BELOW_S (0: always a cluster).
@@ -215,7 +215,7 @@ IN_PROCESS_VARIABLE = "ROTORSWEEP_IN_PROCESS_BELOW_S"
 
 def in_process_below_s(scene_value=None):
     """The threshold of in-process execution: a scene's [run] in_process_below (seconds, validated
-    with the config; pipeline.scene.Scene.in_process_below), else $ROTORSWEEP_IN_PROCESS_BELOW_S,
+    with the config; rotorsweep.pipeline.scene.Scene.in_process_below), else $ROTORSWEEP_IN_PROCESS_BELOW_S,
     else IN_PROCESS_BELOW_S."""
     if scene_value is not None:
         return float(scene_value)
@@ -402,10 +402,10 @@ _frozen_blocks = 0      # heap_frozen blocks open in this process
 
 
 def provenance(cfg, kind):
-    """The global attributes every result file of `kind` (pipeline.result_kinds) records:
+    """The global attributes every result file of `kind` (rotorsweep.pipeline.result_kinds) records:
     `history` names the command that wrote it (run, continue, backbone), the version, the model,
     the config and its hash."""
-    from pipeline import result_kinds
+    from rotorsweep.pipeline import result_kinds
 
     kind = result_kinds.KINDS[kind]
     model = cfg.model

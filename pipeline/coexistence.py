@@ -16,7 +16,7 @@ import json
 
 import numpy as np
 
-from rotorkernels.continuation import arclength as al
+from rotorsweep.kernels.continuation import arclength as al
 
 # Two located points are the same orbit when, at the same parameter, one's state is within
 # SAME_ORBIT_FACTOR x newton_tol x max(1, |s|) of a phase copy of the other's (the Newton's own

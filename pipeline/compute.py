@@ -1,32 +1,32 @@
-"""From a scene (pipeline.scene.Scene) to kernel inputs, and from kernel outputs to cube variables.
+"""From a scene (rotorsweep.pipeline.scene.Scene) to kernel inputs, and from kernel outputs to cube variables.
 
 A *segment* is a run of consecutive values of the continued axis (shaft speed for
 jeffcott_clearance) at fixed values of the other axes: the orbit is continued along it, each
 point starting from its neighbours. Segments are fixed by the config (numerics.segment_length),
 so results never depend on how they are scheduled. The model is reached only through its
-`ModelSpec` (rotorkernels.models).
+`ModelSpec` (rotorsweep.kernels.models).
 """
 import time
 from dataclasses import replace
 
 import numpy as np
 
-from pipeline import schema, torus_points
-from rotorkernels import attractor, continuation, extrema, integrators, shooting
+from rotorsweep.pipeline import schema, torus_points
+from rotorsweep.kernels import attractor, continuation, extrema, integrators, shooting
 
 
 def require_forced(spec, command):
     """ConfigError unless the model `spec` is forced: `run`, `continue` and `point` shoot orbits
     over a forcing period, which a conservative model (symmetric4, asymmetric5) has not."""
     if not spec.forced:
-        from pipeline.config import ConfigError
+        from rotorsweep.pipeline.config import ConfigError
         raise ConfigError(f"scene.model: {spec.name} is conservative (no damping, no forcing): `rotorsweep {command}` "
                           "needs a forced model; its nonlinear normal modes and backbones: `rotorsweep backbone`")
 
 
 def builder(scene):
     """point {axis: value} -> Built kernel inputs (p, period, derived values) of a scene
-    (pipeline.scene.Scene), its values gathered once (a segment builds many points)."""
+    (rotorsweep.pipeline.scene.Scene), its values gathered once (a segment builds many points)."""
     spec, values = scene.model, scene.values
     return lambda point: spec.build({**values, **point})
 
@@ -39,7 +39,7 @@ def point_params(scene, point):
 def point_values(cfg, given):
     """A point {axis: value} of the scene's model from `given` (None: not given) and the scene's
     fixed values; raises config.ConfigError naming what is missing or out of range."""
-    from pipeline import config
+    from rotorsweep.pipeline import config
 
     require_forced(cfg.model, "point")
     spec = cfg.model
@@ -55,10 +55,10 @@ def point_values(cfg, given):
 
 
 def solve_segment(scene, points):
-    """Solve a continuation segment of a scene (pipeline.scene.Scene). points: list of dicts
+    """Solve a continuation segment of a scene (rotorsweep.pipeline.scene.Scene). points: list of dicts
     {axis: value} (SI, angles in degrees). Returns schema variables, one row per point: the
     periodic orbit ([analysis] floquet; at a quasi-periodically forced point its torus,
-    pipeline.torus_points) and the attractor ([analysis] attractor)."""
+    rotorsweep.pipeline.torus_points) and the attractor ([analysis] attractor)."""
     model = scene.model
     ana = scene.analysis
     opts = scene.integrator
@@ -181,7 +181,7 @@ def point_variables(model, sol, params, seconds, opts=None):
 
 def _orbit_extent(model, sol, params, opts):
     """Mean and half peak-to-peak of each observable over the orbit (SI), from one integration
-    (rotorkernels.extrema.orbit_extent: exact extrema, the mean by a Hermite rule on the steps)."""
+    (rotorsweep.kernels.extrema.orbit_extent: exact extrema, the mean by a Hermite rule on the steps)."""
     names = [o.name for o in model.observables]
     if sol.status != shooting.CONVERGED:
         return {k: np.nan for name in names for k in (f"{name}_mean", f"amplitude_{name}")}

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline import gridsize, units
-from rotorkernels import attractor, models
-from rotorkernels.models.spec import Parameter as Key
+from rotorsweep.pipeline import gridsize, units
+from rotorsweep.kernels import attractor, models
+from rotorsweep.kernels.models.spec import Parameter as Key
 
 try:
     import tomllib
@@ -46,7 +46,7 @@ def _num(lo=-math.inf, hi=math.inf, lo_open=False, hi_open=False, default=None, 
     return Key(kind, default, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open, **kw)
 
 
-# Frequency units of the reports: Hz, or over omega_l (pipeline.modes.omega_l, the models whose
+# Frequency units of the reports: Hz, or over omega_l (rotorsweep.pipeline.modes.omega_l, the models whose
 # spec has one)
 FREQUENCY_UNITS = ("Hz", "omega_l")
 
@@ -345,8 +345,8 @@ class Config:
 
     @cached_property
     def scene(self):
-        """The typed scene (pipeline.scene.Scene) the commands and their tasks work from, built once."""
-        from pipeline import scene
+        """The typed scene (rotorsweep.pipeline.scene.Scene) the commands and their tasks work from, built once."""
+        from rotorsweep.pipeline import scene
         return scene.build(self)
 
     def hash(self):
@@ -357,7 +357,7 @@ class Config:
         return hashlib.sha256(text.encode()).hexdigest()
 
 
-# Continuation settings (rotorkernels.continuation Settings fields) that a scene gives under
+# Continuation settings (rotorsweep.kernels.continuation Settings fields) that a scene gives under
 # another key than [section].<field>; the others are fixed, not in the config.
 SETTINGS_KEYS = {"tol": "numerics.newton_tol"}
 
@@ -506,7 +506,7 @@ def parse_config(text, path=None, allow_large=False, whole_grid=True):
     """Validate a TOML scene; returns a Config or raises ConfigError listing every problem.
     whole_grid: the command computes every grid point (`run`), so the grid's size is checked;
     `point`, `continue`, `backbone` and `modes` do not, and a large grid is no reason to refuse them.
-    Numbers are SI; a string with a unit is converted to the key's unit (pipeline.units).
+    Numbers are SI; a string with a unit is converted to the key's unit (rotorsweep.pipeline.units).
 
     >>> cfg = parse_config('''
     ... [scene]

@@ -1,4 +1,4 @@
-"""`rotorsweep continue`: pseudo-arclength branches of a scene (rotorkernels.continuation.arclength)
+"""`rotorsweep continue`: pseudo-arclength branches of a scene (rotorsweep.kernels.continuation.arclength)
 on a Dask cluster, into a netCDF *continuation result*.
 
 The config's [continuation] section names the continued parameter (any float parameter of the
@@ -18,14 +18,14 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from pipeline import cluster, compute, result_kinds, results, runlog, schema, torus_branches
-from pipeline.coexistence import (  # noqa: F401 (the continuation result's readers use these names)
+from rotorsweep.pipeline import cluster, compute, result_kinds, results, runlog, schema, torus_branches
+from rotorsweep.pipeline.coexistence import (  # noqa: F401 (the continuation result's readers use these names)
     bistable_intervals, branch_copy_of, coexistence, distinct_branches, distinct_events, event_copy_of, line_coexistence,
     mark_copies, stability_classes,
     stable_runs)
-from pipeline.config import ConfigError, range_text, settings_problems
-from rotorkernels import extrema
-from rotorkernels.continuation import arclength as al, solve_orbit, twoparam
+from rotorsweep.pipeline.config import ConfigError, range_text, settings_problems
+from rotorsweep.kernels import extrema
+from rotorsweep.kernels.continuation import arclength as al, solve_orbit, twoparam
 
 
 @dataclass(frozen=True)
@@ -46,7 +46,7 @@ class Plan:
 
 
 def plan(scene):
-    """The continuation a scene (pipeline.scene.Scene) asks for; raises ConfigError naming every
+    """The continuation a scene (rotorsweep.pipeline.scene.Scene) asks for; raises ConfigError naming every
     key that cannot work (before any work starts)."""
     spec = scene.model
     compute.require_forced(spec, "continue")
@@ -241,7 +241,7 @@ def branch_record(family, built, branch, parent):
 
 def _amplitudes(family, built, point):
     """(max |o|, half peak-to-peak of o) over the orbit for each observable o, in SI, exact
-    (rotorkernels.extrema): those the point recorded (what its events read) where it did."""
+    (rotorsweep.kernels.extrema): those the point recorded (what its events read) where it did."""
     if point.amplitudes is not None:
         return point.amplitudes
     return extrema.amplitudes(family.model, point.state, family.params(point.lam), family.periods, family.opts,
@@ -302,7 +302,7 @@ def _curve_variables(spec, pl, curves, par_attrs):
 
 
 def _torus_variables(records, stable):
-    """(values, run-time attrs) of the torus branches (pipeline.torus_branches): their points'
+    """(values, run-time attrs) of the torus branches (rotorsweep.pipeline.torus_branches): their points'
     error estimate, normal stability and largest exponent; `stable` is 1 where a torus is stable."""
     def pad(key, fill, dtype):
         out = np.full(stable.shape, fill, dtype)
@@ -333,9 +333,9 @@ def _torus_nodes(records, shape):
 
 def _omega_l_variables(scene, pl, values):
     """(values, run-time attrs) of the continued frequency and the events' over omega_l
-    (pipeline.modes.omega_l): the paper's nondimensional frequency, a coordinate the report draws
+    (rotorsweep.pipeline.modes.omega_l): the paper's nondimensional frequency, a coordinate the report draws
     its axes in."""
-    from pipeline import modes
+    from rotorsweep.pipeline import modes
 
     wl = modes.omega_l(scene)
     attrs = {"long_name": f"{pl.parameter} / omega_l", "omega_l": wl,
@@ -452,7 +452,7 @@ def open_result(path):
 def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr, resume=False):
     """Run the continuation a config asks for into a netCDF result at `output`; returns its path.
     Each finished line is kept as a part file until the result is written (`resume`: computes
-    only the lines missing, see pipeline.results)."""
+    only the lines missing, see rotorsweep.pipeline.results)."""
     pl = plan(cfg.scene)
     with (results.result_output(cfg, output, overwrite, scheduler, resume) as (output, parts),
           runlog.log_file(output, "continue")):
@@ -538,7 +538,7 @@ def events_table(ds):
         if ds[c].dims == ("branch",):
             cols[c] = ds[c].values[branch].tolist() if len(branch) else []
     cols["stable"] = [-1 if np.isnan(m).all() else int(np.abs(m).max() < 1.0) for m in mult]   # -1: a torus flag
-    if "event_note" in ds:      # torus branches' events (pipeline.torus_events) in words
+    if "event_note" in ds:      # torus branches' events (rotorsweep.pipeline.torus_events) in words
         cols["note"] = [str(v) for v in ds["event_note"].values]
     for j, name in enumerate(ds["observable"].values):
         cols[f"amplitude_max_{name}"] = ds["event_amplitude_max"].values[:, j].tolist()

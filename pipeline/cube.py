@@ -1,7 +1,7 @@
-"""Result cubes: build, write (atomically), open and describe the netCDF files of pipeline.schema,
+"""Result cubes: build, write (atomically), open and describe the netCDF files of rotorsweep.pipeline.schema,
 plus the part files a sweep writes per finished chunk and assembles at the end.
 
-The schema (axes, variables, dtypes, attrs, flags) lives in pipeline.schema; this module only
+The schema (axes, variables, dtypes, attrs, flags) lives in rotorsweep.pipeline.schema; this module only
 applies it.
 """
 import contextlib
@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from pipeline import duckarrays  # noqa: F401  (xarray without importing Dask for every array)
-from pipeline import fileio, query, schema
+from rotorsweep.pipeline import duckarrays  # noqa: F401  (xarray without importing Dask for every array)
+from rotorsweep.pipeline import fileio, query, schema
 
 CONVENTIONS = "CF-1.10"
 # zlib level 1 after the byte shuffle: on an atlas cube as small as level 4 without shuffle (the
@@ -142,7 +142,7 @@ def _local_write_lock():
     """xarray guards each netCDF write with a lock of the active Dask scheduler; with a distributed
     Client alive in the process (a notebook's, a benchmark's) that is a lock held by the scheduler,
     a round trip per call (Fig. 13's cube: 0.22 s instead of 0.06 s). A cube is in memory: a
-    process-local lock does. Without Dask imported no scheduler is active (pipeline.duckarrays)."""
+    process-local lock does. Without Dask imported no scheduler is active (rotorsweep.pipeline.duckarrays)."""
     if "dask" not in sys.modules:
         return contextlib.nullcontext()
     import dask
@@ -173,7 +173,7 @@ def _chunks(var, points, along):
 
 def open_cube(path):
     """Open a sweep cube into memory (the file is closed on return); integers stay integers.
-    A continuation or backbone result is refused with its kind named (pipeline.result_kinds
+    A continuation or backbone result is refused with its kind named (rotorsweep.pipeline.result_kinds
     opens every kind)."""
     ds = read_netcdf(path)
     kind = ds.attrs.get("result_kind")

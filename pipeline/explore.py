@@ -1,6 +1,6 @@
 """A cube explored the hvplot way, in a notebook: one function per figure kind of the report,
 each returning an hvplot (HoloViews) object, also reachable as methods of the `rotorsweep`
-accessor that importing this module (or `rotorsweep`: pipeline.register_accessor) registers on
+accessor that importing this module (or `rotorsweep`: rotorsweep.pipeline.register_accessor) registers on
 xarray Datasets:
 
     import rotorsweep
@@ -30,11 +30,11 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from pipeline import register_accessor, result_kinds, schema
-from pipeline.report.cubeinfo import (branch_observables, branch_values, continued_axis,
+from rotorsweep.pipeline import register_accessor, result_kinds, schema
+from rotorsweep.pipeline.report.cubeinfo import (branch_observables, branch_values, continued_axis,
                                       default_observable, has_attractor, other_axes)
-from pipeline.report.stability import CLASSES, PALETTE, stability_class
-from pipeline.report.style import LINE_COLOURS, holoviews
+from rotorsweep.pipeline.report.stability import CLASSES, PALETTE, stability_class
+from rotorsweep.pipeline.report.style import LINE_COLOURS, holoviews
 
 
 def plotting(figure):
@@ -224,7 +224,7 @@ def multiplier_frequency(ds, **kwargs):
     >>> type(fig).__name__
     'DynamicMap'
     """
-    from pipeline.report.figures.multiplier_frequency import multiplier_frequency_points
+    from rotorsweep.pipeline.report.figures.multiplier_frequency import multiplier_frequency_points
 
     speed = ds[continued_axis(ds)].values
     one_x = holoviews().Curve((speed, speed), continued_axis(ds), "frequency", label="1x").opts(line_dash="dashed")
@@ -235,16 +235,16 @@ def multiplier_frequency(ds, **kwargs):
 def bode(ds, observable=None, **kwargs):
     """Bode (amplitude, phase) and polar plots of the first harmonic of `observable` (default:
     the scene's report observable) of the orbits along the swept or continued parameter, stable
-    solid, unstable dashed (pipeline.report.figures.bode; the orbits are integrated again).
+    solid, unstable dashed (rotorsweep.pipeline.report.figures.bode; the orbits are integrated again).
 
     >>> fig = rotorsweep.explore.bode(rotorsweep.open_result(continuation_path)[0])
     >>> type(fig).__name__, len(fig)                 # amplitude, phase and polar panels
     ('Layout', 3)
     """
-    from pipeline.report import harmonics
-    from pipeline.report.figures import bode as figure
-    from pipeline.report.points import scene_of
-    from pipeline.report.plan import axis_label
+    from rotorsweep.pipeline.report import harmonics
+    from rotorsweep.pipeline.report.figures import bode as figure
+    from rotorsweep.pipeline.report.points import scene_of
+    from rotorsweep.pipeline.report.plan import axis_label
 
     scene = scene_of(ds)
     observable = observable or figure.report_observable(scene)
@@ -268,7 +268,7 @@ def campbell(ds, **kwargs):
     >>> type(fig).__name__
     'Layout'
     """
-    from pipeline.report.figures import mode_campbell
+    from rotorsweep.pipeline.report.figures import mode_campbell
 
     if not mode_campbell.has_linear_analysis(ds):
         raise ValueError(f"model {ds.attrs.get('model')}: no Campbell diagram (it needs a linearization, a shaft "
@@ -286,7 +286,7 @@ def mode_shapes(ds, **kwargs):
     >>> type(fig).__name__
     'Layout'
     """
-    from pipeline.report.figures import mode_shapes as figure
+    from rotorsweep.pipeline.report.figures import mode_shapes as figure
 
     if not figure.has_stations(ds):
         raise ValueError(f"model {ds.attrs.get('model')}: no mode shapes (they need a linearization, a shaft "
@@ -394,7 +394,7 @@ def backbones(ds, where=None, **kwargs):
                          table.hvplot.line(y="manifold", line_dash="dashed", **style))
 
 
-# the accessor's figures of each result kind (pipeline.result_kinds)
+# the accessor's figures of each result kind (rotorsweep.pipeline.result_kinds)
 FIGURES = {kind: {f.__name__: f for f in figures} for kind, figures in (
     (result_kinds.SWEEP, (max_multiplier, stability_map, branches, response, multiplier_frequency, bifurcation, lle,
                           multipliers, bode, campbell, mode_shapes)),
@@ -403,8 +403,8 @@ FIGURES = {kind: {f.__name__: f for f in figures} for kind, figures in (
 
 
 class CubeAccessor:
-    """ds.rotorsweep.<figure>(...): the functions of pipeline.explore on this result, where its
-    kind has them (pipeline.result_kinds: a sweep cube has every one; a figure that does not
+    """ds.rotorsweep.<figure>(...): the functions of rotorsweep.pipeline.explore on this result, where its
+    kind has them (rotorsweep.pipeline.result_kinds: a sweep cube has every one; a figure that does not
     apply says so); ds.rotorsweep.kind and describe() work on every kind."""
 
     def __init__(self, ds):
@@ -428,7 +428,7 @@ class CubeAccessor:
         return FIGURES[kind.name][figure](self._ds, *args, **kwargs)
 
     def to_frame(self, variables=None):
-        """The tidy table of pipeline.explore.to_frame (every result kind)."""
+        """The tidy table of rotorsweep.pipeline.explore.to_frame (every result kind)."""
         return to_frame(self._ds, variables)
 
     def max_multiplier(self, **kwargs):
@@ -471,4 +471,4 @@ class CubeAccessor:
         return self._draw("backbones", where, **kwargs)
 
 
-register_accessor()         # ds.rotorsweep: this module's CubeAccessor (pipeline.register_accessor)
+register_accessor()         # ds.rotorsweep: this module's CubeAccessor (rotorsweep.pipeline.register_accessor)

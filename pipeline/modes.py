@@ -4,7 +4,7 @@ Campbell table over shaft speed for the models that name one (`ModelSpec.speed`)
 
 Linearization about the static equilibrium q_s: M q'' + (C + G) q' + K q = 0 (the model's own,
 e.g. rigid_preloaded's analytic stiffness of the ball sums). The modes, their damped and undamped
-natural frequencies, damping ratios, whirl directions and labels are rotorkernels.modal's
+natural frequencies, damping ratios, whirl directions and labels are rotorsweep.kernels.modal's
 (`modes_of`, whose docstring gives the conventions): eigenvalues s = -zeta w_n +- i w_d, each mode
 once (w_d > 0), by increasing damped frequency; the logarithmic decrement is 2 pi zeta / sqrt(1 - zeta^2).
 
@@ -21,9 +21,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from pipeline import config, fileio, gridsize
-from pipeline.config import ConfigError
-from rotorkernels import modal
+from rotorsweep.pipeline import config, fileio, gridsize
+from rotorsweep.pipeline.config import ConfigError
+from rotorsweep.kernels import modal
 
 
 # |zeta| below this is the eigen-solver's rounding of an undamped mode (|Re s| ~ eps |s|): printed as 0.
@@ -31,7 +31,7 @@ ZETA_ROUNDING = 1e-12
 
 
 def scene_values(scene, point):
-    """The model's values at a point {axis: value} of a scene (pipeline.scene.Scene; its fixed
+    """The model's values at a point {axis: value} of a scene (rotorsweep.pipeline.scene.Scene; its fixed
     values filled in)."""
     return {**scene.values, **scene.fixed, **point}
 
@@ -43,7 +43,7 @@ def require_linearization(spec):
 
 
 def modes(spec, values, equilibrium=None):
-    """The modes at `values` (list of rotorkernels.modal.LinearMode), by increasing damped
+    """The modes at `values` (list of rotorsweep.kernels.modal.LinearMode), by increasing damped
     frequency; `equilibrium`: the static state if already known (it does not depend on speed)."""
     _, system = spec.linear_system(values, equilibrium)
     return modal.modes_of(system.M, system.C, system.G, system.K, modal.kinds_from_names(system.coordinates))
@@ -330,7 +330,7 @@ def command(cfg, at, campbell_text=None, output=None, as_json=False, report=None
     """`rotorsweep modes`: the summary at the scene's first grid point (axis values from `at`
     {axis: value} where given) and, with `output`, the Campbell table over `--campbell`
     START:STOP:NUM [Hz] (default: the scene's speed axis) as CSV; with `report` (a directory),
-    the HTML report (pipeline.report.modes_report; its Campbell diagram over `--campbell`, default
+    the HTML report (rotorsweep.pipeline.report.modes_report; its Campbell diagram over `--campbell`, default
     the critical-speed search range). Returns the text to print. Every option is checked before
     any work; a linearization that fails at the point asked for (a singular matrix, non-finite
     values) is one line naming --at."""
@@ -360,7 +360,7 @@ def command(cfg, at, campbell_text=None, output=None, as_json=False, report=None
 
 
 def _report(cfg, point, out_dir, speeds):
-    from pipeline.report import modes_report    # on first use: the text summary loads no plotting
+    from rotorsweep.pipeline.report import modes_report    # on first use: the text summary loads no plotting
 
     return modes_report.make_report(cfg, point, out_dir, speeds)
 

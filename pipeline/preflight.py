@@ -6,8 +6,8 @@ is not a promise (the disk may fill meanwhile); the writes themselves fail as cl
 import os
 from pathlib import Path
 
-from pipeline import fileio, gridsize
-from pipeline.fileio import FileIOError
+from rotorsweep.pipeline import fileio, gridsize
+from rotorsweep.pipeline.fileio import FileIOError
 
 # Free space asked for where a command's output has no size estimate (a continuation, a
 # backbone result, a report, a Campbell table: kB to a few MB): room for it and its temp file.

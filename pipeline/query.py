@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from pipeline import schema
+from rotorsweep.pipeline import schema
 
 RTOL = 1e-9                       # a typed value matches a grid value to this relative tolerance
 DEFAULT_VARIABLES = ("orbit_status", "max_abs_multiplier", "stable", "bifurcation")
@@ -198,7 +198,7 @@ ENTERS_BISTABLE = schema.BOUNDARY_DIRECTION.index("enters_bistable")
 
 def bistable_intervals(ds):
     """The bistable intervals of a cube: one per jump of the sweep (two neighbouring points on
-    different branches), between the fold pair its boundary table holds (pipeline.boundaries).
+    different branches), between the fold pair its boundary table holds (rotorsweep.pipeline.boundaries).
 
     Each entry: the other axes' values, `start`/`end` (the lower and upper fold; NaN where the
     pair could not be located), `grid_low`/`grid_high` (the grid points either side of the jump),
@@ -336,7 +336,7 @@ def class_runs(ds):
 
 
 def _torus_classes(ds, values):
-    """A point without orbit by design that has its torus (pipeline.torus_points) is
+    """A point without orbit by design that has its torus (rotorsweep.pipeline.torus_points) is
     "quasi_periodic_<stable|unstable|undecided>", or "torus_failed" where its torus did not converge."""
     if "torus_status" not in ds:
         return

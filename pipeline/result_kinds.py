@@ -1,6 +1,6 @@
 """Result kinds: every kind of file the commands write, in one registry with its schema.
 
-    sweep          `rotorsweep run`       the result cube (its schema: pipeline.schema)
+    sweep          `rotorsweep run`       the result cube (its schema: rotorsweep.pipeline.schema)
     continuation   `rotorsweep continue`  pseudo-arclength branches, located events, boundary curves
     backbone       `rotorsweep backbone`  nonlinear normal modes: manifold and continuation backbones
 
@@ -8,7 +8,7 @@ A file names its kind in the `result_kind` attribute; a sweep cube has none (it 
 `rotorsweep_schema_version` instead, as it had before there were other kinds). `open_result`
 opens a file once and returns it with its kind; `info`, `query`, `report` and the xarray accessor
 ask the kind what to do, never the file again (the accessor's figures per kind:
-pipeline.explore.FIGURES).
+rotorsweep.pipeline.explore.FIGURES).
 
 Adding a kind (the contract of ResultKind): a schema table here (variable -> (dims, attrs)), one
 ResultKind in KINDS naming the command that writes it and its describe / query / report
@@ -21,7 +21,7 @@ from typing import Callable
 
 import numpy as np
 
-from pipeline import cube, schema
+from rotorsweep.pipeline import cube, schema
 
 SWEEP, CONTINUATION, BACKBONE = "sweep", "continuation", "backbone"
 LINE = "..."        # in a schema's dims: the result's swept axes (a backbone result's lines)
@@ -32,13 +32,13 @@ class ResultKind:
     """One kind of result file. name: its `result_kind` attribute; command: the `rotorsweep`
     command that writes it (its `history` names it); what: the kind in words ("a sweep cube");
     title: the start of its files' `title` attribute;
-    variables: its schema, {name: (dims, attrs)} (None: the cube schema, pipeline.schema);
+    variables: its schema, {name: (dims, attrs)} (None: the cube schema, rotorsweep.pipeline.schema);
     check(path, ds): CubeError unless ds is a readable file of this kind (None: every schema
     variable not in `optional`, every coordinate in `coords` and attribute in `attrs` present,
     see missing()); describe(ds) -> text
     (`info`); query(ds, fmt, **options) -> text (`query`, options in query_options);
     report(ds, out_dir, points, forced, say) -> {"html": path, "png": [paths]} (`report`,
-    options in report_options). The accessor's figures of each kind: pipeline.explore.FIGURES."""
+    options in report_options). The accessor's figures of each kind: rotorsweep.pipeline.explore.FIGURES."""
     name: str
     command: str
     what: str
@@ -110,13 +110,13 @@ CONTINUATION_VARIABLES = {
     "event_state": (("event", "state"), _ORBIT_STATE),
     "event_amplitude_max": (("event", "observable"), {"long_name": "max |observable| over the orbit at the event"}),
     "event_amplitude_half_pp": (("event", "observable"), {"long_name": "half peak-to-peak of the observable over the orbit at the event"}),
-    # how many distinct stable orbits coexist where (pipeline.coexistence.line_coexistence)
+    # how many distinct stable orbits coexist where (rotorsweep.pipeline.coexistence.line_coexistence)
     "piece_lo": (("piece",), {"long_name": "start of a piece of a line's parameter range"}),
     "piece_hi": (("piece",), {"long_name": "end of a piece of a line's parameter range"}),
     "piece_line": (("piece",), {"units": "1", "long_name": "first branch index of the piece's line"}),
     "piece_branches": (("piece",), {"long_name": "one branch per distinct stable orbit at the piece's middle (space-separated)",
                                    "comment": "phase copies phi_j(s) of one orbit counted once"}),
-    # where the forcing is quasi-periodic: torus branches (pipeline.torus_branches); an orbit
+    # where the forcing is quasi-periodic: torus branches (rotorsweep.pipeline.torus_branches); an orbit
     # branch's points hold NaN / -1 here
     "branch_kind": (("branch",), {"long_name": "what the branch follows",
                                   "flag_values": np.array([0, 1], "int8"), "flag_meanings": "periodic_orbit torus"}),
@@ -131,7 +131,7 @@ CONTINUATION_VARIABLES = {
     "torus_nodes": (_BP + ("torus_node", "state"), {**_ORBIT_STATE, "long_name": "the torus's invariant circle at its nodes",
                                                    "comment": "values at the support forcing's phases 2 pi j / N (N: the "
                                                               "branch's non-NaN nodes); the trigonometric interpolant of "
-                                                              "them is the circle (rotorkernels.torus.Torus.at)"}),
+                                                              "them is the circle (rotorsweep.kernels.torus.Torus.at)"}),
     "event_note": (("event",), {"long_name": "the event in words (torus branches: flags, locked ratios p/q and "
                                              "their linked periodic orbits)"}),
     # with report.frequency_unit = "omega_l"
@@ -151,7 +151,7 @@ CONTINUATION_VARIABLES = {
 # variables only some continuation results have: with report.frequency_unit = "omega_l", with
 # continuation.curves_in
 # (piece_*: written since the coexistence counts distinct orbits; a file without them is read by
-# counting stable runs, pipeline.coexistence.coexistence)
+# counting stable runs, rotorsweep.pipeline.coexistence.coexistence)
 CONTINUATION_OPTIONAL = ("branch_kind", "torus_status", "torus_error", "torus_exponent", "torus_nodes", "event_note", "parameter_over_omega_l",
                          "event_parameter_over_omega_l", "curve_parameter", "curve_second", "curve_critical_real",
                          "curve_critical_imag", "curve_type", "curve_points", "curve_end", "curve_detail",
@@ -216,7 +216,7 @@ def variables(kind, values, attrs=None, lines=()):
     table = KINDS[kind].variables
     unknown = sorted(set(values) - set(table))
     if unknown:
-        raise KeyError(f"{kind} result: {', '.join(unknown)} not in its schema (pipeline.result_kinds)")
+        raise KeyError(f"{kind} result: {', '.join(unknown)} not in its schema (rotorsweep.pipeline.result_kinds)")
     attrs = attrs or {}
     return {name: (_dims(dims, lines), values[name], {**a, **attrs.get(name, {})})
             for name, (dims, a) in table.items() if name in values}
@@ -272,17 +272,17 @@ def _describe_cube(ds):
 
 
 def _describe_continuation(ds):
-    from pipeline import continuation
+    from rotorsweep.pipeline import continuation
     return continuation.describe(ds)
 
 
 def _describe_backbone(ds):
-    from pipeline import backbone
+    from rotorsweep.pipeline import backbone
     return backbone.describe(ds)
 
 
 def _query_cube(ds, fmt, where=None, var=None, unstable=False, attractors=None, bistable=False):
-    from pipeline import query
+    from rotorsweep.pipeline import query
     ds = query.select(ds, query.parse_where(where or []))
     if bistable:
         return query.intervals_table(query.bistable_intervals(ds), fmt=fmt, kind="bistable")
@@ -294,27 +294,27 @@ def _query_cube(ds, fmt, where=None, var=None, unstable=False, attractors=None, 
 
 
 def _query_continuation(ds, fmt):
-    from pipeline import continuation, query
+    from rotorsweep.pipeline import continuation, query
     return query.render(continuation.events_table(ds), fmt)
 
 
 def _query_backbone(ds, fmt):
-    from pipeline import backbone, query
+    from rotorsweep.pipeline import backbone, query
     return query.render(backbone.table(ds), fmt)
 
 
 def _report_cube(ds, out_dir, points=None, forced=None, say=None):
-    from pipeline import report
+    from rotorsweep.pipeline import report
     return report.make_report(ds, out_dir, points=points, say=say)
 
 
 def _report_continuation(ds, out_dir, points=None, forced=None, say=None):
-    from pipeline.report import branch_result
+    from rotorsweep.pipeline.report import branch_result
     return branch_result.make_report(ds, out_dir)
 
 
 def _report_backbone(ds, out_dir, points=None, forced=None, say=None):
-    from pipeline.report import backbone_result
+    from rotorsweep.pipeline.report import backbone_result
     return backbone_result.make_report(ds, out_dir, forced=forced)
 
 

@@ -1,9 +1,9 @@
 """What `rotorsweep continue` and `rotorsweep backbone` share: writing their result files (netCDF
-with a `result_kind` attribute, see pipeline.result_kinds) and running a task per line of the
-swept axes on a Dask cluster or, for small work, in this process (pipeline.cluster), the
+with a `result_kind` attribute, see rotorsweep.pipeline.result_kinds) and running a task per line of the
+swept axes on a Dask cluster or, for small work, in this process (rotorsweep.pipeline.cluster), the
 scene's kernels compiled first in the driver.
 
-Like `run`'s chunks, every finished line is saved at once as a part file (pipeline.cube's
+Like `run`'s chunks, every finished line is saved at once as a part file (rotorsweep.pipeline.cube's
 write_part, in `<output>.parts/`): a run stopped by a full disk, a kill or Ctrl-C keeps its
 finished lines, and `--resume` computes only the lines no part holds. A line's result (nested
 dicts, lists and tuples of arrays, numbers and text) goes into a part as its arrays and a JSON
@@ -15,7 +15,7 @@ import os
 
 import numpy as np
 
-from pipeline import cluster, cube, fileio, runlog, warmup, workload
+from rotorsweep.pipeline import cluster, cube, fileio, runlog, warmup, workload
 
 
 def write(ds, path):
@@ -97,7 +97,7 @@ def finish(ds, output, parts):
 def run_lines(cfg, task, lines, workers, scheduler, stream, summary, parts, unit="continuation_line"):
     """task(cfg.scene, where) for every line {axis: value}, after compiling the scene's kernels in
     the driver (workers load them from the cache): in this process when the estimated work of the
-    lines to compute (pipeline.workload, `unit`) is small or workers == 0, else as Dask tasks. The
+    lines to compute (rotorsweep.pipeline.workload, `unit`) is small or workers == 0, else as Dask tasks. The
     lines that part files in `parts` hold already are read, not computed; each line done is saved
     as a part and gets a progress line (`summary(result)`). The results in line order."""
     config_hash = cfg.hash()
@@ -193,7 +193,7 @@ def from_part(node, arrays):
 
 
 def say(stream, text):
-    """A phase line on `stream` and in the log (pipeline.runlog)."""
+    """A phase line on `stream` and in the log (rotorsweep.pipeline.runlog)."""
     runlog.phase_printer(stream)(text)
 
 

@@ -1,20 +1,20 @@
 """The scene: a validated config as one typed, frozen, picklable object, built once.
 
-`pipeline.config` validates a TOML file into a dict (every problem reported at once); `build`
+`rotorsweep.pipeline.config` validates a TOML file into a dict (every problem reported at once); `build`
 turns that dict into a `Scene` here, once, in the driver. The tasks receive the scene (or the
 piece they need: its integrator settings, its Newton settings, ...), never the config dict, and
 nothing downstream looks a section key up again. The config's text and dict stay with the
 `config.Config` for the result files' provenance (`cluster.provenance`), exactly as written.
 
-A scene is small on purpose: it is a chunk task's argument (pipeline.sweep), shipped with every
+A scene is small on purpose: it is a chunk task's argument (rotorsweep.pipeline.sweep), shipped with every
 task, so it holds the axes once (as arrays) and the model by name (`models.get` on the worker).
 """
 from dataclasses import dataclass, field, make_dataclass, replace
 
 import numpy as np
 
-from pipeline import config
-from rotorkernels import attractor, integrators, models
+from rotorsweep.pipeline import config
+from rotorsweep.kernels import attractor, integrators, models
 
 # A Lyapunov run measures at least this many forcing periods before its standard-error stop
 # ([analysis] lyapunov_rtol; lowering it would save little: Fig. 13's chaotic runs have a median
@@ -44,7 +44,7 @@ class Newton:
     transient_periods: int
 
     def solve_orbit_args(self, model):
-        """Keyword arguments of rotorkernels.continuation.solve_orbit / natural for `model`."""
+        """Keyword arguments of rotorsweep.kernels.continuation.solve_orbit / natural for `model`."""
         return {"cold_guess": model.cold_guess, "tol": self.tol, "max_iter": self.max_iter,
                 "transient_periods": self.transient_periods}
 
@@ -65,9 +65,9 @@ class Scene:
     """One validated scene. values: the model's parameter values the scene's sections give (SI,
     None where not given); fixed: the axis parameters the scene fixes (their `unset` value where
     not given: derived per point); axes: {swept axis: grid values}, along: the continued axis;
-    integrator: rotorkernels.integrators settings (amplitude limit scaled by the model);
+    integrator: rotorsweep.kernels.integrators settings (amplitude limit scaled by the model);
     integrator_name: its [numerics] name; in_process_below: [run] in_process_below [s] (where it
-    runs, pipeline.cluster.runs_in_process; None: not given)."""
+    runs, rotorsweep.pipeline.cluster.runs_in_process; None: not given)."""
     name: str
     model_name: str
     description: str

@@ -10,7 +10,7 @@ orbits were continued along (`continued_axis`).
 """
 import numpy as np
 
-from rotorkernels import attractor, models
+from rotorsweep.kernels import attractor, models
 
 SCHEMA_VERSION = 1
 DEFAULT_MODEL = "jeffcott_clearance"   # cubes written before models were named in attributes
@@ -106,7 +106,7 @@ ATTRACTOR_VARIABLES = {
         "units": "1", "comment": "the start of the next speed in the continuation; see orbit_state for the units"}),
     "lyapunov_periods": ((), "float64", {"long_name": "forcing periods integrated for the Lyapunov estimate (0 when derived)", "units": "1"}),
 }
-# Tori at quasi-periodically forced grid points (models with torus_forcing; pipeline.torus_points):
+# Tori at quasi-periodically forced grid points (models with torus_forcing; rotorsweep.pipeline.torus_points):
 # the invariant circle of the stroboscopic map, its normal stability and its Fourier resolution.
 TORUS_STATUS = ("converged", "not_converged", "fourier_decay_failed", "integration_failed")
 TORUS_STABILITY = ("unstable", "stable", "undecided")

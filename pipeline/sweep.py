@@ -13,9 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline import boundaries, cluster, compute, cube, fileio, result_kinds, warmup, workload
-from pipeline.runlog import PHASE, Progress, log_file, phase_printer  # noqa: F401 (PHASE: the phase lines' mark)
-from pipeline.cluster import SweepError
+from rotorsweep.pipeline import boundaries, cluster, compute, cube, fileio, result_kinds, warmup, workload
+from rotorsweep.pipeline.runlog import PHASE, Progress, log_file, phase_printer  # noqa: F401 (PHASE: the phase lines' mark)
+from rotorsweep.pipeline.cluster import SweepError
 
 
 @dataclass(frozen=True)
@@ -212,7 +212,7 @@ def run(cfg, output, workers=None, scheduler=None, resume=False, overwrite=False
     """Run a sweep from a validated config into a netCDF cube at `output`; returns its path.
     The output is locked for the whole run, so two runs never share part files. Phase and
     progress lines go to `stream` (default: sys.stderr at the time of the call; progress=False:
-    none) and to the log file `<output>.log` (pipeline.runlog)."""
+    none) and to the log file `<output>.log` (rotorsweep.pipeline.runlog)."""
     compute.require_forced(cfg.model, "run")
     output = os.path.abspath(output)
     with fileio.output_lock(output, cfg.path or "<default scene>"), cluster.heap_frozen():
@@ -308,12 +308,12 @@ RESUBMITS = 3
 
 
 def point_unit(scene):
-    """The unit of a sweep's work (pipeline.workload): a point, with or without attractors."""
+    """The unit of a sweep's work (rotorsweep.pipeline.workload): a point, with or without attractors."""
     return "point_attractor" if scene.analysis.attractor else "point"
 
 
 def _connect(scene, workers, scheduler, n_points, say):
-    """The executor of a sweep of n_points (pipeline.cluster.executor: this process for small
+    """The executor of a sweep of n_points (rotorsweep.pipeline.cluster.executor: this process for small
     work or workers=0, else a cluster), with the scene's kernels compiled (or loaded) here."""
     estimate = workload.estimate(point_unit(scene), scene.model_name, n_points)
     if cluster.runs_in_process(workers, scheduler, estimate, below=scene.in_process_below):
@@ -348,7 +348,7 @@ def _run_chunks(executor, scene, todo, parts, assembly, chunk_points, bar, say):
     both are done (a task and its result's round trip cost ~10 ms of CPU on the driver and the
     worker: Fig. 13 on 2 workers had 11 refinement tasks besides 31 chunks when every finished
     chunk's changes were one): {(line, i): boundary row}. An in-process run records its cost per
-    point (pipeline.workload)."""
+    point (rotorsweep.pipeline.workload)."""
     chunks = chunks_for(scene, todo, executor.n_workers, chunk_points)
     say(f"sweeping {_count(sum(len(s) for s in todo), 'point')} in {_count(len(chunks), 'chunk')}")
     bar.restart()

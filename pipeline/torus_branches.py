@@ -1,6 +1,6 @@
 """The torus line of `rotorsweep continue`: where the scene's forcing is quasi-periodic (two
 frequencies, the model's `torus_forcing`), the response is an invariant 2-torus, followed along
-the parameter by rotorkernels.continuation.tori instead of a periodic orbit.
+the parameter by rotorsweep.kernels.continuation.tori instead of a periodic orbit.
 
 The first torus comes from a settled transient: the stroboscopic map (one first-forcing period
 T, the second forcing's phase advancing by rho) iterated SETTLE_PERIODS times from the model's
@@ -10,7 +10,7 @@ branch keeps that node count; it ends `torus_breakdown` where the tail exceeds B
 
 Per point: the half-swing (half peak-to-peak) and max |o| of each observable over the torus,
 the torus error estimate, the normal stability and its largest exponent. The amplitudes are the
-exact extrema (rotorkernels.extrema) of the trajectories over one period T from AMPLITUDE_PHASES
+exact extrema (rotorsweep.kernels.extrema) of the trajectories over one period T from AMPLITUDE_PHASES
 equally spaced phases of the circle: exact along each trajectory, sampled in the phase, so the
 sup over the phase of each trajectory's extremum is low by at most its curvature in the phase
 times (pi / AMPLITUDE_PHASES)^2 / 2 (a parabola's drop at half the phase spacing): ~1.2e-3
@@ -19,10 +19,10 @@ relative for a swing varying over the phase by O(1) of itself, less for weak pha
 """
 import numpy as np
 
-from pipeline import compute, torus_events
-from pipeline.torus_points import AMPLITUDE_PHASES, DECAY_TOL, FIRST_NODES, FIT_PERIODS, MAX_NODES, SETTLE_PERIODS
-from rotorkernels import torus as tr
-from rotorkernels.continuation import engine, events as ev, tori
+from rotorsweep.pipeline import compute, torus_events
+from rotorsweep.pipeline.torus_points import AMPLITUDE_PHASES, DECAY_TOL, FIRST_NODES, FIT_PERIODS, MAX_NODES, SETTLE_PERIODS
+from rotorsweep.kernels import torus as tr
+from rotorsweep.kernels.continuation import engine, events as ev, tori
 
 BREAKDOWN_TOL = 1e-7    # a branch point's tail above it: the circle is no longer resolved
 POLISH_TOL = 1e-12      # each stored circle's residual, relative to max(1, max |U|) (tori.polish)
@@ -99,7 +99,7 @@ def polished(family, run):
 
 
 def stable_pieces(record, lam_range):
-    """The line's coexistence pieces (pipeline.coexistence's (lo, hi, stable branches)): between
+    """The line's coexistence pieces (rotorsweep.pipeline.coexistence's (lo, hi, stable branches)): between
     two consecutive points the torus branch (0) is stable where both ends are; outside the
     points nothing is known stable."""
     lam, stable = record["parameter"], record["torus_status"] == TORUS_STATUS[tr.STABLE]
@@ -116,7 +116,7 @@ def torus_record(model, family, built, run, n_rhs):
     """One torus branch as plain arrays: the orbit record's keys (multipliers NaN, orbit_state
     the circle at phase 0, period T), torus_error, torus_exponent [1/s], torus_status, torus_nodes
     (points, N, n: the circle's node values, scaled state, at phases 2 pi j / N), and the
-    branch's events (pipeline.torus_events: flags and locked ratios, with event_note)."""
+    branch's events (rotorsweep.pipeline.torus_events: flags and locked ratios, with event_note)."""
     n_state = family.kernel.n_state
     pts = run.points
     amp = np.array([torus_amplitudes(model, family, built, p) for p in pts]).reshape(

@@ -1,20 +1,20 @@
-"""The events of a torus branch (pipeline.torus_branches) as the continuation result's event rows:
-the flags of rotorkernels.continuation.tori (TS: the normal stability changes, TF: a fold of
+"""The events of a torus branch (rotorsweep.pipeline.torus_branches) as the continuation result's event rows:
+the flags of rotorsweep.kernels.continuation.tori (TS: the normal stability changes, TF: a fold of
 tori) between two points, and each locked ratio omega / Omega = p / q (q <= LOCK_DENOMINATOR)
 the branch passes, linked to the periodic-orbit solver.
 
 At a locked ratio the branch's torus is solved exactly there (tori.Locked); its circle then
 consists of q-periodic points of the stroboscopic map (one per phase of the support forcing). The
 one at phase 0, the phase of the scene's forcing, is the start of Newton shooting over q shaft
-turns (rotorkernels.shooting, the solver of the periodic points): the orbit it converges to is
+turns (rotorsweep.kernels.shooting, the solver of the periodic points): the orbit it converges to is
 linked (its state, Floquet multipliers over q turns and amplitudes in the event row) when it lies
 within LINK_TOL of the circle; otherwise the row keeps the circle's point, NaN multipliers, and a
 note saying why. Each row's `note` says it in words.
 """
 import numpy as np
 
-from rotorkernels import extrema, floquet, shooting
-from rotorkernels.continuation import events as ev
+from rotorsweep.kernels import extrema, floquet, shooting
+from rotorsweep.kernels.continuation import events as ev
 
 LOCK_DENOMINATOR = 8    # the largest q recognized as a locked ratio on a torus branch
 SHOOT_TOL = 1e-11       # the shooting's residual (scaled state: um and um per shaft turn)

@@ -1,7 +1,7 @@
 """Tori at sweep grid points: where a point's forcing is quasi-periodic (the model's
 `torus_forcing`, Built.periodic false: no periodic orbit by design) and the scene asks for the
 response ([analysis] floquet), the response is an invariant 2-torus, solved here
-(rotorkernels.torus) instead of being left `not_applicable`.
+(rotorsweep.kernels.torus) instead of being left `not_applicable`.
 
 The circle comes from a settled transient (torus.torus_from_transient: SETTLE_PERIODS iterates of
 the stroboscopic map, FIT_PERIODS samples fitted by FIRST_NODES nodes, then Newton on all nodes
@@ -10,12 +10,12 @@ segment a point first tries the previous quasi-periodic point's circle as its gu
 continuation, as the orbits are chained: it keeps following one torus where tori coexist, and
 reaches tori a transient leaves; not cheaper: a few variational Newton steps cost about what the
 ~500 plain stroboscopic steps of the transient do), the transient only where that fails. The
-same settings serve the torus lines of `rotorsweep continue` (pipeline.torus_branches).
+same settings serve the torus lines of `rotorsweep continue` (rotorsweep.pipeline.torus_branches).
 
 Per point (schema.TORUS_VARIABLES): status, normal stability and largest normal Lyapunov
 exponent [1/s], rotation number, Fourier modes, error estimate, and the half peak-to-peak of each
 observable over the torus, stored as the point's `amplitude_<observable>` so that amplitude maps
-are filled: the exact extrema (rotorkernels.extrema) along the trajectories over one forcing
+are filled: the exact extrema (rotorsweep.kernels.extrema) along the trajectories over one forcing
 period from AMPLITUDE_PHASES equal phases of the circle, their max / min over the phases (low by
 the phase sampling: torus_amplitude_error estimates it, ~1e-4 relative at 64 phases on Fig. 2b).
 Failure is data: a torus that fails has its status and NaN values.
@@ -24,8 +24,8 @@ import time
 
 import numpy as np
 
-from pipeline import schema
-from rotorkernels import torus as tr
+from rotorsweep.pipeline import schema
+from rotorsweep.kernels import torus as tr
 
 SETTLE_PERIODS = 400
 FIT_PERIODS = 120

@@ -87,7 +87,7 @@ def key_value(v, k):
     """(value, error text or None) of a config value for key k (a Parameter): a unit string of a
     number key ("7.6 um") in the key's unit; any other value as it is.
 
-    >>> from rotorkernels.models.spec import Parameter
+    >>> from rotorsweep.kernels.models.spec import Parameter
     >>> key_value("7.6 um", Parameter(unit="m"))
     (7.6e-06, None)
     >>> key_value("7.6 Hz", Parameter(unit="m"))
@@ -137,7 +137,7 @@ def flag_values(flags, spec, unit_of=None):
     SI, a unit string ("7.6 um", "600 rpm") is converted to the unit of the model's parameter of
     that name (or unit_of[name]). Raises UnitError naming the flag and the unit expected.
 
-    >>> from rotorkernels import models
+    >>> from rotorsweep.kernels import models
     >>> flag_values({"speed": ("--speed", "600 rpm"), "clearance": ("--clearance", None)},
     ...             models.get("jeffcott_clearance"))
     {'speed': 10.0, 'clearance': None}

@@ -20,8 +20,8 @@ import time
 
 import numba
 
-import rotorkernels.attractor as diagnostics
-from rotorkernels import integrators as ig, models, orbits
+import rotorsweep.kernels.attractor as diagnostics
+from rotorsweep.kernels import integrators as ig, models, orbits
 
 
 INTEGRATORS = ig.METHODS
@@ -59,7 +59,7 @@ def compile_model(spec, attractor=True, integrators=INTEGRATORS):
 
 
 def compile_scene(scene, say):
-    """Compile (or load) a scene's kernels (pipeline.scene.Scene) in the driver before its workers
+    """Compile (or load) a scene's kernels (rotorsweep.pipeline.scene.Scene) in the driver before its workers
     start solving, so that they load them from the disk cache instead of each compiling them again."""
     model = scene.model
     say(f"compiling the kernels of {model.name}: under a minute the first time on a machine, then "

@@ -1,4 +1,4 @@
-"""How much work a command's plan is, to choose where it runs (pipeline.cluster.runs_in_process):
+"""How much work a command's plan is, to choose where it runs (rotorsweep.pipeline.cluster.runs_in_process):
 the number of units (sweep points, continuation or backbone lines) times the cost of a unit of
 that kind for the scene's model, the largest measured by earlier in-process runs on this machine
 (units of one model cost 100-fold more in one scene than in another: a chaotic point, a line through

@@ -23,7 +23,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rotorkernels.roots import brent_root
+from rotorsweep.kernels.roots import brent_root
 
 _EPS = float(np.finfo(float).eps)
 

@@ -19,7 +19,7 @@ orbit samples are not this module's business.
 import numpy as np
 from numba import njit
 
-from rotorkernels import integrators as ig
+from rotorsweep.kernels import integrators as ig
 
 XTOL = 1e-9                 # zero of g: relative to the step (o's error o'' (XTOL h)^2 / 2 ~ 1e-20 o)
 MAX_REFINE = 60             # iterations per bracket (Newton: 2-4, Illinois: ~6-10)

@@ -1,6 +1,6 @@
 """Floquet multipliers from a monodromy matrix and how the leading one left the unit circle.
 
-Codes match pipeline.schema.BIFURCATION: none, fold (+1), period_doubling (-1),
+Codes match rotorsweep.pipeline.schema.BIFURCATION: none, fold (+1), period_doubling (-1),
 neimark_sacker (complex pair)."""
 import numpy as np
 

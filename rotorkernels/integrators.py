@@ -26,8 +26,8 @@ from numba import njit
 from numba.core.errors import TypingError
 from numba.extending import overload
 
-from rotorkernels import PICKED_BODY, dop853_tableau as _dop
-from rotorkernels.models import dispatch
+from rotorsweep.kernels import PICKED_BODY, dop853_tableau as _dop
+from rotorsweep.kernels.models import dispatch
 
 STATUS_OK, STATUS_NAN, STATUS_AMPLITUDE, STATUS_STEP_UNDERFLOW, STATUS_UNKNOWN_MODEL = range(5)
 

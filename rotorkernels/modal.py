@@ -1,12 +1,12 @@
 """Linear modes of M q'' + D q' + K q = 0 (D: damping plus gyroscopic) and their labels: the one
 linear-modes implementation of rotorsweep (`rotorsweep modes` and omega_l, the nonlinear normal
 modes, the backbones' starting modes and the series rotors' time scale all call it). Pure numpy:
-the models may use it (it is not in rotorkernels.PYTHON_ONLY).
+the models may use it (it is not in rotorsweep.kernels.PYTHON_ONLY).
 
 The first-order form x' = A x (x = (q, q')) has eigenvalues in conjugate pairs s = -zeta w_n +- i w_d
 (w_d = w_n sqrt(1 - zeta^2), w_n = |s|); each oscillating mode is reported once (w_d > 0), by
 increasing w_d (`eigenpairs`; `modes_of` labels them); a conservative gyroscopic system has
-s = +-i omega (`rotorkernels.nnm.linear_modes`).
+s = +-i omega (`rotorsweep.kernels.nnm.linear_modes`).
 
 Labels come from a per-coordinate description the model provides, `kinds`: one (axis, station)
 tag per coordinate, axis "x" or "y" (transverse displacement) or "z" (axial), station any name of

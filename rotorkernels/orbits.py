@@ -1,5 +1,5 @@
 """Periodic-orbit problems, apart from the strategies that follow them along a parameter
-(rotorkernels.continuation), as BifurcationKit separates a ShootingProblem from `continuation`.
+(rotorsweep.kernels.continuation), as BifurcationKit separates a ShootingProblem from `continuation`.
 
 - ForcedOrbitProblem: a forced model at one parameter point; the period is fixed by the forcing
   (k forcing periods, scaled time), the unknown is the state s, the residual phi(k; s) - s, its
@@ -16,8 +16,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rotorkernels import extrema, floquet, integrators as ig, shooting
-from rotorkernels.models import dispatch
+from rotorsweep.kernels import extrema, floquet, integrators as ig, shooting
+from rotorsweep.kernels.models import dispatch
 
 
 class ForcedOrbitProblem(NamedTuple):
@@ -111,7 +111,7 @@ class AutonomousOrbitProblem(NamedTuple):
 def entry_points(spec, opts):
     """(jitted function, example arguments) of each kernel that the orbit problems and their
     continuation call from Python for model `spec` with integrator settings `opts`, with the types
-    of those calls, so that a warm-up compiles exactly those (`pipeline.warmup`): a forced model's
+    of those calls, so that a warm-up compiles exactly those (`rotorsweep.pipeline.warmup`): a forced model's
     shooting and its orbits' exact extrema; a conservative one's backbones neither shoot at a fixed period nor settle a
     transient, but take the vector field at the period's end and the linear modes at rest."""
     kernel, n = spec.kernel, spec.n_state

@@ -1,18 +1,18 @@
 """Periodic orbits by shooting: Newton on r(s) = u(k T; s) - s with the monodromy from the
 variational equations, a backtracking line search, and explicit statuses.
 
-Codes match pipeline.schema: ORBIT_STATUS (converged, not_converged, diverged) and ORBIT_REASON.
+Codes match rotorsweep.pipeline.schema: ORBIT_STATUS (converged, not_converged, diverged) and ORBIT_REASON.
 """
 from collections import namedtuple
 
 import numpy as np
 from numba import njit
 
-from rotorkernels import integrators as ig
+from rotorsweep.kernels import integrators as ig
 
 CONVERGED, NOT_CONVERGED, DIVERGED = 0, 1, 2
 (R_OK, R_MAX_ITER, R_LINE_SEARCH, R_NAN, R_AMPLITUDE, R_STEP_UNDERFLOW, R_SINGULAR) = range(7)
-R_UNKNOWN_MODEL = 9     # pipeline.schema.ORBIT_REASON: 7, 8 are set by the pipeline
+R_UNKNOWN_MODEL = 9     # rotorsweep.pipeline.schema.ORBIT_REASON: 7, 8 are set by the pipeline
 
 Orbit = namedtuple("Orbit", "state monodromy status reason iterations residual n_rhs")
 

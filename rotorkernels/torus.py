@@ -31,7 +31,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rotorkernels import extrema, integrators as ig, shooting
+from rotorsweep.kernels import extrema, integrators as ig, shooting
 
 CONVERGED, NOT_CONVERGED, FOURIER_DECAY_FAILED, INTEGRATION_FAILED = (
     "converged", "not_converged", "fourier_decay_failed", "integration_failed")
@@ -302,7 +302,7 @@ def surface_samples(kernel, circle, p, phase_index, opts, n_phases=64, n_per_per
 
 
 def phase_extremes(model, circle, p, phase_index, opts, period, n_phases):
-    """(hi, lo) (n_phases, n_observables) SI: the exact extrema (rotorkernels.extrema) of each
+    """(hi, lo) (n_phases, n_observables) SI: the exact extrema (rotorsweep.kernels.extrema) of each
     observable along the trajectory over one period T from each of n_phases equally spaced phases
     of the circle (period: T in seconds, for the observables' units). Their max / min over the
     phases is the torus's to the phase sampling (see phase_sampling_error)."""

@@ -1,6 +1,6 @@
 """rotorsweep: stability maps of rotors on ball bearings (shooting, Floquet, Lyapunov) into
-netCDF result cubes. The public API in one place; the work is done by `pipeline` (configs,
-sweeps, cubes, queries, reports) and `rotorkernels` (the Numba numerics).
+netCDF result cubes. The public API in one place; the work is done by `rotorsweep.pipeline` (configs,
+sweeps, cubes, queries, reports) and `rotorsweep.kernels` (the Numba numerics).
 
     import rotorsweep
     path = rotorsweep.run("configs/demo.toml", "out/demo.nc")      # rotorsweep run
@@ -17,19 +17,19 @@ as soon as xarray is imported, before or after rotorsweep.
 """
 import importlib
 
-import pipeline
+import rotorsweep.pipeline as pipeline
 
 # public name -> (module, attribute in it; None: the module itself)
 _API = {
-    "explore": ("pipeline.explore", None),
+    "explore": ("rotorsweep.pipeline.explore", None),
     "make_report": ("pipeline", "make_report"), "open_cube": ("pipeline", "open_cube"),
     "open_result": ("pipeline", "open_result"), "point": ("pipeline", "point"), "run": ("pipeline", "run"),
     "unstable_intervals": ("pipeline", "unstable_intervals"),
-    "__version__": ("pipeline.cluster", "VERSION"), "SweepError": ("pipeline.cluster", "SweepError"),
-    "ConfigError": ("pipeline.config", "ConfigError"), "load_config": ("pipeline.config", "load_config"),
-    "parse_config": ("pipeline.config", "parse_config"),
-    "CubeError": ("pipeline.cube", "CubeError"),
-    "QueryError": ("pipeline.query", "QueryError"), "attractor_intervals": ("pipeline.query", "attractor_intervals"),
+    "__version__": ("rotorsweep.pipeline.cluster", "VERSION"), "SweepError": ("rotorsweep.pipeline.cluster", "SweepError"),
+    "ConfigError": ("rotorsweep.pipeline.config", "ConfigError"), "load_config": ("rotorsweep.pipeline.config", "load_config"),
+    "parse_config": ("rotorsweep.pipeline.config", "parse_config"),
+    "CubeError": ("rotorsweep.pipeline.cube", "CubeError"),
+    "QueryError": ("rotorsweep.pipeline.query", "QueryError"), "attractor_intervals": ("rotorsweep.pipeline.query", "attractor_intervals"),
 }
 
 __all__ = sorted(_API)

@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 
 # What the suite measures (pipeline/workload.py: $ROTORSWEEP_CACHE/costs.json) goes to a cache of
-# its own, not the user's: set before anything imports rotorkernels, and inherited by the CLI's
-# subprocesses and Dask workers. Its numba/ links to the user's, where rotorkernels keeps the
+# its own, not the user's: set before anything imports rotorsweep.kernels, and inherited by the CLI's
+# subprocesses and Dask workers. Its numba/ links to the user's, where rotorsweep.kernels keeps the
 # compiled kernels under the same variable, so the suite does not compile them again.
 PRIVATE_CACHE = Path(tempfile.mkdtemp(prefix="rotorsweep-test-cache-"))
 
@@ -48,7 +48,7 @@ lyapunov_max_periods = 300
 @pytest.fixture(scope="session")
 def tiny_run(tmp_path_factory):
     """(cube path, the chunk's results as the workers return them) of the TINY_SCENE sweep."""
-    from pipeline import boundaries, config, cube, sweep
+    from rotorsweep.pipeline import boundaries, config, cube, sweep
     cfg = config.parse_config(TINY_SCENE)
     ids, index, results, _ = sweep.compute_chunk(cfg.scene, sweep.segments(cfg.scene))
     ds = cube.assemble(cfg.axes, sweep.fixed_coords(cfg.scene), [(ids, index, results, None)],

@@ -1,5 +1,5 @@
 """Faults the reliability tests inject, written once."""
-from pipeline import cube
+from rotorsweep.pipeline import cube
 
 
 def disk_full_after_one_part(monkeypatch):

@@ -5,7 +5,7 @@ WINDOW = 1400     # px: every figure fits a window this wide
 def plots_of(figures):
     """(caption, bokeh Plot) of every panel of [(caption, filename, HoloViews figure)]."""
     from bokeh.models import Plot
-    from pipeline.report import style
+    from rotorsweep.pipeline.report import style
     hv = style.holoviews()
     with style.backend("bokeh"):
         return [(caption, plot) for caption, _, fig in figures

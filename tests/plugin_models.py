@@ -2,7 +2,7 @@
 test's directory, never a file of rotorsweep), their environment and the CLI run in it.
 
 Each source is the shared imports and rhs_jac around a model's own equations and spec; the text is
-what the kernel cache hashes (rotorkernels), so an edit here compiles the plugins' kernels again."""
+what the kernel cache hashes (rotorsweep.kernels), so an edit here compiles the plugins' kernels again."""
 import os
 import subprocess
 import sys
@@ -21,11 +21,11 @@ def rhs_jac(tau, u, p, du, out):
 
 
 def model_source(spec_names, equations, spec):
-    """A model module: numpy, njit and `spec_names` of rotorkernels.models.spec imported, the
+    """A model module: numpy, njit and `spec_names` of rotorsweep.kernels.models.spec imported, the
     model's rhs and jac (`equations`), the shared rhs_jac, then its build and SPEC (`spec`)."""
     return ("\nimport numpy as np\nfrom numba import njit\n\n"
-            f"from rotorkernels.models.spec import {spec_names}\n"
-            "from rotorkernels.models.velocity import upper_rows, velocity_rows\n\n\n"
+            f"from rotorsweep.kernels.models.spec import {spec_names}\n"
+            "from rotorsweep.kernels.models.velocity import upper_rows, velocity_rows\n\n\n"
             + equations + RHS_JAC + spec)
 
 
@@ -201,7 +201,7 @@ def plugin_env(directory, modules, files=None):
 
 def cli(env, *args, rc=0):
     """`rotorsweep ARGS` in `env`, which must exit with `rc`; the finished process."""
-    proc = subprocess.run([sys.executable, "-m", "pipeline.cli", *map(str, args)], env=env,
+    proc = subprocess.run([sys.executable, "-m", "rotorsweep.pipeline.cli", *map(str, args)], env=env,
                           capture_output=True, text=True, timeout=900, cwd=ROOT)
     assert proc.returncode == rc, f"rotorsweep {args}:\n{proc.stdout}\n{proc.stderr}"
     return proc

@@ -1,7 +1,7 @@
 """An independent reference for the Bai 2006 model: the equations written again in SI units with
 numpy, integrated by scipy's solve_ivp, the periodic orbit found by Newton with a finite-
 difference Jacobian and the monodromy by central finite differences. It shares no code with
-rotorkernels (no scaling, no analytic Jacobian, no Numba), so agreement tests the kernels."""
+rotorsweep.kernels (no scaling, no analytic Jacobian, no Numba), so agreement tests the kernels."""
 from dataclasses import dataclass
 
 import numpy as np
@@ -80,7 +80,7 @@ class BaiPoint:
 
 # --- the same rotor on an axially preloaded bearing ---------------------------------------------
 #
-# Written from the geometry, not from rotorkernels.bearing: the rings of a bearing with free
+# Written from the geometry, not from rotorsweep.kernels.bearing: the rings of a bearing with free
 # contact angle a0 shift axially under the preload P0; the radial distance between the inner and
 # outer groove centres stays A cos(a0) (A = r_i + r_o - D_b), so their distance grows to
 # A cos(a0) / cos(a) and each ball is squeezed by delta_n = A (cos(a0) / cos(a) - 1) along the

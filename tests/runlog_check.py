@@ -1,4 +1,4 @@
-"""The log file a command writes next to its output (pipeline.runlog): what the tests of `run`,
+"""The log file a command writes next to its output (rotorsweep.pipeline.runlog): what the tests of `run`,
 `continue` and `backbone` check in it."""
 import re
 from pathlib import Path

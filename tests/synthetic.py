@@ -1,4 +1,4 @@
-"""A synthetic result cube that follows pipeline.schema, for tests of query/report/cube code
+"""A synthetic result cube that follows rotorsweep.pipeline.schema, for tests of query/report/cube code
 that must not wait for a real sweep. Values are made up but shaped like a Fig. 13 sweep:
 unstable speed bands whose position depends on clearance, with all three instability types.
 
@@ -9,8 +9,8 @@ boundary table (add_boundary_table)."""
 import numpy as np
 import xarray as xr
 
-from pipeline import cube, schema
-from rotorkernels.models.jeffcott_clearance import SPEC as JEFFCOTT
+from rotorsweep.pipeline import cube, schema
+from rotorsweep.kernels.models.jeffcott_clearance import SPEC as JEFFCOTT
 
 JEFFCOTT_VARIABLES = schema.variables_of(schema.model_of({}))
 

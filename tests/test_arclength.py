@@ -1,4 +1,4 @@
-"""Pseudo-arclength continuation (rotorkernels.continuation.arclength) against independent values.
+"""Pseudo-arclength continuation (rotorsweep.kernels.continuation.arclength) against independent values.
 
 - Forced Duffing resonance curves, hardening and softening: both folds passed in one run; the
   fold frequency and the orbit there against a reference computed another way (scipy solve_ivp
@@ -17,9 +17,9 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import fsolve
 
-from pipeline import compute, config
-from rotorkernels import integrators as ig, models, shooting
-from rotorkernels.continuation import arclength as al, events, solve_orbit
+from rotorsweep.pipeline import compute, config
+from rotorsweep.kernels import integrators as ig, models, shooting
+from rotorsweep.kernels.continuation import arclength as al, events, solve_orbit
 
 DUFFING = models.get("duffing")
 # Integrator tolerance of the continuation runs; the Newton tolerance (1e-10) sits above it.
@@ -225,7 +225,7 @@ def test_sweep_boundary_table_locates_the_fold_on_the_branch(bai):
     the boundary at the fold of the stable branch, typed as a fold, to the table's 1e-8."""
     import xarray as xr
 
-    from pipeline import boundaries, schema
+    from rotorsweep.pipeline import boundaries, schema
 
     cfg = config.load_config("configs/bai2006_fig13.toml")
     fixed = {k: v for k, v in cfg.scene.fixed.items() if v is not None}
@@ -249,7 +249,7 @@ def test_an_event_brent_cannot_locate_is_left_out_and_the_branch_goes_on(monkeyp
     """The hardening Duffing branch with Brent made to give up on every event: the two folds are
     not listed (they have no located point), the branch's detail says where they were detected,
     and the branch still runs to the end of its range."""
-    from rotorkernels.roots import NotConverged
+    from rotorsweep.kernels.roots import NotConverged
 
     def not_converging(f, a, b, xtol):
         raise NotConverged("no convergence", (a, b))

@@ -6,8 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline import boundaries, compute, config, cube, scene, schema, sweep
-from pipeline.report.figures import atlas
+from rotorsweep.pipeline import boundaries, compute, config, cube, scene, schema, sweep
+from rotorsweep.pipeline.report.figures import atlas
 from tests.test_pipeline import SMALL
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -202,7 +202,7 @@ def test_onset_and_stable_share_per_line():
 
 @pytest.mark.parametrize("builder", [atlas.fig_onset, atlas.fig_stable_fraction, atlas.fig_boundary_surfaces])
 def test_atlas_figures_build_in_both_backends_one_panel_per_clearance(builder):
-    from pipeline.report import style
+    from rotorsweep.pipeline.report import style
 
     ds = _atlas_cube(np.full((2, 3, 2), 3), refined={(1, 2, 0): 12.5})
     for backend in ("bokeh", "matplotlib"):
@@ -212,7 +212,7 @@ def test_atlas_figures_build_in_both_backends_one_panel_per_clearance(builder):
 
 
 def test_atlas_figures_apply_only_with_more_than_two_varying_axes():
-    from pipeline.report import figures_for
+    from rotorsweep.pipeline.report import figures_for
 
     four = _atlas_cube(np.full((2, 3, 2), 3))
     names = {f.name for f in figures_for(four)}

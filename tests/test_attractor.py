@@ -6,9 +6,9 @@ eigenvalues of a constant matrix, Liouville's formula for the divergence, synthe
 import numpy as np
 import pytest
 
-from rotorkernels import attractor as at, continuation, floquet, integrators as ig, models, shooting
-from rotorkernels.attractor import lyapunov
-from rotorkernels.models import jeffcott_clearance as jc
+from rotorsweep.kernels import attractor as at, continuation, floquet, integrators as ig, models, shooting
+from rotorsweep.kernels.attractor import lyapunov
+from rotorsweep.kernels.models import jeffcott_clearance as jc
 from tests.reference import BaiPoint
 from tests.test_kernels import JEFF, bai_params
 

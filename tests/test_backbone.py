@@ -1,15 +1,15 @@
 """Backbone curves by pseudo-arclength continuation of conservative periodic orbits
-(rotorkernels.continuation.backbone): the undamped Duffing oscillator against its elliptic-function
+(rotorsweep.kernels.continuation.backbone): the undamped Duffing oscillator against its elliptic-function
 period, the linear limit of symmetric4 / asymmetric5 against the eigen-analysis of the polynomial
 form, multipliers and energy of every continued orbit, invalid input. About 15 s once compiled."""
 import numpy as np
 import pytest
 from scipy.special import ellipk
 
-from rotorkernels import integrators as ig, models
-from rotorkernels.continuation.arclength import Settings
-from rotorkernels.continuation.backbone import follow_backbone
-from rotorkernels.models import series_rotor as sr, symmetric4
+from rotorsweep.kernels import integrators as ig, models
+from rotorsweep.kernels.continuation.arclength import Settings
+from rotorsweep.kernels.continuation.backbone import follow_backbone
+from rotorsweep.kernels.models import series_rotor as sr, symmetric4
 
 TIGHT = ig.settings("dop853", rtol=1e-12, atol=1e-14, amplitude_limit=1e6)
 # ds in units of the largest amplitude; the velocities of the state (scaled by tau's unit) make

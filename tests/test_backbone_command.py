@@ -1,5 +1,5 @@
-"""`rotorsweep backbone`: the pipeline around the invariant manifold (rotorkernels.nnm) and the
-continuation backbones (rotorkernels.continuation.backbone) — the result file, the manifold vs
+"""`rotorsweep backbone`: the pipeline around the invariant manifold (rotorsweep.kernels.nnm) and the
+continuation backbones (rotorsweep.kernels.continuation.backbone) — the result file, the manifold vs
 continuation agreement at the order the cubic theory predicts, info / query / report, and input
 errors before any work."""
 import json
@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 
-from pipeline import backbone, cli, compute, config, result_kinds
+from rotorsweep.pipeline import backbone, cli, compute, config, result_kinds
 from tests import browser, cfcheck
 from tests.runlog_check import check_log
 from tests.browser import assert_renders, needs_chromium
@@ -133,7 +133,7 @@ def test_a_forced_model_has_no_backbone_and_a_conservative_one_no_sweep():
         backbone.plan(config.load_config("configs/filipkovsky2016_quick.toml").scene)
     with pytest.raises(config.ConfigError, match="symmetric4 is conservative.*rotorsweep backbone"):
         compute.require_forced(config.load_config("configs/filipkovsky2010_symmetric.toml").model, "run")
-    done = subprocess.run([sys.executable, "-m", "pipeline.cli", "run", AXIAL, "-o", "/nonexistent/x.nc"],
+    done = subprocess.run([sys.executable, "-m", "rotorsweep.pipeline.cli", "run", AXIAL, "-o", "/nonexistent/x.nc"],
                           capture_output=True, text=True)
     assert done.returncode == 2 and "asymmetric5 is conservative" in done.stderr
 
@@ -163,7 +163,7 @@ def _forced_response(path, unit="Hz"):
 
 
 def test_backbones_drawn_over_a_forced_response(axial_result, tmp_path):
-    import pipeline
+    import rotorsweep.pipeline as pipeline
 
     nc, _ = axial_result
     files = pipeline.make_report(nc, tmp_path / "over", over=_forced_response(tmp_path / "forced.nc"))
@@ -220,5 +220,5 @@ def test_the_screenshot_comparison_passes_a_window_1_px_off_and_fails_a_missing_
 
 
 def test_every_plot_of_the_report_has_a_legend_and_a_hover(axial_result):
-    from pipeline.report import backbone_result
+    from rotorsweep.pipeline.report import backbone_result
     assert_legend_hover_and_width(backbone_result.figures(backbone.open_result(axial_result[0]), "bokeh"))

@@ -1,10 +1,10 @@
-"""Tests of rotorkernels.bearing: Hertz constants, contact angles, preload state, presets."""
+"""Tests of rotorsweep.kernels.bearing: Hertz constants, contact angles, preload state, presets."""
 import math
 
 import numpy as np
 import pytest
 
-from rotorkernels.bearing import (
+from rotorsweep.kernels.bearing import (
     BAI2006_CONTACT_CONSTANT,
     _elliptic_integrals,
     PRESETS,

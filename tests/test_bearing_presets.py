@@ -1,4 +1,4 @@
-"""The papers' bearing tables as presets (rotorkernels.models.preloaded_pair): the free angle from
+"""The papers' bearing tables as presets (rotorsweep.kernels.models.preloaded_pair): the free angle from
 the table's groove geometry under both preload laws (closed form written here), the loaded angle
 (a scalar solve written here), every value recorded as given or derived, a table row replaced
 consistently (omega_l, the angle axes), the 2010 papers' E; and the disc's orbit in the mode shapes
@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from pipeline import cli, compute, config, modes
-from rotorkernels import bearing, models
-from rotorkernels.models import preloaded_pair as pp, rigid_preloaded as rp
+from rotorsweep.pipeline import cli, compute, config, modes
+from rotorsweep.kernels import bearing, models
+from rotorsweep.kernels.models import preloaded_pair as pp, rigid_preloaded as rp
 
 SPEC = models.get("rigid_preloaded")
 # The tables as printed, typed here: Filipkovsky 2016 (the paragraph after eq. 13) and both 2010
@@ -190,7 +190,7 @@ def test_info_shows_each_bearing_value_and_whether_it_was_given():
     """A cube of two points holding the model's derived values (as a sweep writes them):
     `rotorsweep info` prints each value used and its given flag where they are the same at
     every point."""
-    from pipeline import cube
+    from rotorsweep.pipeline import cube
     points = [SPEC.build(values(speed=s, groove_radius=5.94e-3)).derived for s in (250.0, 260.0)]
     results = {name: np.array([p[name] for p in points]) for name in points[0]}
     ds = cube.build_dataset({"speed": [250.0, 260.0]}, {}, results, {"model": "rigid_preloaded"})
@@ -212,9 +212,9 @@ def test_info_shows_each_bearing_value_and_whether_it_was_given():
 def test_a_result_of_model_version_1_keeps_the_free_angle_it_was_computed_with(bearing_keys, before):
     """A Hertz scene on the 2016 table that gives no free_angle meant the row's label before model
     version 2 unless a groove dimension was given (aace0b1's free_angle_source); a result file of
-    version 1 is rebuilt that way (pipeline.scene.of_result), one of version 2 from the geometry.
+    version 1 is rebuilt that way (rotorsweep.pipeline.scene.of_result), one of version 2 from the geometry.
     Checked against the same scene with free_angle given explicitly."""
-    from pipeline import scene
+    from rotorsweep.pipeline import scene
 
     text = SCENE.format(law="hertz", bearing=bearing_keys, sweep="nominal_angle = [15.0]")
 

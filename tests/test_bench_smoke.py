@@ -39,7 +39,7 @@ def test_chunk_plan_simulation_on_known_schedules():
     (<= 4 segments at the 64-point floor and its 32-point steps) of the ideal."""
     import numpy as np
 
-    from pipeline import sweep
+    from rotorsweep.pipeline import sweep
     from workflows.bench import chunk_plans as cp
 
     o = cp.TASK_OVERHEAD_S
@@ -188,7 +188,7 @@ def test_models_c_floor_equals_the_kernels():
     largest component leaves 1000x for cancellation between bearing force and forcing."""
     import numpy as np
 
-    from rotorkernels import models
+    from rotorsweep.kernels import models
     from workflows.bench.models import POINTS
     from workflows.bench.models_floor import check_c
     from workflows.bench.models_points import point_values
@@ -215,7 +215,7 @@ def test_models_scipy_peers_compute_the_kernels_equations():
     cancellation."""
     import numpy as np
 
-    from rotorkernels import integrators as ig, models
+    from rotorsweep.kernels import integrators as ig, models
     from workflows.bench.models import POINTS
     from workflows.bench.models_points import prepare_peer
 
@@ -269,7 +269,7 @@ def test_attractor_accuracy_counts_what_differs():
     reference attractor (near), one far from any (3 grid speeds from the only change), one
     period change; exponents by the three rules (derived: ln|lambda| = lle k T to 1e-5, derived
     vs integrated 3 se or 1e-3, both integrated 3 combined se)."""
-    from rotorkernels import attractor as at
+    from rotorsweep.kernels import attractor as at
     from workflows import attractor_accuracy as acc
 
     P, C, Q = at.PERIODIC, at.CHAOTIC, at.QUASI_PERIODIC

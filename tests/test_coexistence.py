@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from pipeline import config, continuation
+from rotorsweep.pipeline import config, continuation
 from tests.reference import BaiPoint
 
 

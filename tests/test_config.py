@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline import config
+from rotorsweep.pipeline import config
 CLI = [str(Path(sys.executable).with_name("rotorsweep"))]
 
 BASE = """
@@ -50,7 +50,7 @@ def test_range_forms():
 
 def test_zero_clearance_without_angle_is_radial_contact():
     """Bai's eq. 6 gives a zero contact angle at zero clearance: a valid deep-groove state."""
-    from pipeline import compute
+    from rotorsweep.pipeline import compute
 
     cfg = config.parse_config(BASE.replace("clearance = [3.8e-6, 7.6e-6]", "clearance = [0.0, 1e-6]"))
     point = {"speed": 50.0, "clearance": 0.0, "contact_angle": None, "preload": 0.0}
@@ -163,7 +163,7 @@ def test_fuzzed_configs_never_raise_anything_but_config_error():
 
 @pytest.mark.parametrize("text", [MALFORMED[2][1], MALFORMED[11][1], MALFORMED[22][1]])
 def test_cli_rejects_bad_config_with_exit_2(tmp_path, capsys, text):
-    from pipeline import cli
+    from rotorsweep.pipeline import cli
 
     path = tmp_path / "bad.toml"
     path.write_text(text)
@@ -219,8 +219,8 @@ def test_analysis_keys_are_the_attractor_settings_fields():
     attractor.Settings, and the settings built from a scene carry the scene's values."""
     from dataclasses import fields
 
-    from pipeline import scene
-    from rotorkernels import attractor
+    from rotorsweep.pipeline import scene
+    from rotorsweep.kernels import attractor
 
     keys = set(config.SCHEMA["analysis"]) - {"floquet", "attractor", "sweep_direction"}
     assert keys <= {f.name for f in fields(attractor.Settings)}
@@ -234,7 +234,7 @@ def test_continuation_messages_name_existing_keys_and_state_the_limits():
     """Issue 36 item 13: the step-order problem names the three config keys (not
     `continuation.steps`), the Newton tolerance is numerics.newton_tol, and a start outside the
     parameter's values states its limits (no empty "()" list)."""
-    from pipeline import continuation
+    from rotorsweep.pipeline import continuation
     from tests.test_continue_command import DUFFING
 
     def message(extra):

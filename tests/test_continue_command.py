@@ -8,12 +8,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline import config, continuation
+from rotorsweep.pipeline import config, continuation
 from tests import cfcheck
 from tests.runlog_check import check_log
 from tests.browser import assert_renders, needs_chromium
 from tests.figure_checks import assert_legend_hover_and_width
-from rotorkernels.continuation import arclength as al
+from rotorsweep.kernels.continuation import arclength as al
 
 CLI = [str(Path(sys.executable).with_name("rotorsweep"))]
 
@@ -209,5 +209,5 @@ def test_events_csv_has_units_in_every_numeric_header(duffing_result):
 
 
 def test_every_plot_of_the_report_has_a_legend_and_a_hover(duffing_result):
-    from pipeline.report import branch_result
+    from rotorsweep.pipeline.report import branch_result
     assert_legend_hover_and_width(branch_result.figures(continuation.open_result(duffing_result[0]), "bokeh"))

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import cube, schema
-from rotorkernels.models.jeffcott_clearance import SPEC as JEFFCOTT
+from rotorsweep.pipeline import cube, schema
+from rotorsweep.kernels.models.jeffcott_clearance import SPEC as JEFFCOTT
 from tests import cfcheck
 from tests.synthetic import synthetic_cube
 

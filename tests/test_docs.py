@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
-import pipeline
+import rotorsweep.pipeline as pipeline
 import rotorsweep
-from pipeline import config, config_reference, units
-from rotorkernels import models
+from rotorsweep.pipeline import config, config_reference, units
+from rotorsweep.kernels import models
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
 
@@ -46,7 +46,7 @@ def public_functions():
 
 def test_the_committed_config_reference_is_current():
     assert config_reference.OUTPUT.read_text() == config_reference.markdown(), \
-        "docs/reference/config.md is stale: run python -m pipeline.config_reference"
+        "docs/reference/config.md is stale: run python -m rotorsweep.pipeline.config_reference"
 
 
 def test_the_config_reference_names_every_key_of_every_model():

@@ -1,4 +1,4 @@
-"""The continuation engine (rotorkernels.continuation.engine) on a problem with a closed-form
+"""The continuation engine (rotorsweep.kernels.continuation.engine) on a problem with a closed-form
 branch, written against the problem contract alone: the unit circle x^2 + y^2 = 1 continued in y.
 The loop closes, an edge is solved exactly, a user event (x = 0, the top and bottom of the circle)
 is located by Brent on the arclength and a level event (y = 1/2) is solved where it is crossed;
@@ -8,7 +8,7 @@ from typing import NamedTuple
 import numpy as np
 import pytest
 
-from rotorkernels.continuation import engine, events as ev
+from rotorsweep.kernels.continuation import engine, events as ev
 
 SETTINGS = engine.Settings(ds=0.1, ds_max=0.3, tol=1e-14, locate_xtol=1e-12)
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import rotorsweep
-from pipeline import explore
+from rotorsweep.pipeline import explore
 from tests.synthetic import synthetic_cube
 
 KINDS = ("max_multiplier", "stability_map", "branches", "response", "multiplier_frequency", "bifurcation", "lle",

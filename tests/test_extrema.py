@@ -1,4 +1,4 @@
-"""Exact extrema (rotorkernels.extrema) and the amplitudes built on them, each against an
+"""Exact extrema (rotorsweep.kernels.extrema) and the amplitudes built on them, each against an
 independent value: a closed form, or scipy's DOP853 at rtol 1e-13 with a bounded scalar search
 on its dense solution (scipy_extremes)."""
 from pathlib import Path
@@ -8,9 +8,9 @@ import pytest
 from scipy.integrate import quad, solve_ivp
 from scipy.optimize import minimize_scalar
 
-from pipeline import compute, config, continuation, scene
-from rotorkernels import extrema, integrators as ig, models
-from rotorkernels.continuation import arclength as al, solve_orbit
+from rotorsweep.pipeline import compute, config, continuation, scene
+from rotorsweep.kernels import extrema, integrators as ig, models
+from rotorsweep.kernels.continuation import arclength as al, solve_orbit
 
 DUFFING = models.get("duffing")
 TIGHT = ig.settings(rtol=1e-12, atol=1e-14)
@@ -226,7 +226,7 @@ def test_duffing_peak_matches_scipy(gamma, force, hi):
 def test_peak_in_info_events_table_and_csv():
     """The linear oscillator's peak in `info`, the events table (the report's and the CSV's):
     parameter, amplitudes (as the event recorded them), stability."""
-    from pipeline import query
+    from rotorsweep.pipeline import query
 
     cfg = config.parse_config(DUFFING_SCENE.format(gamma=0.0, force=0.3, lo=0.5, hi=2.0))
     pl = continuation.plan(cfg.scene)

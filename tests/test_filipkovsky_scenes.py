@@ -5,10 +5,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline import compute, config, continuation
-from rotorkernels import continuation as kc, integrators as ig, shooting
-from rotorkernels.continuation import arclength as al
-from rotorkernels.models import rigid_preloaded as rp
+from rotorsweep.pipeline import compute, config, continuation
+from rotorsweep.kernels import continuation as kc, integrators as ig, shooting
+from rotorsweep.kernels.continuation import arclength as al
+from rotorsweep.kernels.models import rigid_preloaded as rp
 
 SPEC = rp.SPEC
 FIG2A = Path("configs/filipkovsky2016_fig2a_continue.toml")
@@ -120,7 +120,7 @@ def test_continuing_a_frequency_with_both_forcings_on_follows_tori():
     so no periodic orbit can be continued; `rotorsweep continue` follows the invariant torus
     instead (issue 38; it refused such a scene before). Without the unbalance the line stays a
     periodic-orbit line."""
-    from pipeline import torus_branches
+    from rotorsweep.pipeline import torus_branches
 
     text = FIG2B.read_text().replace("eccentricity = 0.0", "eccentricity = 0.2e-6")
     both = config.parse_config(text).scene
@@ -208,7 +208,7 @@ def test_forcing_too_strong_for_newton_gives_a_status_not_an_exception():
     built = SPEC.build(v)
     sol = kc.solve_orbit(SPEC, built.p, ig.settings(rtol=1e-9, atol=1e-11), cold_guess=SPEC.cold_guess,
                          tol=1e-9, max_iter=15)
-    from pipeline import schema
+    from rotorsweep.pipeline import schema
     assert (sol.status, schema.ORBIT_REASON[sol.reason]) == (shooting.DIVERGED, "amplitude_limit")
     assert np.isnan(sol.multipliers.real).all()
 
@@ -221,7 +221,7 @@ def test_omega_l_is_the_axial_mode_at_15_deg():
     (bearing.preload_state, closed form): sqrt(2 k_a / (m_B + m_0)) sqrt(1 - zeta^2) / 2 pi,
     zeta = C / (2 sqrt(2 k_a (m_B + m_0))); equal to 1e-9 (the linearization at the static
     state, q = 0, is exact)."""
-    from pipeline import modes
+    from rotorsweep.pipeline import modes
     data = config.parse_config(FIG2A.read_text().replace("nominal_angle = [12, 15, 26, 36, 40]",
                                                          "nominal_angle = [40]")).scene
     wl = modes.omega_l(data)
@@ -237,7 +237,7 @@ def test_continuation_report_draws_the_response_in_omega_l_and_the_campbell_diag
     """The result carries the continued speed over omega_l (the paper's axis), the report draws
     the half peak-to-peak of y_B (the [report] observable) against it, and the Campbell diagram
     (forward / backward whirl, the 1x line)."""
-    from pipeline.report import branch_result
+    from rotorsweep.pipeline.report import branch_result
     cfg, where, rec = fig2a_line
     pl = continuation.plan(cfg.scene)
     ds = continuation.to_dataset(cfg.scene, pl, [(where, [rec])],
@@ -280,9 +280,9 @@ def test_sweep_report_maps_stability_over_contact_angle_and_preload(tmp_path):
     derived contact angle reads 'from the preload solve' (not the clearance model's text), and
     the report adds the Campbell diagram with the grid's speeds marked, and draws a --point of
     this model (no x, y observables)."""
-    from pipeline import cube, sweep
-    from pipeline.report import axes_plan, make_report, map_rectangles
-    from pipeline.report.plan import fmt
+    from rotorsweep.pipeline import cube, sweep
+    from rotorsweep.pipeline.report import axes_plan, make_report, map_rectangles
+    from rotorsweep.pipeline.report.plan import fmt
     cfg = config.parse_config(SWEEP_GRID)
     ds = cube.open_cube(sweep.run(cfg, tmp_path / "grid.nc", workers=1, progress=False))
     plan = axes_plan(ds)
@@ -358,7 +358,7 @@ def test_fig5_point_with_the_unbalance_on_beats_on_a_forced_torus():
     forcing is quasi-periodic: no orbit, and the attractor (Poincare once per shaft revolution)
     is the forced torus, quasi_periodic, not period-1: its y_B samples spread over a band (beats)
     while its Lyapunov exponents are all negative (a forced torus contracts)."""
-    from pipeline import schema, scene
+    from rotorsweep.pipeline import schema, scene
     cfg = config.load_config(FIG5)
     data = scene.from_data({**cfg.data, "analysis": {**cfg.data["analysis"], "transient_periods": 200,
                                                      "lyapunov_max_periods": 200}})

@@ -4,8 +4,8 @@ short range follows a torus whose half-swing a long scipy DOP853 run from its ci
 import numpy as np
 import pytest
 
-from pipeline import cli, compute, config, continuation, torus_branches
-from pipeline import scene as scene_mod
+from rotorsweep.pipeline import cli, compute, config, continuation, torus_branches
+from rotorsweep.pipeline import scene as scene_mod
 
 SCENES = {"3a": 15, "3b": 15, "4a": 26, "4b": 36}
 
@@ -27,7 +27,7 @@ def test_fig4b_starts_a_stable_torus_confirmed_by_a_transient(tmp_path):
     the sup from below, ~1e-3 relative at most)."""
     from scipy.integrate import solve_ivp
 
-    from rotorkernels.models import rigid_preloaded as rp
+    from rotorsweep.kernels.models import rigid_preloaded as rp
 
     text = open("configs/filipkovsky2016_fig4b.toml").read().replace("stop = 1300.0", "stop = 100.4")
     (tmp_path / "fig4b.toml").write_text(text)

@@ -2,9 +2,9 @@
 import numpy as np
 import pytest
 
-from rotorkernels import attractor as at, continuation, floquet, integrators as ig, shooting
-from rotorkernels.continuation import events as boundary
-from rotorkernels.models import jeffcott_clearance as jc
+from rotorsweep.kernels import attractor as at, continuation, floquet, integrators as ig, shooting
+from rotorsweep.kernels.continuation import events as boundary
+from rotorsweep.kernels.models import jeffcott_clearance as jc
 from tests.reference import BaiPoint, PreloadedPoint
 from tests.test_kernels import JEFF, bai_params, match
 
@@ -143,7 +143,7 @@ def test_preloaded_bearing_driven_until_balls_unload(load, unloads):
     the orbit (about 3 um peak to peak) unloads up to 3 balls, which leave and regain contact every
     ball passage (the force is only C^1 there). Both orbits converge and match the independent
     scipy reference."""
-    from pipeline import compute, config
+    from rotorsweep.pipeline import compute, config
 
     cfg = config.parse_config(PRELOADED_SCENE.format(load=load))
     params = compute.point_params(cfg.scene, {"speed": 350.0, "clearance": 0.0, "contact_angle": None,

@@ -6,8 +6,8 @@ import json
 import numpy as np
 import pytest
 
-from pipeline import boundaries, cli, compute, config, continuation, cube, query, schema, sweep
-from rotorkernels.continuation import arclength as al
+from rotorsweep.pipeline import boundaries, cli, compute, config, continuation, cube, query, schema, sweep
+from rotorsweep.kernels.continuation import arclength as al
 
 # Bai 2006 (configs/bai2006_fold.toml): the natural sweep jumps over a fold pair near 40.8 Hz at
 # 7.6 um and near 31.1 Hz at 15.2 um.
@@ -105,7 +105,7 @@ def test_smooth_branches_make_no_jump():
 
 
 def test_the_map_draws_the_bistable_band_as_its_own_class(jump_sweep):
-    from pipeline.report import stability
+    from rotorsweep.pipeline.report import stability
 
     _, ds, _ = jump_sweep
     (iv,) = query.bistable_intervals(ds)
@@ -142,7 +142,7 @@ def test_the_map_draws_a_narrow_bistable_band_at_least_its_minimum_width(jump_sw
     """The bistable band lies over the interval between the folds (query --bistable), is in the
     legend, and a band narrower than MIN_BAND_FRACTION of the axis (the demo's 7.6 um pair: 0.1 Hz
     of 240, half a pixel) is drawn that wide about its middle."""
-    from pipeline.report import axes_plan, map_rectangles, stability
+    from rotorsweep.pipeline.report import axes_plan, map_rectangles, stability
 
     _, ds, _ = jump_sweep
     (iv,) = query.bistable_intervals(ds)
@@ -162,11 +162,11 @@ def test_the_bistable_interval_names_its_two_coexisting_orbits(jump_sweep):
     """query --bistable and the report's table give the two stable orbits that coexist in the
     middle of the fold pair (issue 32 item 4, gap d). Independently: Newton at that speed from
     the cube's orbits either side of the jump (one on each branch), amplitudes by
-    rotorkernels.extrema; both sides converge to 1e-9 (newton_tol), so the amplitudes agree to
+    rotorsweep.kernels.extrema; both sides converge to 1e-9 (newton_tol), so the amplitudes agree to
     1e-6 relative with room, and each orbit is stable."""
-    from pipeline.report.tables import bistable_rows
-    from rotorkernels import extrema
-    from rotorkernels.continuation import solve_orbit
+    from rotorsweep.pipeline.report.tables import bistable_rows
+    from rotorsweep.kernels import extrema
+    from rotorsweep.kernels.continuation import solve_orbit
 
     cfg, ds, clearance = jump_sweep
     (iv,) = query.bistable_intervals(ds)

@@ -8,9 +8,9 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 from scipy.optimize import linear_sum_assignment
 
-from rotorkernels import continuation, floquet, integrators as ig, models, shooting
-from rotorkernels.continuation import events as boundary
-from rotorkernels.models import jeffcott_clearance as jc
+from rotorsweep.kernels import continuation, floquet, integrators as ig, models, shooting
+from rotorsweep.kernels.continuation import events as boundary
+from rotorsweep.kernels.models import jeffcott_clearance as jc
 from tests.reference import BAI, BaiPoint
 
 JEFF = models.get("jeffcott_clearance")
@@ -273,9 +273,9 @@ def test_boundary_is_located_far_below_the_grid_step():
 @pytest.mark.parametrize("preload", [50.0, 300.0, 1500.0])
 def test_preloaded_law_linearizes_to_the_bearing_radial_stiffness(preload):
     """Two independent routes to the radial stiffness of a preloaded bearing: the closed form of
-    rotorkernels.bearing ((3/4) N K delta_n^{1/2} cos^2 a) and the kernel's analytic Jacobian of
+    rotorsweep.kernels.bearing ((3/4) N K delta_n^{1/2} cos^2 a) and the kernel's analytic Jacobian of
     the ball-by-ball force law at the centred journal."""
-    from rotorkernels import bearing
+    from rotorsweep.kernels import bearing
 
     geom = bearing.preset("angular_contact_medium", 26)
     state = bearing.preload_state(geom, preload)
@@ -320,7 +320,7 @@ def test_fused_rhs_jac_equals_rhs_and_jac():
 
 
 def test_force_only_contact_sum_equals_ring_load():
-    from rotorkernels.contact import ring_force, ring_load
+    from rotorsweep.kernels.contact import ring_force, ring_load
 
     rng = np.random.default_rng(6)
     for _ in range(50):
@@ -411,7 +411,7 @@ def test_numba_cache_is_keyed_on_all_kernel_sources(tmp_path):
     import shutil
 
     import numba
-    import rotorkernels
+    import rotorsweep.kernels as rotorkernels
 
     src = Path(rotorkernels.__file__).parent
     shutil.copytree(src, tmp_path, dirs_exist_ok=True, ignore=shutil.ignore_patterns("__pycache__"))
@@ -432,7 +432,7 @@ def test_numba_cache_is_keyed_on_all_kernel_sources(tmp_path):
 def test_vendored_dop853_tableau_is_scipys():
     """rotorkernels/dop853_tableau.py holds scipy's (private) DOP853 floats digit for digit."""
     ref = pytest.importorskip("scipy.integrate._ivp.dop853_coefficients")
-    from rotorkernels import dop853_tableau as tab
+    from rotorsweep.kernels import dop853_tableau as tab
 
     n = tab.N_STAGES
     assert n == ref.N_STAGES

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline import cluster, config, continuation, cube, sweep, workload
+from rotorsweep.pipeline import cluster, config, continuation, cube, sweep, workload
 from tests.test_continue_command import DUFFING
 from tests.test_pipeline import SMALL
 
@@ -26,12 +26,12 @@ HEAVY = PLOTTING + DASK + SCIPY_SOLVERS
 NOTHING_READ = HEAVY + ("numba", "xarray", "pandas", "netCDF4", "pint")
 COMMANDS = {
     "import rotorsweep": (["-c", "import rotorsweep"], NOTHING_READ),
-    "argument parsing": (["-m", "pipeline.cli", "--help"], NOTHING_READ),
-    "info": (["-m", "pipeline.cli", "info", "{cube}"], HEAVY + ("pint",)),
-    "query --unstable": (["-m", "pipeline.cli", "query", "{cube}", "--unstable"], HEAVY + ("pint",)),
-    "query --where --var": (["-m", "pipeline.cli", "query", "{cube}", "--where", "speed=0:1e4", "--var",
+    "argument parsing": (["-m", "rotorsweep.pipeline.cli", "--help"], NOTHING_READ),
+    "info": (["-m", "rotorsweep.pipeline.cli", "info", "{cube}"], HEAVY + ("pint",)),
+    "query --unstable": (["-m", "rotorsweep.pipeline.cli", "query", "{cube}", "--unstable"], HEAVY + ("pint",)),
+    "query --where --var": (["-m", "rotorsweep.pipeline.cli", "query", "{cube}", "--where", "speed=0:1e4", "--var",
                              "max_abs_multiplier"], HEAVY + ("pint",)),
-    "point": (["-m", "pipeline.cli", "point", "--speed", "100", "--clearance", "7.6e-6"],
+    "point": (["-m", "rotorsweep.pipeline.cli", "point", "--speed", "100", "--clearance", "7.6e-6"],
               HEAVY + ("xarray", "pandas", "netCDF4", "pint")),
 }
 
@@ -145,7 +145,7 @@ def test_the_accessor_registers_without_hvplot_and_draws_with_it(tiny_cube):
     code = ("import sys, rotorsweep; ds = rotorsweep.open_cube(sys.argv[1]); assert 'hvplot' not in sys.modules; "
             "ds.rotorsweep.max_multiplier(); assert 'hvplot' in sys.modules")
     subprocess.run([sys.executable, "-c", code, str(tiny_cube)], check=True, env=env(), timeout=300, cwd=ROOT)
-    before = ("import xarray as xr, rotorsweep, pipeline.explore; "
+    before = ("import xarray as xr, rotorsweep, rotorsweep.pipeline.explore; "
               "assert type(xr.Dataset().rotorsweep).__name__ == 'CubeAccessor'")    # once: no override warning
     subprocess.run([sys.executable, "-W", "error", "-c", before], check=True, env=env(), timeout=300, cwd=ROOT)
 

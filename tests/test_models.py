@@ -10,15 +10,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rotorkernels import integrators as ig, models, shooting
-from rotorkernels.models import generate
+from rotorsweep.kernels import integrators as ig, models, shooting
+from rotorsweep.kernels.models import generate
 from tests import plugin_models
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_committed_dispatch_is_generated_from_the_registry():
-    """`python -m rotorkernels.models.generate` after adding a built-in model: a stale file fails here."""
+    """`python -m rotorsweep.kernels.models.generate` after adding a built-in model: a stale file fails here."""
     assert generate.PATH.read_text() == generate.builtin_source()
 
 
@@ -143,11 +143,11 @@ def test_a_throwaway_model_runs_through_point_sweep_cube_query_and_report(chain_
 
 
 def test_python_only_modules_hold_no_compiled_code_and_no_kernel_reads_them():
-    """Why they may be left out of the Numba cache's hash (rotorkernels.PYTHON_ONLY)."""
+    """Why they may be left out of the Numba cache's hash (rotorsweep.kernels.PYTHON_ONLY)."""
     import re
     from pathlib import Path
 
-    import rotorkernels
+    import rotorsweep.kernels as rotorkernels
 
     root = Path(rotorkernels.__file__).parent
     kernel = set(rotorkernels.kernel_sources(root))
@@ -156,7 +156,7 @@ def test_python_only_modules_hold_no_compiled_code_and_no_kernel_reads_them():
     names = "|".join(re.escape(n.removesuffix(".py")) for n in rotorkernels.PYTHON_ONLY)
     for path in kernel:
         if "numba" in path.read_text():
-            assert not re.search(rf"^\s*(from|import) rotorkernels(\.| import ).*\b({names})\b",
+            assert not re.search(rf"^\s*(from|import) rotorsweep.kernels(\.| import ).*\b({names})\b",
                                  path.read_text(), re.M), path
 
 
@@ -167,8 +167,8 @@ def test_warmup_compiles_what_a_point_with_attractor_then_runs(capsys):
     from an empty cache.)"""
     from numba.core import event
 
-    import pipeline
-    from pipeline import cli, compute, scene
+    import rotorsweep.pipeline as pipeline
+    from rotorsweep.pipeline import cli, compute, scene
 
     assert cli.main(["warmup", "duffing", "--integrator", "dop853"]) == 0
     assert "duffing (kernel group duffing)" in capsys.readouterr().out
@@ -185,8 +185,8 @@ def test_warmup_compiles_what_a_point_with_attractor_then_runs(capsys):
 _WARM_THEN_RUN = """
 import sys
 from numba.core import event
-import pipeline
-from pipeline import backbone, compute, scene as scenes, sweep, warmup
+import rotorsweep.pipeline as pipeline
+from rotorsweep.pipeline import backbone, compute, scene as scenes, sweep, warmup
 from workflows.bench.scaling_scene import scene_config
 
 def compiled_by(run):
@@ -256,7 +256,7 @@ def test_a_model_module_that_cannot_load_is_one_line_and_version_still_works(tmp
 def test_physically_impossible_geometry_is_refused_naming_the_key(path, edit, message):
     """Issue 36 item 11: the disk on the shaft, a shaft of at most 10 m (modelled rigid), an
     imposed contact angle of an angular-contact bearing (1 to 60 deg), each with its reason."""
-    from pipeline import config
+    from rotorsweep.pipeline import config
 
     text = (ROOT / path).read_text()
     section = edit.split("\n")[0]

@@ -1,5 +1,5 @@
 """`rotorsweep modes` for every model with a linearization, and the one linear-modes function
-(rotorkernels.modal) against closed forms."""
+(rotorsweep.kernels.modal) against closed forms."""
 import json
 from pathlib import Path
 
@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from pipeline import cli, modes
-from rotorkernels import modal, models
+from rotorsweep.pipeline import cli, modes
+from rotorsweep.kernels import modal, models
 
 ROOT_CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 
@@ -76,7 +76,7 @@ def test_declared_linearization_equals_the_kernels_jacobian_at_the_equilibrium(n
     """The spec's capability and the kernel agree: the eigenvalues of the model's Jacobian
     (dispatch.jac, scaled time) at its static equilibrium, over the period, are the modes'
     s = -zeta w_n + i w_d (SI). Two assemblies of one matrix: rounding only, 1e-9 relative."""
-    from rotorkernels.models import dispatch
+    from rotorsweep.kernels.models import dispatch
 
     spec = models.get(name)
     values = {p.name: (p.unset if p.axis else p.default) for p in spec.parameters}
@@ -224,9 +224,9 @@ def test_station_shapes_of_a_whirling_pair_are_circles_turning_with_the_whirl():
 
 
 def test_mode_shapes_figure_has_a_panel_per_mode():
-    from pipeline import config
-    from pipeline.report import style
-    from pipeline.report.figures import mode_shapes
+    from rotorsweep.pipeline import config
+    from rotorsweep.pipeline.report import style
+    from rotorsweep.pipeline.report.figures import mode_shapes
     scene = config.load_config(ROOT_CONFIGS / "filipkovsky2010_symmetric.toml").scene
     found, coordinates, disk = mode_shapes.scene_modes(scene)
     fig = mode_shapes.fig_mode_shapes(scene, "bokeh")

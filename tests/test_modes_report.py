@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline import cli, config, modes
-from pipeline.report import modes_report
+from rotorsweep.pipeline import cli, config, modes
+from rotorsweep.pipeline.report import modes_report
 from tests.browser import assert_renders, needs_chromium
 from tests.figure_checks import assert_legend_hover_and_width, plots_of
 
@@ -74,7 +74,7 @@ def test_every_plot_has_a_legend_and_a_hover_and_the_critical_speeds_are_listed(
     assert campbell[0].select({"type": ColorBar})
     names = {item.label["value"] for legend in campbell[0].select({"type": Legend}) for item in legend.items}
     assert {"1x (shaft speed)", "support 150 Hz", "critical speed"} <= names
-    from pipeline.report import style
+    from rotorsweep.pipeline.report import style
     with style.backend("bokeh"):
         model = style.holoviews().render(figs[0][2], backend="bokeh")
     (table,) = model.select({"type": DataTable})

@@ -1,4 +1,4 @@
-"""Nonlinear normal modes (rotorkernels.nnm): Shaw-Pierre manifold to cubic order, reduced
+"""Nonlinear normal modes (rotorsweep.kernels.nnm): Shaw-Pierre manifold to cubic order, reduced
 oscillator and backbone, against closed forms and against periodic orbits of the full system
 computed here independently (solve_ivp shooting, Newton with the monodromy matrix)."""
 import numpy as np
@@ -6,8 +6,8 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.special import ellipk
 
-from rotorkernels import nnm
-from rotorkernels.nnm import shaw_pierre
+from rotorsweep.kernels import nnm
+from rotorsweep.kernels.nnm import shaw_pierre
 
 TWO_PI = 2 * np.pi
 

@@ -1,4 +1,4 @@
-"""The cubic series bearing law (rotorkernels.cubic_law) against the exact Hertz ball sum, and the
+"""The cubic series bearing law (rotorsweep.kernels.cubic_law) against the exact Hertz ball sum, and the
 Filipkovsky 2010 models symmetric4 / asymmetric5: kernel = polynomial form, f = dV/dq, M and G
 from the papers' kinetic energy (sympy), linear frequencies, config errors. All numpy-level or
 single kernel calls (no integration): about 10 s once the model kernels are compiled."""
@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from pipeline import config
-from rotorkernels import models
-from rotorkernels.contact import ring_load
-from rotorkernels.cubic_law import cubic_coefficients, cubic_load, derivative_tensor, potential_monomials
-from rotorkernels.models import rigid_preloaded as rp, series_rotor as sr
+from rotorsweep.pipeline import config
+from rotorsweep.kernels import models
+from rotorsweep.kernels.contact import ring_load
+from rotorsweep.kernels.cubic_law import cubic_coefficients, cubic_load, derivative_tensor, potential_monomials
+from rotorsweep.kernels.models import rigid_preloaded as rp, series_rotor as sr
 
 MODELS = ("symmetric4", "asymmetric5")
 
@@ -151,7 +151,7 @@ def test_polynomial_forces_are_the_gradient_of_a_potential(name):
             np.testing.assert_allclose(t, t.transpose(perm), atol=1e-14 * np.abs(t).max())
     np.testing.assert_allclose(s.G, -s.G.T, atol=0)
     np.testing.assert_array_equal(s.M, s.M.T)
-    from rotorkernels.continuation.backbone import energy
+    from rotorsweep.kernels.continuation.backbone import energy
     q = np.random.default_rng(3).normal(scale=2e-6, size=s.M.shape[0])
     h = 1e-4 * np.abs(q).max()
     zero = np.zeros_like(q)

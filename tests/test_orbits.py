@@ -1,11 +1,11 @@
-"""Periodic-orbit problems (rotorkernels.orbits) against closed forms, on the Duffing validation
+"""Periodic-orbit problems (rotorsweep.kernels.orbits) against closed forms, on the Duffing validation
 model: forced orbits of the linear oscillator, free (conservative) orbits with unknown period."""
 import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from rotorkernels import integrators as ig, models, shooting
-from rotorkernels.orbits import AutonomousOrbitProblem, ForcedOrbitProblem
+from rotorsweep.kernels import integrators as ig, models, shooting
+from rotorsweep.kernels.orbits import AutonomousOrbitProblem, ForcedOrbitProblem
 
 DUFFING = models.get("duffing")
 TIGHT = ig.settings("dop853", rtol=1e-12, atol=1e-14, amplitude_limit=1e3)
@@ -63,8 +63,8 @@ def test_autonomous_orbit_reports_failure_instead_of_raising():
 
 def test_a_point_without_orbit_has_every_multiplier_component_nan():
     """Failure is data, uniformly: no orbit means NaN real and imaginary parts (not NaN + 0j)."""
-    from pipeline import compute
-    from rotorkernels import continuation
+    from rotorsweep.pipeline import compute
+    from rotorsweep.kernels import continuation
 
     jeff = models.get("jeffcott_clearance")
     built = jeff.build({"speed": 60.0, "clearance": 3.8e-6, "preset": "209", "stiffness": "bai2006",
@@ -80,7 +80,7 @@ def test_a_point_without_orbit_has_every_multiplier_component_nan():
 def test_follow_returns_a_branch_with_a_status_per_step():
     """Natural continuation of the forced linear oscillator over omega: every step converges to
     the closed-form steady state; an unknown strategy is refused by name."""
-    from rotorkernels import continuation
+    from rotorsweep.kernels import continuation
 
     omegas = [0.6, 0.7, 0.8]
     params = [duffing(w, 0.05, 0.0, 0.3).p for w in omegas]
@@ -128,7 +128,7 @@ def test_a_dop853_first_point_compiles_no_rk4_and_one_integrator(tmp_path):
     import sys
     from pathlib import Path
 
-    code = ("import pipeline\nfrom rotorkernels import integrators as ig\n"
+    code = ("import rotorsweep.pipeline as pipeline\nfrom rotorsweep.kernels import integrators as ig\n"
             "pipeline.point(speed=100, clearance=7.6e-6)\n"
             "print(len(ig._dop853_steps.signatures), len(ig._rk4_steps.signatures))\n")
     root = Path(__file__).resolve().parents[1]

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline import cluster, config, cube, sweep
+from rotorsweep.pipeline import cluster, config, cube, sweep
 from tests.runlog_check import check_log
 
 SMALL = """
@@ -171,8 +171,8 @@ def test_bad_config_exits_2(tmp_path):
 
 
 def test_boundary_table_refines_each_stability_change(small_cube):
-    import pipeline
-    from pipeline import boundaries
+    import rotorsweep.pipeline as pipeline
+    from rotorsweep.pipeline import boundaries
 
     ds = cube.open_cube(small_cube)
     table = boundaries.boundary_frame(ds)
@@ -186,7 +186,7 @@ def test_boundary_table_refines_each_stability_change(small_cube):
     onsets = [iv["onset"] for iv in intervals if iv["onset"] is not None]
     assert any(abs(o - table[0]["speed"]) < 1e-12 for o in onsets)
     # refined on the workers (one task per line) as the driver would refine it alone
-    from pipeline import config
+    from rotorsweep.pipeline import config
     plain = ds.drop_dims("boundary")
     serial = boundaries.add_boundary_table(config.parse_config(ds.attrs["config_toml"]).scene, plain)
     assert boundaries.boundary_frame(serial) == table
@@ -203,7 +203,7 @@ LAST_PHASES = ["HTML page written", "PNGs written"]
 def test_run_prints_its_phases_before_the_progress_lines(tmp_path, capsys):
     """In a non-interactive log (captured stderr) each phase is a line of its own, in order, and
     the progress lines come after the sweep starts."""
-    from pipeline import cli
+    from rotorsweep.pipeline import cli
     cfg = tmp_path / "phases.toml"
     # 79 and 82 Hz at 7.6 um: two points either side of the period doubling at 80.88 Hz
     cfg.write_text(SMALL.replace("start = 70.0, stop = 100.0", "start = 79.0, stop = 82.0")
@@ -229,7 +229,7 @@ def test_every_cli_argument_has_help():
     """Every argument of every subcommand says what it is (`rotorsweep CMD --help`)."""
     import argparse
 
-    from pipeline import cli
+    from rotorsweep.pipeline import cli
     parser = cli.build_parser()
     (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
     missing = [f"{name} {a.dest}" for name, p in sub.choices.items() for a in p._actions

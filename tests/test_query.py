@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from pipeline import cube, query, schema
+from rotorsweep.pipeline import cube, query, schema
 from tests.synthetic import synthetic_cube
 
 
@@ -156,7 +156,7 @@ def test_not_applicable_points_are_never_unstable_intervals():
 def test_map_header_and_query_class_every_interval_alike():
     """One vocabulary (issue 32 item 5): every point of every unstable interval has the
     interval's type as its map class, and the header counts are those classes' sizes."""
-    from pipeline.report import stability
+    from rotorsweep.pipeline.report import stability
 
     ds = tiny_cube()
     classes = stability.stability_class(ds)
@@ -180,7 +180,7 @@ def fig13_slice(tmp_path_factory):
     doubling (15.2 um, 32.4 Hz) and fold (19 um, 28.40159 Hz) intervals."""
     from pathlib import Path
 
-    from pipeline import config, sweep
+    from rotorsweep.pipeline import config, sweep
 
     text = Path("configs/bai2006_fig13.toml").read_text()
     text = text.replace("speed = {start = 10.0, stop = 250.0, step = 0.1}", "speed = {start = 28.2, stop = 32.6, step = 0.05}")
@@ -195,7 +195,7 @@ def test_fig13_slice_map_header_query_and_info_class_every_interval_alike(fig13_
     """One vocabulary on a real cube (issue 32 item 5): for every interval `info` lists, the map
     draws each of its points in that class, `query --unstable` / `--bistable` put them in an
     interval of that type (a stable one in none), and the header counts are the intervals' sizes."""
-    from pipeline.report import stability
+    from rotorsweep.pipeline.report import stability
 
     ds = fig13_slice
     runs = query.class_runs(ds)

@@ -11,8 +11,8 @@ import time
 import numpy as np
 import pytest
 
-from pipeline import compute, config, cube, scene, schema, sweep
-from pipeline.cluster import connect
+from rotorsweep.pipeline import compute, config, cube, scene, schema, sweep
+from rotorsweep.pipeline.cluster import connect
 from tests.test_pipeline import CLI, SMALL, data_vars, rotorsweep
 
 LONG = SMALL.replace("speed = {start = 70.0, stop = 100.0, step = 3.0}",

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline import cube
+from rotorsweep.pipeline import cube
 from tests.test_pipeline import CLI, SMALL, data_vars, rotorsweep
 from tests.test_reliability import wait_for_parts
 

@@ -9,7 +9,7 @@ import time
 import numpy as np
 import pytest
 
-from pipeline import cli, config, cube, fileio, gridsize, sweep
+from rotorsweep.pipeline import cli, config, cube, fileio, gridsize, sweep
 from tests.test_cube import AXES4, PROVENANCE, random_results, _write_random_parts
 from tests.faults import disk_full_after_one_part
 from tests.test_pipeline import CLI, SMALL, rotorsweep
@@ -242,7 +242,7 @@ def _files(directory):
 
 @pytest.mark.slow    # 17-41 s: the default suite stays under 15 min on 2 cores (make test-slow)
 def test_a_report_of_another_cube_is_refused_then_replaced_cleanly(two_cubes, tmp_path):
-    import pipeline
+    import rotorsweep.pipeline as pipeline
 
     first, second = two_cubes
     out, fresh = tmp_path / "rep", tmp_path / "fresh"
@@ -306,7 +306,7 @@ def test_a_closing_worker_logs_nothing_more(caplog):
     """A worker's teardown (the start of its close) silences Dask's loggers in that process: a
     heartbeat in flight when the worker closes its connections would log an ERROR traceback
     after Ctrl-C (seen once in a fresh-clone CI run of the test above)."""
-    from pipeline import workerinit
+    from rotorsweep.pipeline import workerinit
 
     dask_logger = logging.getLogger("distributed")
     level = dask_logger.level
@@ -324,7 +324,7 @@ def test_ctrl_c_is_an_interrupt_where_a_library_turns_it_into_another_error(tmp_
     KeyboardInterrupt raised inside it as a TypeError; the CLI still ends as interrupted."""
     import signal
 
-    import pipeline
+    import rotorsweep.pipeline as pipeline
 
     def run_hit_inside_numpy(*args, **kwargs):
         try:
@@ -351,7 +351,7 @@ def test_after_ctrl_c_the_event_loop_logs_nothing_and_main_restores_the_loggers(
     which silencing "distributed" would miss) and back on when main returns."""
     import signal
 
-    import pipeline
+    import rotorsweep.pipeline as pipeline
 
     def interrupted_run(*args, **kwargs):
         os.kill(os.getpid(), signal.SIGINT)

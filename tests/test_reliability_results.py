@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import cli, cube, results
+from rotorsweep.pipeline import cli, cube, results
 from tests.faults import disk_full_after_one_part
 from tests.test_pipeline import CLI
 from tests.test_reliability import wait_for_parts
@@ -121,7 +121,7 @@ def test_resume_after_the_driver_is_killed_gives_the_uninterrupted_result(lines_
 def test_a_backbone_result_from_part_files_is_bitwise_the_computed_one(tmp_path):
     """A backbone line (nested records, a surface or None, tuples of modes) read back from its part
     gives the same result file as the line computed (as --resume assembles it)."""
-    from pipeline import backbone, cluster, config, result_kinds
+    from rotorsweep.pipeline import backbone, cluster, config, result_kinds
     from tests.test_backbone_command import scene
 
     bb = config.parse_config(scene(modes="1", amplitude_max=4e-6, amplitude_points=9, surface_mode=1))

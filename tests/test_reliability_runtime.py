@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from pipeline import cli, cluster, cube, fileio, gridsize, preflight, sweep
+from rotorsweep.pipeline import cli, cluster, cube, fileio, gridsize, preflight, sweep
 from tests.test_pipeline import SMALL, rotorsweep
 
 CONFIG = Path(__file__).parents[1] / "configs"
@@ -246,7 +246,7 @@ def no_work(monkeypatch):
     def work(*args, **kwargs):
         raise AssertionError("work started before the checks")
 
-    from pipeline import backbone, continuation, modes
+    from rotorsweep.pipeline import backbone, continuation, modes
     for module, name in ((sweep, "run"), (continuation, "run"), (backbone, "run"), (modes, "command")):
         monkeypatch.setattr(module, name, work)
 
@@ -303,7 +303,7 @@ def test_too_little_disk_space_is_refused_before_any_work(command, small_config,
 
 
 def test_a_sweep_asks_for_room_for_its_parts_and_its_cube(small_config):
-    from pipeline import config
+    from rotorsweep.pipeline import config
 
     cfg = config.load_config(small_config)
     assert preflight.sweep_bytes(cfg) == (2 * cfg.n_points * gridsize.bytes_per_point(cfg.data)
@@ -329,7 +329,7 @@ def test_a_locked_output_is_refused_before_any_work(command, small_config, tmp_p
 
 
 def test_report_checks_its_directory_before_drawing(tmp_path, capsys, monkeypatch):
-    import pipeline
+    import rotorsweep.pipeline as pipeline
 
     monkeypatch.setattr(pipeline, "make_report", lambda *a, **k: pytest.fail("drawn before the checks"))
     (tmp_path / "afile").write_text("x")
@@ -355,7 +355,7 @@ def test_a_write_error_names_the_output_not_its_temp_file(tmp_path):
 def test_a_full_disk_in_continue_is_one_line_naming_the_output(tmp_path, monkeypatch):
     import xarray as xr
 
-    from pipeline import results
+    from rotorsweep.pipeline import results
 
     def hdf_error(*_, **__):
         raise RuntimeError("NetCDF: HDF error")
@@ -395,7 +395,7 @@ def test_ctrl_c_tells_each_commands_truth(command, expected):
 
 
 def test_ctrl_c_in_continue_says_what_it_kept(tmp_path, monkeypatch, capsys):
-    from pipeline import continuation
+    from rotorsweep.pipeline import continuation
 
     def interrupted(*args, **kwargs):
         os.kill(os.getpid(), signal.SIGINT)

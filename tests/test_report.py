@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import cube, query, schema
+from rotorsweep.pipeline import cube, query, schema
 from tests.synthetic import synthetic_cube
 
-# `from pipeline import report` can return the function of that name in pipeline/__init__.py
-report = importlib.import_module("pipeline.report")
+# `from rotorsweep.pipeline import report` can return the function of that name in pipeline/__init__.py
+report = importlib.import_module("rotorsweep.pipeline.report")
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 BASE_PNGS = ("stability_map.png", "branches.png", "max_multiplier.png", "response.png", "multiplier_frequency.png",
@@ -436,7 +436,7 @@ def test_parse_and_resolve_points():
 
 
 def _cli(args, capsys):
-    from pipeline import cli
+    from rotorsweep.pipeline import cli
     code = cli.main([str(a) for a in args])
     out = capsys.readouterr()
     return code, out.out, out.err
@@ -531,7 +531,7 @@ def test_multiplier_panels_are_square_with_units_on_the_colour_bar():
 @pytest.mark.slow    # 17-41 s: the default suite stays under 15 min on 2 cores (make test-slow)
 def test_every_line_plot_has_a_hover_with_the_parameter_and_the_value():
     ds = attractor_cube()
-    from pipeline.report.figures import branch_diagram, multiplier_frequency, response
+    from rotorsweep.pipeline.report.figures import branch_diagram, multiplier_frequency, response
     values = {report.fig_max_multiplier: "max |multiplier|", report.fig_bifurcation: "Poincaré x [µm]",
               report.fig_lle: "largest Lyapunov exp. [1/s]", multiplier_frequency.fig_multiplier_frequency: "frequency [Hz]",
               response.fig_response: "amplitude of",
@@ -561,7 +561,7 @@ def _glyphs(plot, kind):
 
 
 def test_branch_diagram_draws_stable_solid_unstable_dashed_and_labels_special_points():
-    from pipeline.report.figures import branch_diagram
+    from rotorsweep.pipeline.report.figures import branch_diagram
     ds = attractor_cube()
     plots = _bokeh_plots(branch_diagram.fig_branches(ds, "bokeh", observable="amplitude_x"))
     assert len(plots) == ds.sizes["clearance"]

@@ -1,4 +1,4 @@
-"""The report's PNGs drawn in a process of their own (pipeline.report.pngs) while the HTML is drawn
+"""The report's PNGs drawn in a process of their own (rotorsweep.pipeline.report.pngs) while the HTML is drawn
 here: the same pixels as drawn here, failures raised with the drawer's own traceback, the drawer
 stopped when the caller fails, and drawing here where there is one CPU, no process to start or
 nothing that pickles."""
@@ -10,10 +10,10 @@ import matplotlib.image as mpimg
 import numpy as np
 import pytest
 
-from pipeline import cube
-from pipeline.report import pngs
+from rotorsweep.pipeline import cube
+from rotorsweep.pipeline.report import pngs
 
-report = importlib.import_module("pipeline.report")
+report = importlib.import_module("rotorsweep.pipeline.report")
 
 
 def test_the_png_process_draws_the_pixels_drawn_here(tiny_cube, tmp_path):

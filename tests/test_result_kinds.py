@@ -1,4 +1,4 @@
-"""Every result kind (pipeline.result_kinds) through everything that reads results: one small file
+"""Every result kind (rotorsweep.pipeline.result_kinds) through everything that reads results: one small file
 of each kind (sweep cube, continuation, backbone) opened by open_result, `rotorsweep info`,
 `query` and `report` (each opening the file once) and the xarray accessor; open_cube refuses the
 other kinds by name; each file's history names the command that wrote it."""
@@ -9,7 +9,7 @@ import xarray as xr
 from bokeh.models import Plot
 
 import rotorsweep
-from pipeline import backbone, cli, cluster, config, continuation, cube, explore, result_kinds, results
+from rotorsweep.pipeline import backbone, cli, cluster, config, continuation, cube, explore, result_kinds, results
 from tests.test_backbone_command import scene
 from tests.test_continue_command import DUFFING
 

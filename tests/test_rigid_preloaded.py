@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from pipeline import compute, config, modes, scene
-from rotorkernels import integrators as ig, modal, models, shooting, continuation
-from rotorkernels.attractor.poincare import _poincare
-from rotorkernels.models import rigid_preloaded as rp
+from rotorsweep.pipeline import compute, config, modes, scene
+from rotorsweep.kernels import integrators as ig, modal, models, shooting, continuation
+from rotorsweep.kernels.attractor.poincare import _poincare
+from rotorsweep.kernels.models import rigid_preloaded as rp
 
 SPEC = models.get("rigid_preloaded")
 L = rp.LENGTH_SCALE
@@ -315,7 +315,7 @@ def test_quasi_periodic_point_has_no_orbit_and_its_samples_run_on_in_time():
     data = scene.from_data({**cfg.data, "analysis": {**cfg.data["analysis"], "attractor": False}})
     pts = [{**data.fixed, "speed": 250.0, "support_frequency": f} for f in cfg.axes["support_frequency"]]
     out = compute.solve_segment(data, pts)
-    from pipeline import schema
+    from rotorsweep.pipeline import schema
     status = [schema.ORBIT_STATUS[k] for k in out["orbit_status"]]
     reason = [schema.ORBIT_REASON[k] for k in out["orbit_reason"]]
     assert status == ["converged", "not_applicable", "converged"]
@@ -366,10 +366,10 @@ def test_long_common_period_is_only_an_error_when_orbits_are_requested():
 
 
 def test_small_scene_sweeps_end_to_end(tmp_path):
-    """configs/filipkovsky2016_quick.toml through pipeline.sweep.run: the 3/5 point has a
+    """configs/filipkovsky2016_quick.toml through rotorsweep.pipeline.sweep.run: the 3/5 point has a
     stable orbit whose attractor is that period-1 orbit, the golden-ratio point an attractor
     but no orbit; the cube says which case each point is."""
-    from pipeline import cube, schema, sweep
+    from rotorsweep.pipeline import cube, schema, sweep
     cfg = config.load_config(QUICK)
     ds = cube.open_cube(sweep.run(cfg, tmp_path / "quick.nc", workers=1, progress=False))
     pt = ds.isel(speed=0)
@@ -385,14 +385,14 @@ def test_a_point_imports_no_heavy_module():
     """`rotorsweep point` on the quick scene (the kernels are in the disk cache after the sweep
     above): its answer, without importing what a point does not need (each 0.1-0.6 s of a warm
     point's ~1 s): scipy.optimize (the preload's and the Hertz ellipticity's roots are
-    rotorkernels.roots), scipy.special (the Hertz constant's elliptic integrals are the AGM's),
+    rotorsweep.kernels.roots), scipy.special (the Hertz constant's elliptic integrals are the AGM's),
     xarray, pandas, Dask."""
     import json
     import subprocess
     import sys
 
     heavy = ("scipy.optimize", "scipy.special", "xarray", "pandas", "dask", "distributed")
-    script = ("import json, sys; from pipeline.cli import main; "
+    script = ("import json, sys; from rotorsweep.pipeline.cli import main; "
               f"main(['point', '--config', {QUICK!r}, '--at', 'speed=250', '--at', 'support_frequency=150', '--json']); "
               f"print(json.dumps(sorted(m for m in {heavy!r} if m in sys.modules)))")
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from pipeline import config, cube, modes
-from pipeline.report import points
-from rotorkernels import bearing, models
-from rotorkernels.models import preloaded_pair, rigid_preloaded as rp
+from rotorsweep.pipeline import config, cube, modes
+from rotorsweep.pipeline.report import points
+from rotorsweep.kernels import bearing, models
+from rotorsweep.kernels.models import preloaded_pair, rigid_preloaded as rp
 from tests.synthetic import synthetic_cube
 
 SPEC = models.get("rigid_preloaded")
@@ -128,7 +128,7 @@ def rotor_matrices():
 @pytest.mark.parametrize("speed", [0.0, 250.0])
 @pytest.mark.parametrize("angle", [15, 40])
 def test_linear_frequencies_equal_eigenvalues_of_independent_m_g_k(speed, angle):
-    """All five modes of the law as printed, at rest and at 250 Hz: pipeline.modes (and the
+    """All five modes of the law as printed, at rest and at 250 Hz: rotorsweep.pipeline.modes (and the
     kernel's Jacobian at rest) against eig of [[0, I], [-M^-1 K, -M^-1 (C + Omega G)]] with M, G
     written from T and K the printed sum's stiffness at q = 0 (alpha, z0, K solved here). Two
     eigen-solves of matrices equal to rounding: 1e-9 relative."""
@@ -240,7 +240,7 @@ def test_jeffcott_preload_constant_filipkovsky_is_the_law_as_printed_without_cle
     with pytest.raises(config.ConfigError, match="has no clearance"):
         config.parse_config(text.format(extra="clearance = 1e-6\n"))
     cfg = config.parse_config(text.format(extra=""))
-    from pipeline import compute
+    from rotorsweep.pipeline import compute
     derived = compute.point_params(cfg.scene, {**cfg.scene.fixed, "speed": 100.0}).derived
     geom = bearing.preset("angular_contact_medium", 15)
     want = bearing.as_printed_state(geom, 300.0, math.radians(15.0))

@@ -13,8 +13,8 @@ that at bearing level), so:
 import numpy as np
 import pytest
 
-from pipeline import modes
-from rotorkernels import continuation, integrators as ig, models, shooting
+from rotorsweep.pipeline import modes
+from rotorsweep.kernels import continuation, integrators as ig, models, shooting
 
 SPEC = models.get("rigid_preloaded")
 OPTS = ig.settings(rtol=1e-12, atol=1e-12)

@@ -1,4 +1,4 @@
-"""rotorkernels.roots.brent_root against analytic roots and scipy.optimize.brentq (an independent
+"""rotorsweep.kernels.roots.brent_root against analytic roots and scipy.optimize.brentq (an independent
 implementation of the same method)."""
 import math
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from rotorkernels.roots import RTOL_MIN, NotConverged, brent_root
+from rotorsweep.kernels.roots import RTOL_MIN, NotConverged, brent_root
 
 DOTTIE = 0.7390851332151607      # the root of cos(x) = x (OEIS A003957)
 
@@ -91,7 +91,7 @@ def test_a_boundary_brent_cannot_locate_is_a_boundary_error_not_a_crash(monkeypa
     becomes the locator's BoundaryError, the boundary table's 'unrefined' status."""
     from collections import namedtuple
 
-    from rotorkernels.continuation import events
+    from rotorsweep.kernels.continuation import events
 
     sol = namedtuple("Sol", "status state max_abs")
 

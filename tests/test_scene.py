@@ -1,4 +1,4 @@
-"""The scene object (pipeline.scene): built once from a validated config, typed, frozen, small
+"""The scene object (rotorsweep.pipeline.scene): built once from a validated config, typed, frozen, small
 when pickled into a chunk task."""
 import dataclasses
 import pickle
@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline import config, scene, sweep
-from rotorkernels import attractor, integrators, models
+from rotorsweep.pipeline import config, scene, sweep
+from rotorsweep.kernels import attractor, integrators, models
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -47,8 +47,8 @@ def test_a_page_is_rendered_cropped_and_its_script_errors_reported(tmp_path):
 def sweep_report(tiny_cube, tmp_path_factory):
     """The report of the suite's tiny real sweep cube (tests/conftest.py) with a point in detail,
     drawn once."""
-    from pipeline import cube
-    from pipeline.report import make_report
+    from rotorsweep.pipeline import cube
+    from rotorsweep.pipeline.report import make_report
     out = tmp_path_factory.mktemp("sweep") / "report"
     make_report(cube.open_cube(tiny_cube), out, points=["speed=64 clearance=19e-6"], parallel=False)
     return out

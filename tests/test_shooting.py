@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from scipy.optimize import linear_sum_assignment
 
-from rotorkernels import floquet, integrators as ig, models, shooting
-from rotorkernels.models import jeffcott_clearance as jc
+from rotorsweep.kernels import floquet, integrators as ig, models, shooting
+from rotorsweep.kernels.models import jeffcott_clearance as jc
 
 JEFF = models.get("jeffcott_clearance")
 REFS = json.loads((Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "reference_points.json").read_text())

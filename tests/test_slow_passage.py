@@ -6,9 +6,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import pipeline
-from pipeline import compute, config, sweep
-from rotorkernels import shooting
+import rotorsweep.pipeline as pipeline
+from rotorsweep.pipeline import compute, config, sweep
+from rotorsweep.kernels import shooting
 
 ROOT = Path(__file__).resolve().parents[1]
 FIG13 = (ROOT / "configs" / "bai2006_fig13.toml").read_text()

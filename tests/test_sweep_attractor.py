@@ -4,8 +4,8 @@ cube variables a sweep writes."""
 import numpy as np
 import pytest
 
-from pipeline import cli, compute, config, cube, query, schema, sweep
-from rotorkernels import attractor as at
+from rotorsweep.pipeline import cli, compute, config, cube, query, schema, sweep
+from rotorsweep.kernels import attractor as at
 
 SCENE = """
 [scene]

@@ -1,10 +1,10 @@
-"""Continuation of invariant tori (rotorkernels.continuation.tori) through a rational frequency
+"""Continuation of invariant tori (rotorsweep.kernels.continuation.tori) through a rational frequency
 ratio, checked point by point against the torus solver, and ending with a reason."""
 import numpy as np
 
-from rotorkernels import integrators as ig, torus as tr
-from rotorkernels.continuation import engine, tori
-from rotorkernels.models import duffing2, get
+from rotorsweep.kernels import integrators as ig, torus as tr
+from rotorsweep.kernels.continuation import engine, tori
+from rotorsweep.kernels.models import duffing2, get
 
 MODEL = get("duffing2")
 OPTS = ig.settings(rtol=1e-11, atol=1e-13)

@@ -1,12 +1,12 @@
-"""Invariant tori under two-frequency forcing (rotorkernels.torus) against independent values:
+"""Invariant tori under two-frequency forcing (rotorsweep.kernels.torus) against independent values:
 the closed-form response of the linear oscillator, a long scipy DOP853 run of the nonlinear one,
 and the shooting solver's periodic orbit at a rational frequency ratio."""
 import numpy as np
 import pytest
 from scipy.integrate import ode
 
-from rotorkernels import integrators as ig, shooting, torus
-from rotorkernels.models import duffing2, get
+from rotorsweep.kernels import integrators as ig, shooting, torus
+from rotorsweep.kernels.models import duffing2, get
 
 MODEL = get("duffing2")
 OPTS = ig.settings(rtol=1e-11, atol=1e-13)

@@ -4,7 +4,7 @@ map from its circle (a second method: the map iterated, not the collocation solv
 import numpy as np
 import pytest
 
-from pipeline import cli, config, continuation, result_kinds, torus_branches
+from rotorsweep.pipeline import cli, config, continuation, result_kinds, torus_branches
 
 SCENE = "configs/filipkovsky2016_fig2b_tori.toml"
 
@@ -44,7 +44,7 @@ def test_a_torus_point_against_a_long_scipy_transient(result):
     ~(pi / 64)^2 / 2 ~ 1e-3 relative at most, hence the tolerance."""
     from scipy.integrate import solve_ivp
 
-    from rotorkernels.models import rigid_preloaded as rp
+    from rotorsweep.kernels.models import rigid_preloaded as rp
 
     d, data = result
     ds = continuation.open_result(d / "tori.nc")
@@ -73,7 +73,7 @@ def test_a_torus_point_against_a_long_scipy_transient(result):
 
 def test_a_torus_line_that_does_not_start_is_an_empty_branch_with_a_reason(result):
     """A failed start is data: an empty branch ending start_failed, written like any other."""
-    from rotorkernels.continuation import engine
+    from rotorsweep.kernels.continuation import engine
 
     _, data = result
     pl = continuation.plan(data)

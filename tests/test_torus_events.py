@@ -1,4 +1,4 @@
-"""Events of a torus branch (pipeline.torus_events): a locked ratio omega / Omega = 3/5 passed by
+"""Events of a torus branch (rotorsweep.pipeline.torus_events): a locked ratio omega / Omega = 3/5 passed by
 the branch of the preloaded rotor is recognized, solved there and linked to the periodic orbit of
 5 shaft turns, which is checked against a torus solved independently at that ratio and against
 the multipliers composed from one-turn flows along the circle; the ratio search and the fold flag
@@ -8,9 +8,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from pipeline import cli, compute, config, continuation, torus_branches
-from rotorkernels import integrators as ig, torus as tr
-from rotorkernels.continuation import events as ev, tori
+from rotorsweep.pipeline import cli, compute, config, continuation, torus_branches
+from rotorsweep.kernels import integrators as ig, torus as tr
+from rotorsweep.kernels.continuation import events as ev, tori
 
 SCENE = "configs/filipkovsky2016_fig2b_tori.toml"
 OMEGA = 250.0       # the scene's shaft speed [Hz]: 3/5 is at 150 Hz
@@ -89,12 +89,12 @@ def test_a_fold_of_tori_is_flagged_where_the_tangent_turns_back_in_lambda():
 
 
 def test_the_torus_in_detail_passes_its_once_per_turn_points_through_the_circle(result):
-    """The report's torus in detail (pipeline.report.figures.torus_detail): a trajectory from the
+    """The report's torus in detail (rotorsweep.pipeline.report.figures.torus_detail): a trajectory from the
     circle at phase 0, integrated anew from the scene, visits the circle at phases k rho after k
     turns (the invariance the collocation solved, checked by the flow over 40 turns: the torus
     attracts, so the circle's error ~1e-8 and the integration's 1e-10 do not grow; 1e-6 in the
     scaled state). The point drawn: the largest half-swing, or the one nearest [report] torus_detail."""
-    from pipeline.report.figures import torus_detail as td
+    from rotorsweep.pipeline.report.figures import torus_detail as td
 
     ds, data = result
     d = td.torus_detail(ds, data)
@@ -110,7 +110,7 @@ def test_the_torus_in_detail_passes_its_once_per_turn_points_through_the_circle(
 
 def test_the_continuation_report_draws_the_torus_in_detail(result, tmp_path):
     ds, _ = result
-    from pipeline.report import branch_result
+    from rotorsweep.pipeline.report import branch_result
 
     branch_result.make_report(ds, tmp_path / "report")
     assert (tmp_path / "report" / "torus_detail.png").exists()

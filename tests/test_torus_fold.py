@@ -1,4 +1,4 @@
-"""A fold of tori and the unstable tori between two folds (rotorkernels.continuation.tori): the
+"""A fold of tori and the unstable tori between two folds (rotorsweep.kernels.continuation.tori): the
 two-frequency Duffing oscillator (validation model duffing2) with its second forcing near the
 hardening resonance, continued in that forcing's frequency over a short range that passes both
 folds. Checked against harmonic balance (the fold's frequency), against theory (at a fold of tori
@@ -8,9 +8,9 @@ largest normal exponent)."""
 import numpy as np
 import pytest
 
-from rotorkernels import integrators as ig, torus as tr
-from rotorkernels.continuation import engine, events as ev, tori
-from rotorkernels.models import duffing2, get
+from rotorsweep.kernels import integrators as ig, torus as tr
+from rotorsweep.kernels.continuation import engine, events as ev, tori
+from rotorsweep.kernels.models import duffing2, get
 
 MODEL = get("duffing2")
 OPTS = ig.settings(rtol=1e-11, atol=1e-13)

@@ -1,13 +1,13 @@
-"""Tori at sweep grid points (pipeline.torus_points): a tiny grid of the map scene
+"""Tori at sweep grid points (rotorsweep.pipeline.torus_points): a tiny grid of the map scene
 (configs/filipkovsky2016_map_tori.toml) with one periodically and one quasi-periodically forced
 point, run end to end; the torus point checked against the torus solver run directly and against
 a long scipy DOP853 run (a second method: the flow integrated, not the collocation solved)."""
 import numpy as np
 import pytest
 
-from pipeline import cli, compute, config, cube, query, schema, torus_points
-from pipeline.report import stability
-from rotorkernels import torus as tr
+from rotorsweep.pipeline import cli, compute, config, cube, query, schema, torus_points
+from rotorsweep.pipeline.report import stability
+from rotorsweep.kernels import torus as tr
 
 SCENE = "configs/filipkovsky2016_map_tori.toml"
 PERIODIC, QUASI = 300.0, 323.6067977     # 6/5 of 250 Hz; no ratio of small integers
@@ -80,7 +80,7 @@ def test_the_torus_amplitude_against_a_long_dop853_run(result):
     estimate plus 2e-5 relative."""
     from scipy.integrate import solve_ivp
 
-    from rotorkernels.models import rigid_preloaded as rp
+    from rotorsweep.kernels.models import rigid_preloaded as rp
 
     ds, data, built = result
     model = data.model

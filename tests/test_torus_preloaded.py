@@ -6,9 +6,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline import compute, config
-from rotorkernels import integrators as ig, torus as tr
-from rotorkernels.models import rigid_preloaded as rp
+from rotorsweep.pipeline import compute, config
+from rotorsweep.kernels import integrators as ig, torus as tr
+from rotorsweep.kernels.models import rigid_preloaded as rp
 
 FIG5 = Path(__file__).resolve().parents[1] / "configs" / "filipkovsky2016_fig5.toml"
 

@@ -5,8 +5,8 @@ a long scipy DOP853 run from its circle (a second method: the flow, not the coll
 import numpy as np
 import pytest
 
-from pipeline import cli, compute, config, continuation, torus_branches
-from rotorkernels.continuation import events as ev
+from rotorsweep.pipeline import cli, compute, config, continuation, torus_branches
+from rotorsweep.kernels.continuation import events as ev
 
 SCENE = "configs/filipkovsky2016_fig2b_tori.toml"
 SUPPORT = 300.0     # omega [Hz], fixed on the line: 6/5 of Omega at 250 Hz
@@ -42,7 +42,7 @@ def test_the_last_point_against_a_long_scipy_transient(result):
     integers); both sample the sup from below, ~1e-3 relative at most."""
     from scipy.integrate import solve_ivp
 
-    from rotorkernels.models import rigid_preloaded as rp
+    from rotorsweep.kernels.models import rigid_preloaded as rp
 
     ds, data = result
     spec = data.model

@@ -1,4 +1,4 @@
-"""Two-parameter continuation of bifurcation points (rotorkernels.continuation.twoparam): the
+"""Two-parameter continuation of bifurcation points (rotorsweep.kernels.continuation.twoparam): the
 period-doubling, Neimark-Sacker and fold curves of the Bai 2006 model in (speed, clearance)
 against the sweep's refined boundaries and one-parameter fold locations, the forced Duffing fold
 curve in (omega, force) against a scipy reference, the codimension-2 flags and the statuses."""
@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from pipeline import boundaries, compute, config
-from rotorkernels import integrators as ig, models
-from rotorkernels.continuation import arclength as al, events, solve_orbit, twoparam as tp
+from rotorsweep.pipeline import boundaries, compute, config
+from rotorsweep.kernels import integrators as ig, models
+from rotorsweep.kernels.continuation import arclength as al, events, solve_orbit, twoparam as tp
 from workflows.bench.peers import duffing_scipy
 
 FIG13 = (3.8e-6, 7.6e-6, 11.4e-6, 15.2e-6, 19e-6)      # the Fig. 13 grid's clearances
@@ -40,7 +40,7 @@ def branch_events(plane, nu, lo, hi):
 
 def grid_boundary(scene, point):
     """The grid's refined boundary next to a curve point by Brent's method, the boundary table's
-    fallback (pipeline.boundaries; the table itself now refines on the branch by arclength, so
+    fallback (rotorsweep.pipeline.boundaries; the table itself now refines on the branch by arclength, so
     this is a second, independent method): the bracketing grid speeds, their orbits by
     solve_orbit from a neighbour, Brent on max|multiplier| - 1 with natural continuation
     (events.locate_boundary)."""

@@ -9,8 +9,8 @@ import sys
 import numpy as np
 import pytest
 
-import pipeline
-from pipeline import cli, config, modes, units
+import rotorsweep.pipeline as pipeline
+from rotorsweep.pipeline import cli, config, modes, units
 
 from tests.test_config import BASE
 
@@ -102,7 +102,7 @@ def test_a_float_or_key_takes_a_unit_string():
 
 
 def test_pint_is_imported_only_when_a_unit_string_is_met():
-    code = ("import sys; from pipeline import config; from tests.test_config import BASE; "
+    code = ("import sys; from rotorsweep.pipeline import config; from tests.test_config import BASE; "
             "config.parse_config(BASE); print('pint' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
@@ -114,7 +114,7 @@ class Captured(Exception):
 
 @pytest.fixture
 def point_kwargs(monkeypatch):
-    """The keywords `rotorsweep point` hands to pipeline.point (the computation itself skipped)."""
+    """The keywords `rotorsweep point` hands to rotorsweep.pipeline.point (the computation itself skipped)."""
     seen = {}
 
     def fake_point(config=None, **values):

@@ -5,9 +5,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline import config, modes
-from pipeline.report import style
-from pipeline.report.figures import mode_campbell
+from rotorsweep.pipeline import config, modes
+from rotorsweep.pipeline.report import style
+from rotorsweep.pipeline.report.figures import mode_campbell
 from tests.figure_checks import WINDOW
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
@@ -55,7 +55,7 @@ def test_campbell_diagram_marks_and_lists_the_critical_speeds(symmetric):
 def test_support_frequency_adds_its_line_and_crossings():
     """A support excitation frequency (rigid_preloaded's [forcing] support_frequency) is a
     horizontal line whose crossings are critical speeds too, at the line's frequency."""
-    from rotorkernels import models
+    from rotorsweep.kernels import models
     spec = models.REGISTRY["rigid_preloaded"]
     assert spec.support_frequency == "support_frequency"
     lines = modes.excitation_lines(spec, {"support_frequency": 500.0})
@@ -85,7 +85,7 @@ amplitude_limit = 100.0
 def linear_cube():
     """A real sweep cube of the forced linear oscillator x'' + 2 zeta x' + x = F cos(omega t)
     (duffing with gamma = 0), built in-process as tests/conftest.py builds its tiny cube."""
-    from pipeline import cube, sweep
+    from rotorsweep.pipeline import cube, sweep
     cfg = config.parse_config(LINEAR_DUFFING)
     ids, index, results, _ = sweep.compute_chunk(cfg.scene, sweep.segments(cfg.scene))
     return cfg, cube.assemble(cfg.axes, sweep.fixed_coords(cfg.scene), [(ids, index, results, None)],
@@ -95,7 +95,7 @@ def linear_cube():
 def test_first_harmonic_is_exact_for_a_band_limited_signal():
     """o = 2 cos(t + 0.3) + 0.5 cos(3 t) - 0.2 sin(2 t) sampled at 64 points per period: X = 2 e^{0.3 i}
     to rounding (the DFT's aliases of the other harmonics are at indices 64 apart)."""
-    from pipeline.report import harmonics
+    from rotorsweep.pipeline.report import harmonics
     t = 2 * np.pi * np.arange(64) / 64
     o = 2 * np.cos(t + 0.3) + 0.5 * np.cos(3 * t) - 0.2 * np.sin(2 * t)
     assert harmonics.first_harmonic(o[:, None])[0] == pytest.approx(2 * np.exp(0.3j), abs=1e-13)
@@ -107,8 +107,8 @@ def test_bode_of_the_linear_oscillator_against_the_closed_form(linear_cube):
     """X = F / (1 - w^2 + 2 i zeta w): amplitude and phase of the first harmonic of the re-integrated
     orbits. The orbit is shot to newton_tol 1e-12 and integrated at rtol 1e-12; 1e-8 relative
     leaves room for the error growth over a period near resonance (amplification 1 / 2 zeta = 10)."""
-    from pipeline.report import harmonics
-    from pipeline.report.figures import bode
+    from rotorsweep.pipeline.report import harmonics
+    from rotorsweep.pipeline.report.figures import bode
     cfg, ds = linear_cube
     lines = harmonics.sweep_lines(ds, cfg.scene, "x")
     (w,), (x,) = lines.x, lines.harmonic
@@ -121,7 +121,7 @@ def test_bode_of_the_linear_oscillator_against_the_closed_form(linear_cube):
 
 def test_bode_figure_has_legends_hover_and_fits_the_window(linear_cube):
     from bokeh.models import HoverTool, Legend
-    from pipeline.report.figures import bode
+    from rotorsweep.pipeline.report.figures import bode
     cfg, ds = linear_cube
     plots = _plots(_render(bode.fig_bode(*_bode_inputs(cfg, ds), "bokeh")))
     assert len(plots) == 3
@@ -136,7 +136,7 @@ def _width(plot):
 
 
 def _bode_inputs(cfg, ds):
-    from pipeline.report import harmonics
+    from rotorsweep.pipeline.report import harmonics
     return harmonics.sweep_lines(ds, cfg.scene, "x"), "x", "1", "omega [rad s-1]"
 
 
@@ -148,8 +148,8 @@ def test_accessor_draws_bode_and_says_why_no_campbell(linear_cube):
     ds = ds.assign_attrs(config_toml=cfg.source)
     plot = ds.rotorsweep.bode()
     assert isinstance(plot, hv.Layout) and len(plot) == 3
-    from pipeline.report.cubeinfo import continued_axis
-    from pipeline.report.plan import axis_label
+    from rotorsweep.pipeline.report.cubeinfo import continued_axis
+    from rotorsweep.pipeline.report.plan import axis_label
     xlabel = hv.renderer("bokeh").get_plot(plot).state.children[0][0].xaxis[0].axis_label
     assert xlabel == axis_label(ds, continued_axis(ds))          # the report's label, in display units
     with pytest.raises(ValueError, match="no Campbell diagram"):
@@ -161,7 +161,7 @@ def test_accessor_draws_bode_and_says_why_no_campbell(linear_cube):
 def test_special_points_at_one_place_share_one_label():
     """Two PDs at one point (a branch and the branch switched there) give one "PD"; an LP beside
     them too: one text "PD/LP"; a PD elsewhere keeps its own."""
-    from pipeline.report.branches import Special, merged_labels
+    from rotorsweep.pipeline.report.branches import Special, merged_labels
     special = [Special(30.0, 2.0, "PD"), Special(30.0 + 1e-6, 2.0, "PD"), Special(30.0, 2.0 + 1e-6, "LP"),
                Special(40.0, 1.0, "PD")]
     assert [label for _, _, label in merged_labels(special)] == ["PD/LP", "PD"]

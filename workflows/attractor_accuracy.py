@@ -16,7 +16,7 @@ run of the same scene (same grid, same continuation), point by point.
 """
 import numpy as np
 
-from rotorkernels import attractor as at
+from rotorsweep.kernels import attractor as at
 
 NEAR_POINTS = 2          # grid speeds either side
 NEAR_HZ = 0.5

@@ -27,7 +27,7 @@ import resource
 import time
 from pathlib import Path
 
-from pipeline import config, cube, sweep, warmup
+from rotorsweep.pipeline import config, cube, sweep, warmup
 from workflows import attractor_accuracy as acc
 from workflows.bench import render
 from workflows.bench.common import DOCS, ROOT, add_render_options, log, loadavg, provenance

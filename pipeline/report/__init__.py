@@ -31,7 +31,7 @@ plan, stability -> cubeinfo, style.
 import importlib
 
 # name -> the submodule defining it, imported on first use (PEP 562): importing any
-# pipeline.report.<module> (the accessor's cubeinfo, style) loads this package, which must not load
+# rotorsweep.pipeline.report.<module> (the accessor's cubeinfo, style) loads this package, which must not load
 # the report driver and every figure with it (issue 35)
 _NAMES = {
     "branches": "SPECIAL_LABELS Special branch_elements stability_runs",
@@ -71,9 +71,9 @@ __all__ = [
 
 def __getattr__(name):
     if name not in _WHERE:
-        raise AttributeError(f"module 'pipeline.report' has no attribute {name!r}")
+        raise AttributeError(f"module 'rotorsweep.pipeline.report' has no attribute {name!r}")
     if _WHERE[name] == "registry":
-        importlib.import_module("pipeline.report.figures")     # registers them: figures_for sees every one
-    value = getattr(importlib.import_module(f"pipeline.report.{_WHERE[name]}"), name)
+        importlib.import_module("rotorsweep.pipeline.report.figures")     # registers them: figures_for sees every one
+    value = getattr(importlib.import_module(f"rotorsweep.pipeline.report.{_WHERE[name]}"), name)
     globals()[name] = value
     return value

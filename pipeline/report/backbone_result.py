@@ -9,8 +9,8 @@ import json
 
 import numpy as np
 
-from pipeline import backbone, query
-from pipeline.report import branches, page, style
+from rotorsweep.pipeline import backbone, query
+from rotorsweep.pipeline.report import branches, page, style
 
 UM = 1e6
 
@@ -195,7 +195,7 @@ def _header_html(ds, title):
 
 def make_report(ds, out_dir, title=None, forced=None):
     """report.html, one PNG per figure and modes.csv into out_dir; returns the paths as
-    pipeline.report.make_report does. forced: a continuation result of a forced response along a
+    rotorsweep.pipeline.report.make_report does. forced: a continuation result of a forced response along a
     frequency (the backbones are drawn over it; `check_forced` first)."""
     title = title or f"Backbone report: {ds.attrs.get('scene', '')}"
     cols = backbone.table(ds)

@@ -4,16 +4,16 @@ solid, unstable dashed, located folds LP, period doublings PD and Neimark-Sacker
 marked and labelled), max |multiplier| along the branches, and the table of located points.
 
 A branch that turns back at a fold is not a function of the parameter: it is drawn in its own
-order (runs of one stability along the branch, pipeline.report.branches), never sorted by the
+order (runs of one stability along the branch, rotorsweep.pipeline.report.branches), never sorted by the
 parameter."""
 import html
 
 import numpy as np
 
-from pipeline import continuation, query, schema
-from pipeline.report import branches, harmonics, page, style
-from pipeline.report.figures import bode, mode_campbell, mode_shapes, torus_detail
-from rotorkernels.continuation import arclength as al
+from rotorsweep.pipeline import continuation, query, schema
+from rotorsweep.pipeline.report import branches, harmonics, page, style
+from rotorsweep.pipeline.report.figures import bode, mode_campbell, mode_shapes, torus_detail
+from rotorsweep.kernels.continuation import arclength as al
 
 def _shown(value, units):
     """(value, units) as the report shows them: lengths in um (clearances, amplitudes)."""
@@ -193,7 +193,7 @@ def figures(ds, backend):
 
 def _bode(ds, observable, backend):
     """The Bode and polar plots of the branches, along the parameter as the other panels draw it."""
-    from pipeline.report.points import scene_of
+    from rotorsweep.pipeline.report.points import scene_of
 
     scene = scene_of(ds)
     names = [_branch_label(ds, b) for b in range(ds.sizes["branch"])]
@@ -247,7 +247,7 @@ def _header_html(ds, title):
 
 def make_report(ds, out_dir, title=None):
     """report.html, one PNG per figure and events.csv into out_dir; returns the paths as
-    pipeline.report.make_report does."""
+    rotorsweep.pipeline.report.make_report does."""
     title = title or f"Continuation report: {ds.attrs.get('scene', '')}"
     return page.write_result_report(out_dir, title, _header_html(ds, title), lambda backend: figures(ds, backend),
                                     _events_html(ds) + _bistable_html(ds), ds.attrs.get("config_toml", ""),

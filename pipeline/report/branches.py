@@ -10,7 +10,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from pipeline.report import style
+from rotorsweep.pipeline.report import style
 
 # AUTO / MatCont labels of the special points, by the cube's bifurcation names
 SPECIAL_LABELS = {"fold": "LP", "period_doubling": "PD", "neimark_sacker": "NS"}

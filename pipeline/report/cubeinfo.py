@@ -2,7 +2,7 @@
 of the cube, the scene it was run from, and its attractor diagnostics."""
 import numpy as np
 
-from pipeline import schema
+from rotorsweep.pipeline import schema
 
 
 def continued_axis(ds):
@@ -138,6 +138,6 @@ def branch_values(line, observable):
 
 def stable_response(line):
     """Where a point's response is stable (bool over the point dims): its periodic orbit, or at a
-    quasi-periodically forced point its torus (pipeline.torus_points)."""
+    quasi-periodically forced point its torus (rotorsweep.pipeline.torus_points)."""
     stable = line["stable"].values == 1
     return stable | (line["torus_stability"].values == 1) if "torus_stability" in line else stable

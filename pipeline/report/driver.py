@@ -2,16 +2,16 @@
 import time
 from pathlib import Path
 
-from pipeline import query, schema
-from pipeline.report import figures  # noqa: F401  (registers the figures)
-from pipeline.report import page, pngs, style
-from pipeline.report.cubeinfo import scene_name
-from pipeline.report.figures.point import fig_point
-from pipeline.report.plan import axes_plan
-from pipeline.report.points import (compute_point, point_filename, point_rows, point_title,
+from rotorsweep.pipeline import query, schema
+from rotorsweep.pipeline.report import figures  # noqa: F401  (registers the figures)
+from rotorsweep.pipeline.report import page, pngs, style
+from rotorsweep.pipeline.report.cubeinfo import scene_name
+from rotorsweep.pipeline.report.figures.point import fig_point
+from rotorsweep.pipeline.report.plan import axes_plan
+from rotorsweep.pipeline.report.points import (compute_point, point_filename, point_rows, point_title,
                                     resolve_point, scene_of)
-from pipeline.report.registry import figures_for
-from pipeline.report.tables import bistable_rows, interval_rows, write_csv
+from rotorsweep.pipeline.report.registry import figures_for
+from rotorsweep.pipeline.report.tables import bistable_rows, interval_rows, write_csv
 
 _VARS = ("orbit_status", "stable", "bifurcation", "max_abs_multiplier", "multiplier_real",
          "multiplier_imag", "forcing_period", "orbit_state")
@@ -48,7 +48,7 @@ def make_report(ds, out_dir, title=None, points=None, parallel=None, say=None):
     points: grid points to show in detail ({axis: value} dicts or AXIS=VALUE strings, nearest
     grid point, see resolve_point), one point_<speed>Hz_<clearance>um.png each. parallel
     (default: with 2 or more usable CPUs): the PNGs are drawn by a second process while this one
-    draws the HTML, then helps with those left (pipeline.report.pngs). say(text): where phase
+    draws the HTML, then helps with those left (rotorsweep.pipeline.report.pngs). say(text): where phase
     lines go (None: nowhere). Returns {"html": Path, "png": [Path, ...] (figures, then points),
     "csv": Path, "points": [Path, ...]}."""
     say = say or (lambda text: None)

@@ -15,9 +15,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from pipeline import compute, schema
-from pipeline.report.cubeinfo import continued_axis, other_axes
-from rotorkernels.orbits import ForcedOrbitProblem
+from rotorsweep.pipeline import compute, schema
+from rotorsweep.pipeline.report.cubeinfo import continued_axis, other_axes
+from rotorsweep.kernels.orbits import ForcedOrbitProblem
 
 HARMONIC_SAMPLES = 64
 CONVERGED = schema.ORBIT_STATUS.index("converged")
@@ -63,7 +63,7 @@ def _observable_index(spec, observable):
 def sweep_lines(ds, scene, observable):
     """Lines of a sweep cube along its continued axis, one per value of the first other axis
     with several values (the other axes at their first value): the grid's converged orbits
-    (scene: the cube's pipeline.scene.Scene)."""
+    (scene: the cube's rotorsweep.pipeline.scene.Scene)."""
     spec = scene.model
     j = _observable_index(spec, observable)
     build, fixed, opts = compute.builder(scene), scene.fixed, scene.integrator

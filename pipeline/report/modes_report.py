@@ -1,5 +1,5 @@
 """The report of `rotorsweep modes --report DIR`: one offline page with the linear modes at one
-point (pipeline.modes.records: damped and undamped frequencies, damping ratio, log decrement,
+point (rotorsweep.pipeline.modes.records: damped and undamped frequencies, damping ratio, log decrement,
 whirl), the Campbell diagram with its critical speeds marked and listed (figures/mode_campbell.py,
 for the models with a shaft speed) and the mode shapes (figures/mode_shapes.py, for the models
 whose coordinates name stations), as the other reports: report.html, one PNG per figure, and the
@@ -9,9 +9,9 @@ import html
 
 import numpy as np
 
-from pipeline import modes, query
-from pipeline.report import page
-from pipeline.report.figures import mode_campbell, mode_shapes
+from rotorsweep.pipeline import modes, query
+from rotorsweep.pipeline.report import page
+from rotorsweep.pipeline.report.figures import mode_campbell, mode_shapes
 
 MODE_COLUMNS = ("mode [index]", "damped frequency [Hz]", "undamped frequency [Hz]", "damping ratio [1]",
                 "log decrement [1]", "whirl", "label")
@@ -74,7 +74,7 @@ def header_html(scene, rec, point, title):
 
 def make_report(cfg, point, out_dir, campbell_speeds_hz=None, title=None):
     """report.html, a PNG per figure and modes.csv into out_dir for the scene `cfg` at `point`
-    {axis: value} (pipeline.modes.at_point); returns the paths as pipeline.report.make_report
+    {axis: value} (rotorsweep.pipeline.modes.at_point); returns the paths as rotorsweep.pipeline.report.make_report
     does. campbell_speeds_hz: the Campbell diagram's speeds (default campbell_speeds)."""
     spec = cfg.model
     scene = scene_at(cfg.scene, point)

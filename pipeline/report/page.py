@@ -5,12 +5,12 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline import schema
-from pipeline.report.cubeinfo import (attractor_counts, continued_axis, has_attractor, scene_name,
+from rotorsweep.pipeline import schema
+from rotorsweep.pipeline.report.cubeinfo import (attractor_counts, continued_axis, has_attractor, scene_name,
                                       sweep_labels)
-from pipeline.report.plan import MAX_PANELS, axis_display, fixed_note, where_label
-from pipeline.report.stability import CLASS_MEANING, counts
-from pipeline.report.style import holoviews
+from rotorsweep.pipeline.report.plan import MAX_PANELS, axis_display, fixed_note, where_label
+from rotorsweep.pipeline.report.stability import CLASS_MEANING, counts
+from rotorsweep.pipeline.report.style import holoviews
 
 _CSS = """<style>
 table.intervals {border-collapse: collapse; font-family: sans-serif; font-size: 10pt}
@@ -146,8 +146,8 @@ def columns_html(title, cols, digits=10):
 def write_result_report(out_dir, title, header, figures, tables, config_toml, csv_name, csv_text):
     """A result's report (continuation, backbone): one PNG per figure (matplotlib), report.html
     (bokeh figures, header, tables, config) and a CSV; figures(backend) -> [(caption, file, fig)].
-    Returns the paths as pipeline.report.make_report does."""
-    from pipeline.report import style
+    Returns the paths as rotorsweep.pipeline.report.make_report does."""
+    from rotorsweep.pipeline.report import style
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -4,8 +4,8 @@ import itertools
 
 import numpy as np
 
-from pipeline import cube, schema
-from pipeline.report.cubeinfo import continued_axis, other_axes
+from rotorsweep.pipeline import cube, schema
+from rotorsweep.pipeline.report.cubeinfo import continued_axis, other_axes
 
 MAX_PANELS = 12        # facet panels per figure; the rest are listed as omitted
 

@@ -24,11 +24,11 @@ import sys
 import tempfile
 from pathlib import Path
 
-from pipeline.report import style
-from pipeline.report.figures.point import fig_point
-from pipeline.report.registry import figure_named
+from rotorsweep.pipeline.report import style
+from rotorsweep.pipeline.report.figures.point import fig_point
+from rotorsweep.pipeline.report.registry import figure_named
 
-_CHILD = "import json, sys; sys.path[:] = json.loads(sys.argv[1]); from pipeline.report.pngs import main; main()"
+_CHILD = "import json, sys; sys.path[:] = json.loads(sys.argv[1]); from rotorsweep.pipeline.report.pngs import main; main()"
 _STDERR_TAIL = 4000                                   # characters of a failed drawer's stderr to show
 
 

@@ -2,7 +2,7 @@
 direction (the bifurcation diagram, the attractors behind a branch diagram)."""
 import numpy as np
 
-from pipeline.report import style
+from rotorsweep.pipeline.report import style
 
 # Poincare points per panel of the bifurcation diagram: per grid value the distinct values (at a
 # resolution of 1/THIN_LEVELS of the panel's range), evenly thinned to at most budget / values.

@@ -4,9 +4,9 @@ import re
 
 import numpy as np
 
-from pipeline import query, schema
-from pipeline.report.cubeinfo import sweep_labels
-from pipeline.report.plan import TYPE_NAMES, axis_display, where_label
+from rotorsweep.pipeline import query, schema
+from rotorsweep.pipeline.report.cubeinfo import sweep_labels
+from rotorsweep.pipeline.report.plan import TYPE_NAMES, axis_display, where_label
 
 POINT_PERIODS = 256        # forcing periods of the trajectory drawn at a --point
 POINT_STEPS = 64           # samples per forcing period (the Poincare section is every 64th)
@@ -89,9 +89,9 @@ def resolve_point(ds, spec):
 
 
 def scene_of(ds):
-    """The scene (pipeline.scene.Scene) of a result's config_toml, which --point and the figures
+    """The scene (rotorsweep.pipeline.scene.Scene) of a result's config_toml, which --point and the figures
     that integrate orbits again need."""
-    from pipeline import config as config_mod, scene as scene_mod
+    from rotorsweep.pipeline import config as config_mod, scene as scene_mod
 
     text = ds.attrs.get("config_toml")
     if not text:
@@ -115,10 +115,10 @@ def point_filename(ds, resolved):
 
 
 def compute_point(ds, scene, resolved):
-    """Recompute one grid point for the report (pipeline.compute.point_detail): a trajectory on
+    """Recompute one grid point for the report (rotorsweep.pipeline.compute.point_detail): a trajectory on
     the attractor the sweep found there (started from the cube's attractor_state; a second one
     from attractor_state_down where the down sweep ended elsewhere), plus the cube's values."""
-    from pipeline import compute
+    from rotorsweep.pipeline import compute
 
     fixed = scene.fixed
     values = resolved["values"]

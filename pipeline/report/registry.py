@@ -1,4 +1,4 @@
-"""The report's figures, each registered by its own module (pipeline.report.figures), and the
+"""The report's figures, each registered by its own module (rotorsweep.pipeline.report.figures), and the
 question which of them a cube's report shows.
 
     register(Figure(name="lle", filename="lle.png", title="Largest Lyapunov exponent vs {axis}",
@@ -10,8 +10,8 @@ fixes by importing the figure modules in order.
 from dataclasses import dataclass
 from typing import Callable
 
-from pipeline.report.cubeinfo import continued_axis
-from pipeline.report.plan import axis_display
+from rotorsweep.pipeline.report.cubeinfo import continued_axis
+from rotorsweep.pipeline.report.plan import axis_display
 
 
 def _always(ds):

@@ -2,13 +2,13 @@
 continued axis with edges at the refined boundaries of the cube's boundary table."""
 import numpy as np
 
-from pipeline import query, schema
-from pipeline.report.cubeinfo import axis_edges, continued_axis, select
+from rotorsweep.pipeline import query, schema
+from rotorsweep.pipeline.report.cubeinfo import axis_edges, continued_axis, select
 
 # Stability classes of a grid point, in colour order. Okabe-Ito colours (colour-blind safe) for
 # the instabilities, a pale grey-blue for the stable background, near-black for "no orbit".
 # Bistable (a stable orbit where another stable one coexists, between a jump's folds): bluish green.
-# Quasi-periodically forced points with their torus (pipeline.torus_points): sky blue stable,
+# Quasi-periodically forced points with their torus (rotorsweep.pipeline.torus_points): sky blue stable,
 # vermillion unstable, yellow undecided, mid grey where the torus failed.
 CLASSES = ("stable", "fold", "period doubling", "Neimark-Sacker", "no periodic orbit", "bistable",
            "quasi-periodic stable", "quasi-periodic unstable", "quasi-periodic undecided", "torus failed")

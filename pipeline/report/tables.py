@@ -4,8 +4,8 @@ import csv
 
 import numpy as np
 
-from pipeline.report.cubeinfo import continued_axis, other_axes
-from pipeline.report.plan import TYPE_NAMES, axis_display, axis_label, unit_display
+from rotorsweep.pipeline.report.cubeinfo import continued_axis, other_axes
+from rotorsweep.pipeline.report.plan import TYPE_NAMES, axis_display, axis_label, unit_display
 
 
 def interval_rows(ds, intervals, machine=False):

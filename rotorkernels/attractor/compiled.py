@@ -1,9 +1,9 @@
 """The jitted functions the attractor diagnostics call from Python, each with example arguments
-of the types they pass, so that a warm-up compiles exactly those (`pipeline.warmup`); each module
+of the types they pass, so that a warm-up compiles exactly those (`rotorsweep.pipeline.warmup`); each module
 lists its own next to its calls."""
-from rotorkernels.attractor.lyapunov import entry_points as lyapunov_entry_points
-from rotorkernels.attractor.period import entry_points as period_entry_points
-from rotorkernels.attractor.poincare import entry_points as poincare_entry_points
+from rotorsweep.kernels.attractor.lyapunov import entry_points as lyapunov_entry_points
+from rotorsweep.kernels.attractor.period import entry_points as period_entry_points
+from rotorsweep.kernels.attractor.poincare import entry_points as poincare_entry_points
 
 
 def entry_points(spec, opts):

@@ -6,10 +6,10 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from rotorkernels import floquet, integrators as ig, shooting
-from rotorkernels.attractor import lyapunov
-from rotorkernels.attractor.period import default_period_rtol, detect_period
-from rotorkernels.attractor.poincare import _poincare
+from rotorsweep.kernels import floquet, integrators as ig, shooting
+from rotorsweep.kernels.attractor import lyapunov
+from rotorsweep.kernels.attractor.period import default_period_rtol, detect_period
+from rotorsweep.kernels.attractor.poincare import _poincare
 
 # not_settled: the samples neither repeat nor form a torus and the exponent is negative -- the
 # transient budget ran out before the state settled (a period longer than max_period, or

@@ -30,7 +30,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from rotorkernels import integrators as ig
+from rotorsweep.kernels import integrators as ig
 
 Lyapunov = namedtuple("Lyapunov", "exponents stderr lle lle_stderr periods_used status")
 

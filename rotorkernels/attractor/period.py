@@ -2,7 +2,7 @@
 import numpy as np
 from numba import njit
 
-from rotorkernels import integrators as ig
+from rotorsweep.kernels import integrators as ig
 
 # detect_period(): a sample repeats when it is within rel_tol * scale of the one k periods
 # later, scale = max(spread of the tail samples, PERIOD_FLOOR * their magnitude, tiny): the

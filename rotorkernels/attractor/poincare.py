@@ -2,7 +2,7 @@
 import numpy as np
 from numba import njit
 
-from rotorkernels import integrators as ig
+from rotorsweep.kernels import integrators as ig
 
 
 @njit(cache=True, nogil=True)

@@ -1,4 +1,4 @@
-"""Following periodic orbits (rotorkernels.orbits) along parameters. What is what:
+"""Following periodic orbits (rotorsweep.kernels.orbits) along parameters. What is what:
 
 - On a grid: `natural` solves the forced orbit at each given parameter vector, each started from
   its neighbours; `follow(model, params, opts, strategy=...)` below runs it over a grid and returns
@@ -15,8 +15,8 @@
   codimension-2 flags, and user events) are objects in `events`."""
 from collections import namedtuple
 
-from rotorkernels import shooting
-from rotorkernels.continuation.natural import (  # noqa: F401 (the package's API)
+from rotorsweep.kernels import shooting
+from rotorsweep.kernels.continuation.natural import (  # noqa: F401 (the package's API)
     COLD_RETRIES, QUICK_ITERATIONS, PointSolution, natural, solve_orbit)
 
 STRATEGIES = {"natural": natural}

@@ -29,15 +29,15 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from rotorkernels import extrema, floquet, integrators as ig
-from rotorkernels.continuation import engine, events as ev
-from rotorkernels.continuation.engine import (  # noqa: F401 (the names this module has always offered)
+from rotorsweep.kernels import extrema, floquet, integrators as ig
+from rotorsweep.kernels.continuation import engine, events as ev
+from rotorsweep.kernels.continuation.engine import (  # noqa: F401 (the names this module has always offered)
     CLOSED_LOOP, END_REASONS, INTEGRATION_FAILED, LEFT_RANGE, NEWTON_FAILED, REJOINED, START_FAILED, START_NEWTON,
     STEP_BUDGET, Counter, Settings)
-from rotorkernels.continuation.events import (  # noqa: F401
+from rotorsweep.kernels.continuation.events import (  # noqa: F401
     BRANCH_POINT, EVENT_LABELS, EVENT_TYPES, FOLD, NEIMARK_SACKER, PEAK, PERIOD_DOUBLING)
-from rotorkernels.orbits import ForcedOrbitProblem
-from rotorkernels.roots import brent_root
+from rotorsweep.kernels.orbits import ForcedOrbitProblem
+from rotorsweep.kernels.roots import brent_root
 
 
 class Solution(NamedTuple):
@@ -75,7 +75,7 @@ class Family(NamedTuple):
     engine problem (engine's contract): unknowns X = (s, mu), bordered Newton corrector.
 
     weights: observables o = weights @ u[:m] whose exact extrema every point records
-    (`Point.amplitudes`, rotorkernels.extrema); peak: the row of weights whose half peak-to-peak
+    (`Point.amplitudes`, rotorsweep.kernels.extrema); peak: the row of weights whose half peak-to-peak
     amplitude's local maxima are `events.Peak` events (-1: none), its slope along the tangent a
     central difference of step fd_step (truncation O(fd_step^2), integration noise rtol / fd_step
     relative: a peak located to ~1e-7 of the step's length at rtol 1e-12)."""

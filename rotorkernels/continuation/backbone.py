@@ -35,11 +35,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rotorkernels import floquet, shooting
-from rotorkernels.continuation import engine
-from rotorkernels.continuation.engine import Settings  # noqa: F401 (the settings this module takes)
-from rotorkernels.modal import eigenpairs
-from rotorkernels.orbits import AutonomousOrbitProblem
+from rotorsweep.kernels import floquet, shooting
+from rotorsweep.kernels.continuation import engine
+from rotorsweep.kernels.continuation.engine import Settings  # noqa: F401 (the settings this module takes)
+from rotorsweep.kernels.modal import eigenpairs
+from rotorsweep.kernels.orbits import AutonomousOrbitProblem
 
 # Relative gap below which two linear frequencies count as one repeated frequency.
 REPEATED_RTOL = 1e-6
@@ -156,7 +156,7 @@ def _null_tangent(jac, t_prev):
 def linear_modes(model, p, basis):
     """(omega [rad per unit tau], complex state vectors) of the linearization at rest restricted
     to the subspace, ascending in omega, each pair once."""
-    from rotorkernels.models import dispatch
+    from rotorsweep.kernels.models import dispatch
 
     n = model.n_state
     jac = np.empty((n, n))

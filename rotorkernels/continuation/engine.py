@@ -43,7 +43,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rotorkernels.roots import NotConverged, brent_root
+from rotorsweep.kernels.roots import NotConverged, brent_root
 
 # How a branch ended (the result's `end` code), one vocabulary for every problem.
 END_REASONS = (

@@ -22,9 +22,9 @@ from collections import namedtuple
 
 import numpy as np
 
-from rotorkernels import floquet
-from rotorkernels.continuation import engine
-from rotorkernels.roots import NotConverged, brent_root
+from rotorsweep.kernels import floquet
+from rotorsweep.kernels.continuation import engine
+from rotorsweep.kernels.roots import NotConverged, brent_root
 
 # The bifurcations of orbits located on a branch (the codes a branch's events record).
 # The last three are events of torus branches (continuation.tori): a change of normal stability, a

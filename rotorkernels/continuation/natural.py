@@ -1,4 +1,4 @@
-"""Natural continuation: periodic orbits of forced-orbit problems (rotorkernels.orbits) along a
+"""Natural continuation: periodic orbits of forced-orbit problems (rotorsweep.kernels.orbits) along a
 chain of parameter points, each started from its neighbours.
 
 Each point starts Newton from the best guess available, in this order: the secant predictor
@@ -13,8 +13,8 @@ from collections import namedtuple
 
 import numpy as np
 
-from rotorkernels import floquet, shooting
-from rotorkernels.orbits import ForcedOrbitProblem
+from rotorsweep.kernels import floquet, shooting
+from rotorsweep.kernels.orbits import ForcedOrbitProblem
 
 PointSolution = namedtuple(
     "PointSolution",
@@ -80,7 +80,7 @@ def solve_orbit(model, p, opts, history=(), *, cold_guess, periods=1, tol=1e-9, 
 
     history: converged states of the previous points of the chain (most recent last);
     n_samples: orbit samples per forcing period (0: none, samples None -- a sweep takes its
-    orbit means and extrema in one pass, rotorkernels.extrema.orbit_extent)."""
+    orbit means and extrema in one pass, rotorsweep.kernels.extrema.orbit_extent)."""
     problem = ForcedOrbitProblem(model, p, opts, periods)
     n_rhs = 0
     best = None

@@ -1,7 +1,7 @@
 """Pseudo-arclength continuation of invariant tori under two-frequency forcing (a problem class of
 `engine.follow`) along one parameter lambda, e.g. the second forcing's frequency omega.
 
-Unknowns X = (U, mu): the torus's node values U (N x n, rotorkernels.torus, N fixed along the
+Unknowns X = (U, mu): the torus's node values U (N x n, rotorsweep.kernels.torus, N fixed along the
 branch) and mu = lambda / scale. Equations: the collocation residual R(U, lambda) = 0 (the
 rotation rho(lambda) and the kernel vector p(lambda) both follow lambda) and one scalar condition
 c . X = target. Bordered Newton with dR/dU from the nodes' monodromies and the shift operator,
@@ -23,10 +23,10 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from rotorkernels import torus as tr
-from rotorkernels.continuation import engine, events as ev
-from rotorkernels.continuation.engine import INTEGRATION_FAILED, NEWTON_FAILED, START_NEWTON, TORUS_BREAKDOWN
-from rotorkernels.roots import brent_root
+from rotorsweep.kernels import torus as tr
+from rotorsweep.kernels.continuation import engine, events as ev
+from rotorsweep.kernels.continuation.engine import INTEGRATION_FAILED, NEWTON_FAILED, START_NEWTON, TORUS_BREAKDOWN
+from rotorsweep.kernels.roots import brent_root
 
 
 class Solution(NamedTuple):

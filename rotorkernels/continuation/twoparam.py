@@ -60,9 +60,9 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from rotorkernels import floquet, integrators as ig
-from rotorkernels.continuation import arclength as al, engine, events as ev
-from rotorkernels.continuation.engine import (  # noqa: F401 (the names this module has always offered)
+from rotorsweep.kernels import floquet, integrators as ig
+from rotorsweep.kernels.continuation import arclength as al, engine, events as ev
+from rotorsweep.kernels.continuation.engine import (  # noqa: F401 (the names this module has always offered)
     END_REASONS, INTEGRATION_FAILED, LEFT_RANGE, NEWTON_FAILED, START_FAILED, STEP_BUDGET)
 
 CLOSED = engine.CLOSED_LOOP     # the curve came back to its first point (an isola)

@@ -16,10 +16,10 @@ import importlib.util
 import os
 import sys
 
-from rotorkernels import PLUGINS_VARIABLE, plugin_modules
-from rotorkernels.models import (asymmetric5, damped_mathieu, duffing, duffing2, jeffcott_clearance,
+from rotorsweep.kernels import PLUGINS_VARIABLE, plugin_modules
+from rotorsweep.kernels.models import (asymmetric5, damped_mathieu, duffing, duffing2, jeffcott_clearance,
                                  linear_oscillator, rigid_preloaded, symmetric4)
-from rotorkernels.models.spec import Built, KernelId, ModelSpec, Observable, Parameter  # noqa: F401 (API)
+from rotorsweep.kernels.models.spec import Built, KernelId, ModelSpec, Observable, Parameter  # noqa: F401 (API)
 
 BUILTIN = (jeffcott_clearance, linear_oscillator, damped_mathieu, duffing, rigid_preloaded, symmetric4, asymmetric5,
            duffing2)
@@ -68,11 +68,11 @@ def kernel_tag(spec):
 def _load_dispatch():
     """The committed dispatch for the built-in models, else one generated for the registry."""
     if set(REGISTRY) == set(BUILTIN_NAMES):
-        from rotorkernels.models import dispatch
+        from rotorsweep.kernels.models import dispatch
         return dispatch
     import numba
 
-    from rotorkernels.models.generate import dispatch_source
+    from rotorsweep.kernels.models.generate import dispatch_source
 
     source = dispatch_source(REGISTRY.values())
     os.makedirs(numba.config.CACHE_DIR, exist_ok=True)

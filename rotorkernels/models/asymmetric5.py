@@ -10,8 +10,8 @@ angles); `polynomial(values)` gives the PolynomialSystem for the invariant-manif
 import numpy as np
 from numba import njit
 
-from rotorkernels.models import series_rotor as sr
-from rotorkernels.models.spec import ModelSpec, Parameter
+from rotorsweep.kernels.models import series_rotor as sr
+from rotorsweep.kernels.models.spec import ModelSpec, Parameter
 
 N_POS = 5
 

@@ -3,8 +3,8 @@
 import numpy as np
 from numba import njit
 
-from rotorkernels.models.spec import validation_spec
-from rotorkernels.models.velocity import upper_rows, velocity_rows
+from rotorsweep.kernels.models.spec import validation_spec
+from rotorsweep.kernels.models.velocity import upper_rows, velocity_rows
 
 
 @njit(cache=True, nogil=True, inline="always")

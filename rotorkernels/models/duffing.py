@@ -4,8 +4,8 @@ and autonomous (free oscillation, backbone); hardening for gamma > 0, softening 
 import numpy as np
 from numba import njit
 
-from rotorkernels.models.spec import Built, LinearSystem, ModelSpec, Observable, Parameter
-from rotorkernels.models.velocity import upper_rows, velocity_rows
+from rotorsweep.kernels.models.spec import Built, LinearSystem, ModelSpec, Observable, Parameter
+from rotorsweep.kernels.models.velocity import upper_rows, velocity_rows
 
 P_T2, P_DAMP, P_GAMMA, P_FORCE = range(4)   # T^2, 2 zeta T, gamma, F
 

@@ -4,13 +4,13 @@ tau = Omega t / 2 pi (the first forcing's period is 1):
     x'' + c x' + k x + gamma x^3 = f1 cos(2 pi tau) + f2 cos(w2 tau + theta),
 
 p = (k, c, gamma, f1, f2, w2, theta), state (x, x'). The second forcing's phase theta at tau = 0 is
-a parameter: the torus solver (rotorkernels.torus) shoots one forcing period from each phase node.
+a parameter: the torus solver (rotorsweep.kernels.torus) shoots one forcing period from each phase node.
 With gamma = 0 it is linear and its quasi-periodic response is the sum of two periodic ones."""
 import numpy as np
 from numba import njit
 
-from rotorkernels.models.spec import VALIDATION_GROUP, Built, ModelSpec, Observable, Parameter
-from rotorkernels.models.velocity import upper_rows, velocity_rows
+from rotorsweep.kernels.models.spec import VALIDATION_GROUP, Built, ModelSpec, Observable, Parameter
+from rotorsweep.kernels.models.velocity import upper_rows, velocity_rows
 
 P_K, P_C, P_GAMMA, P_F1, P_F2, P_W2, P_PHASE = range(7)
 NAMES = ("k", "c", "gamma", "f1", "f2", "w2", "theta")

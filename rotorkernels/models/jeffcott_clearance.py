@@ -8,7 +8,7 @@ The state is u = (x/L, y/L, dx/dtau / L, dy/dtau / L).
 
 The right-hand side, its analytic Jacobian and both from one ball sum (`rhs`, `jac`,
 `rhs_jac`) are inlined (`inline="always"`) into the group's bodies in the generated
-`models.dispatch`, which LLVM inlines into the integrators (`rotorkernels.PICKED_BODY`): a
+`models.dispatch`, which LLVM inlines into the integrators (`rotorsweep.kernels.PICKED_BODY`): a
 compiled call with array arguments costs more than the 9-ball force sum it would wrap.
 """
 from functools import lru_cache
@@ -16,10 +16,10 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
-from rotorkernels import bearing
-from rotorkernels.contact import ring_force, ring_load
-from rotorkernels.models.spec import Built, ModelSpec, Observable, Parameter
-from rotorkernels.models.velocity import upper_rows
+from rotorsweep.kernels import bearing
+from rotorsweep.kernels.contact import ring_force, ring_load
+from rotorsweep.kernels.models.spec import Built, ModelSpec, Observable, Parameter
+from rotorsweep.kernels.models.velocity import upper_rows
 
 LENGTH_SCALE = 1e-6  # m: bearing clearances and vibration amplitudes are micrometres
 

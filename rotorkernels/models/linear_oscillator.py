@@ -2,8 +2,8 @@
 C = diag(p3, p4) (scaled time); its flow is expm(A t), its spectra the eigenvalues of A."""
 from numba import njit
 
-from rotorkernels.models.spec import validation_spec
-from rotorkernels.models.velocity import upper_rows, velocity_rows
+from rotorsweep.kernels.models.spec import validation_spec
+from rotorsweep.kernels.models.velocity import upper_rows, velocity_rows
 
 
 @njit(cache=True, nogil=True, inline="always")

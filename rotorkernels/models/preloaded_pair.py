@@ -16,8 +16,8 @@ import math
 from functools import lru_cache
 from typing import NamedTuple
 
-from rotorkernels import bearing
-from rotorkernels.models.spec import Parameter
+from rotorsweep.kernels import bearing
+from rotorsweep.kernels.models.spec import Parameter
 
 NOMINAL_ANGLES = tuple(bearing.ANGULAR_TABLES["filipkovsky2016"].outer_race_radius)
 DEFAULT_TABLE = "filipkovsky2016"

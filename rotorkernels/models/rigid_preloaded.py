@@ -46,15 +46,15 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from rotorkernels import modal
-from rotorkernels.contact import ring_force, ring_load
-from rotorkernels.cubic_law import cubic_coefficients, cubic_load
-from rotorkernels.models.spec import Built, Equilibrium, LinearSystem, ModelSpec, Observable, Parameter
-from rotorkernels.models.preloaded_pair import (  # noqa: F401 (the pair's API, read as rp.*)
+from rotorsweep.kernels import modal
+from rotorsweep.kernels.contact import ring_force, ring_load
+from rotorsweep.kernels.cubic_law import cubic_coefficients, cubic_load
+from rotorsweep.kernels.models.spec import Built, Equilibrium, LinearSystem, ModelSpec, Observable, Parameter
+from rotorsweep.kernels.models.preloaded_pair import (  # noqa: F401 (the pair's API, read as rp.*)
     ARRANGEMENTS, BEARING_DERIVED, BEARING_KEYS, DEFAULT_NOMINAL_ANGLE, NOMINAL_ANGLES,
     arrangement_of, bearing_derived, bearing_problems, bearing_state, free_angle_before_version_2, geometry,
     n_balls_of, preload_of, table_geometry, with_row)
-from rotorkernels.models.velocity import upper_rows, velocity_rows
+from rotorsweep.kernels.models.velocity import upper_rows, velocity_rows
 
 LENGTH_SCALE = 1e-6
 N_POS = 5

@@ -1,6 +1,6 @@
 """What `symmetric4` and `asymmetric5` (Filipkovsky 2010) share: a rigid shaft with distributed
 mass and one disk on two preloaded angular-contact bearings with the cubic series law
-(`rotorkernels.cubic_law`), conservative (no damping, no forcing).
+(`rotorsweep.kernels.cubic_law`), conservative (no damping, no forcing).
 
 Coordinates q = (x1, y1, x2, y2[, z]) [m]: journal displacements of bearing A (at xi = 0) and B
 (xi = l), and for the 5-DOF model the axial displacement z. Lagrange's equations
@@ -43,11 +43,11 @@ from dataclasses import replace
 import numpy as np
 from numba import njit
 
-from rotorkernels import modal
-from rotorkernels.cubic_law import cubic_coefficients, cubic_load, derivative_tensor, potential_monomials
-from rotorkernels.models import rigid_preloaded as rp
-from rotorkernels.models.spec import Built, Observable, Parameter, PolynomialSystem
-from rotorkernels.models.velocity import upper_rows, velocity_rows
+from rotorsweep.kernels import modal
+from rotorsweep.kernels.cubic_law import cubic_coefficients, cubic_load, derivative_tensor, potential_monomials
+from rotorsweep.kernels.models import rigid_preloaded as rp
+from rotorsweep.kernels.models.spec import Built, Observable, Parameter, PolynomialSystem
+from rotorsweep.kernels.models.velocity import upper_rows, velocity_rows
 
 LENGTH_SCALE = 1e-6
 STEEL_DENSITY = 7800.0      # kg/m^3 (not in the papers)

@@ -108,7 +108,7 @@ class ModelSpec:
     # (version, section, key, value): a scene written by a model version below `version` that
     # gives no section.key meant `value` (the default then; a callable: value(the scene's section)),
     # so that results written before a default changed are recomputed as they were
-    # (pipeline.scene.of_result)
+    # (rotorsweep.pipeline.scene.of_result)
     older_defaults: tuple = ()
     velocity_form: bool = True      # u = (q, q'), dq/dtau = q': Jacobian [[0, I], [A, B]]
     n_state_override: int = 0       # only for models not in velocity form
@@ -143,7 +143,7 @@ class ModelSpec:
     #                                 series law's axial approach); "": no bound
     torus_forcing: tuple = ()       # (phase slot, frequency slot, values): a second forcing whose phase is
     #                                 p[phase slot] and frequency p[frequency slot] [rad per unit tau]; the build
-    #                                 at {**values, ...} keeps tau one first-forcing period (tori: pipeline.tori)
+    #                                 at {**values, ...} keeps tau one first-forcing period (tori: rotorsweep.pipeline.tori)
     invariant_subspaces: dict = field(default_factory=dict)   # name -> basis (n_state x k) of an invariant
     #                                 subspace in which a repeated linear frequency is simple (backbones)
 
@@ -159,7 +159,7 @@ class ModelSpec:
     @property
     def kernel(self):
         """The model's `KernelId`, which every njit function takes."""
-        from rotorkernels.models import kernel_tag   # the registry imports this module
+        from rotorsweep.kernels.models import kernel_tag   # the registry imports this module
 
         return KernelId(kernel_tag(self), self.n_state, self.n_position, int(self.velocity_form))
 

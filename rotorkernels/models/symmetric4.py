@@ -10,8 +10,8 @@ gyroscopic coupling leaves untouched); the conical modes split into backward and
 import numpy as np
 from numba import njit
 
-from rotorkernels.models import series_rotor as sr
-from rotorkernels.models.spec import ModelSpec
+from rotorsweep.kernels.models import series_rotor as sr
+from rotorsweep.kernels.models.spec import ModelSpec
 
 N_POS = 4
 

@@ -33,7 +33,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from rotorkernels.nnm import system as ps
+from rotorsweep.kernels.nnm import system as ps
 
 # Integration tolerances of the full system in the invariance check (relative; the absolute one
 # is this times the amplitude, times omega for velocities).

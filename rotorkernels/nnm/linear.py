@@ -1,11 +1,11 @@
 """Normal modes of the linear part of a conservative gyroscopic PolynomialSystem (the nonlinear
-normal modes' starting point): `rotorkernels.modal.modes_of` with D = G, which also gives the
+normal modes' starting point): `rotorsweep.kernels.modal.modes_of` with D = G, which also gives the
 labels, whirl directions and degenerate-pair conventions."""
 import numpy as np
 
-from rotorkernels import modal
-from rotorkernels.modal import LinearMode, kinds_from_names  # noqa: F401 (the package's API)
-from rotorkernels.nnm import system as ps
+from rotorsweep.kernels import modal
+from rotorsweep.kernels.modal import LinearMode, kinds_from_names  # noqa: F401 (the package's API)
+from rotorsweep.kernels.nnm import system as ps
 
 # Relative size of Re(s) to |s| above which an eigenvalue is not on the imaginary axis.
 CONSERVATIVE_RTOL = 1e-8

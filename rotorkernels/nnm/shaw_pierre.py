@@ -56,7 +56,7 @@ The reduced oscillator is the master's own equation on the manifold, p'' = W(p, 
     p'' + sum_m B_m mono_m(p, p') = 0,   B = -W  (B_p = omega^2, B_r = 0 up to rounding),
 
 the papers' eq. 26 (symmetric paper, which keeps only the cubic terms) / the axial paper's B_1..B_9.
-Its backbone is in rotorkernels.nnm.curves.
+Its backbone is in rotorsweep.kernels.nnm.curves.
 
 Choices where the papers are silent: the default master is the coordinate with the largest
 displacement in the mode (the papers leave J free); the constant term is zero (expansion about
@@ -66,8 +66,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rotorkernels.nnm import linear
-from rotorkernels.nnm import system as ps
+from rotorsweep.kernels.nnm import linear
+from rotorsweep.kernels.nnm import system as ps
 
 # Exponents (of p, of r) of the monomials; index 0 is the constant, 1..9 the papers' gamma columns.
 EXPONENTS = ((0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2), (3, 0), (2, 1), (1, 2), (0, 3))

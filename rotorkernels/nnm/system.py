@@ -4,8 +4,8 @@ linear part and its right-hand side for scipy.
 """
 import numpy as np
 
-from rotorkernels import modal
-from rotorkernels.models.spec import PolynomialSystem  # noqa: F401 (the package's API)
+from rotorsweep.kernels import modal
+from rotorsweep.kernels.models.spec import PolynomialSystem  # noqa: F401 (the package's API)
 
 # M symmetric and G skew to this relative accuracy (the models assemble them in floating point).
 SYMMETRY_RTOL = 1e-10

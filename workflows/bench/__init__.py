@@ -6,7 +6,7 @@ Entry points: `python -m workflows.bench.kernels` and `python -m workflows.bench
 - measurement, writing the JSON: `references`, `work_precision`, `peer_baseline`, `cfloor`
   (kernel benchmarks, on the scene of `scene`); `scaling_scene`, `scaling_runs`,
   `scaling_analysis` (scaling benchmark);
-- `jeffcott`: the only module that imports `rotorkernels`: the kernels as the benchmarks call them;
+- `jeffcott`: the only module that imports `rotorsweep.kernels`: the kernels as the benchmarks call them;
 - `peers/`: the same model outside our kernels, scipy (`jeffcott_scipy`) and C (`jeffcott_c`,
   with `jeffcott_rhs.c`);
 - rendering from the JSON: `render` (templates), `kernels_md` and `scaling_md` filling

@@ -8,7 +8,7 @@ angles x 8 preloads = 768,320 points, orbits + Floquet multipliers) on a local 2
                                                          #   each other axis, spread evenly), with
                                                          #   the full atlas extrapolated from it
 
-Measured through the public `pipeline.run` (phases timed by wrapping the pipeline's functions,
+Measured through the public `rotorsweep.pipeline.run` (phases timed by wrapping the pipeline's functions,
 as workflows.bench.scaling does): wall time per phase, points per second, part-file bytes, cube
 size and write time, read times of one speed line, one (contact angle, preload) slice and the
 whole cube, the report's time on the cube (PNGs in a second process, and all in one), peak
@@ -40,7 +40,7 @@ def atlas_config(counts=None):
     values spread evenly from the first to the last (None: the full atlas), by editing the TOML."""
     import numpy as np
 
-    from pipeline import config
+    from rotorsweep.pipeline import config
 
     text = CONFIG.read_text()
     for axis, n in (counts or {}).items():
@@ -61,10 +61,10 @@ def _worker_stats():
 
 def run_atlas(cfg, work_dir, n_workers=2):
     """One timed sweep of cfg into work_dir/atlas.nc; the run's record (the cube is kept)."""
-    import pipeline
+    import rotorsweep.pipeline as pipeline
     from distributed import get_task_stream
 
-    from pipeline import cube
+    from rotorsweep.pipeline import cube
 
     part_bytes = []
     write_part = cube.write_part
@@ -127,11 +127,11 @@ def full_size_io(path, work_dir):
     its lines repeated over the full clearance x contact angle x preload grid, every float
     scaled by 1 + 1e-6 N(0, 1) so that no two lines are bitwise equal (neighbouring lines of a
     real atlas differ in their low bits too; exact copies would compress away). Written by
-    pipeline.cube.write_cube (the pipeline's encoding); read as read_times does."""
+    rotorsweep.pipeline.cube.write_cube (the pipeline's encoding); read as read_times does."""
     import numpy as np
     import xarray as xr
 
-    from pipeline import cube
+    from rotorsweep.pipeline import cube
 
     small = cube.open_cube(path)
     small = small.drop_dims("boundary") if "boundary" in small.dims else small
@@ -158,8 +158,8 @@ def full_size_io(path, work_dir):
 def report_time(path, out_dir, parallel):
     """Seconds of make_report on the cube (parallel: the PNGs in a second process, the default on
     2 cores) and the PNGs' names."""
-    from pipeline import cube
-    from pipeline.report import make_report
+    from rotorsweep.pipeline import cube
+    from rotorsweep.pipeline.report import make_report
 
     t0 = time.perf_counter()
     res = make_report(cube.open_cube(path), out_dir, parallel=parallel)

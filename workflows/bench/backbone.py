@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline import backbone as pb, config, scene as scenes
-from rotorkernels import nnm
+from rotorsweep.pipeline import backbone as pb, config, scene as scenes
+from rotorsweep.kernels import nnm
 from workflows.bench import render
 from workflows.bench.common import DOCS, best_time, loadavg, log, provenance
 

@@ -1,5 +1,5 @@
 """How unevenly points cost, and what that asks of the sweep's chunk plan: the guided share of
-pipeline.sweep (GUIDED_SHARE, GUIDED_SHARE_ATTRACTORS) chosen on measured costs.
+rotorsweep.pipeline.sweep (GUIDED_SHARE, GUIDED_SHARE_ATTRACTORS) chosen on measured costs.
 
     python -m workflows.bench.chunk_plans      # -> docs/benchmarks/chunk_plans.{json,md} (~1 min)
 
@@ -33,8 +33,8 @@ TASK_OVERHEAD_S = 0.010
 def swept_costs(cfg, work_dir):
     """[(segment, its points' summed compute_time [s])] of a sweep of cfg on 2 local workers,
     warmed first (the first point a worker solves would count the kernels' loading), in plan order."""
-    import pipeline
-    from pipeline import sweep
+    import rotorsweep.pipeline as pipeline
+    from rotorsweep.pipeline import sweep
     from workflows.bench.scaling_runs import worker_calls, first_point, start_cluster
 
     cluster, client = start_cluster(2)
@@ -71,7 +71,7 @@ def makespan(chunk_costs, workers):
 def simulate(lines, rng):
     """{workers: {share: {"mean", "worst": makespan / ideal, "chunks"}}} over ORDERS orders of
     the lines."""
-    from pipeline import sweep
+    from rotorsweep.pipeline import sweep
 
     cost = {seg.id: c for line in lines for seg, c in line}
     total = sum(cost.values())
@@ -94,7 +94,7 @@ def simulate(lines, rng):
 
 
 def scene_record(name, cfg, work_dir, rng):
-    from pipeline import sweep
+    from rotorsweep.pipeline import sweep
 
     log(f"{name}: sweeping {cfg.n_points} points on 2 workers")
     lines = lines_of(swept_costs(cfg, work_dir))
@@ -138,7 +138,7 @@ def main(argv=None):
     if args.render_only:
         result = json.loads((args.out / "chunk_plans.json").read_text())
     else:
-        from pipeline import config
+        from rotorsweep.pipeline import config
 
         load = loadavg()
         rng = np.random.default_rng(1)

@@ -2,7 +2,7 @@
 the CPU seconds of every Numba compilation in this process, each without the compilations it
 started (exclusive), summed by function: where a cold first result's compile time goes.
 
-Run as a script, not a module, so that it measures the `pipeline` on PYTHONPATH (another
+Run as a script, not a module, so that it measures the `rotorsweep.pipeline` on PYTHONPATH (another
 revision's tree) and needs nothing from it but the CLI. Compilations in Dask workers are not
 seen (the driver compiles a scene's kernels before they start)."""
 import sys
@@ -37,7 +37,7 @@ def main(argv):
     out, *args = argv
     times = ExclusiveTimes()
     event.register("numba:compile", times)
-    from pipeline import cli
+    from rotorsweep.pipeline import cli
 
     try:
         return cli.main(args)

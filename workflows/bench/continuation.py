@@ -4,7 +4,7 @@ curve (hardening: zeta 0.05, gamma 1, F 0.1, omega 0.5 to 2, two folds).
     python -m workflows.bench.continuation [--rtols 1e-8 1e-10] [--repeats 5]
                                            # -> docs/benchmarks/continuation.{json,md}
 
-(a) rotorkernels.continuation.arclength.continue_orbit; (b) `ScipyContinuation`
+(a) rotorsweep.kernels.continuation.arclength.continue_orbit; (b) `ScipyContinuation`
 (workflows/bench/peers/duffing_scipy.py), the same algorithm written as a scipy user would:
 solve_ivp DOP853 on the variational equations, the same unknowns, bordered Newton, step rules and
 settings, folds by Brent on det(M - I). Both at the same rtol, atol = rtol / 100, Newton tolerance
@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rotorkernels import integrators as ig, models
-from rotorkernels.continuation import arclength as al, solve_orbit
+from rotorsweep.kernels import integrators as ig, models
+from rotorsweep.kernels.continuation import arclength as al, solve_orbit
 from workflows.bench import render
 from workflows.bench.common import DOCS, loadavg, log, provenance
 from workflows.bench.peers.duffing_scipy import Duffing, ScipyContinuation, fold_reference

@@ -27,15 +27,15 @@ from workflows.bench.revisions import checkout
 CHILD = """
 import json, os, time
 from pathlib import Path
-from pipeline import compute, config
+from rotorsweep.pipeline import compute, config
 text = Path('configs/bai2006_fig13.toml').read_text()
 CLEARANCES = (7.6e-6, 15.2e-6, 19.0e-6)
 
 def scene_of(data):
     # (what compute.solve_segment takes, the fixed values): the scene object where the tree has
-    # one (pipeline.scene), else the config dict (trees before it)
+    # one (rotorsweep.pipeline.scene), else the config dict (trees before it)
     try:
-        from pipeline import scene
+        from rotorsweep.pipeline import scene
     except ImportError:
         return data, compute.fixed_values(data)
     built = scene.from_data(data)

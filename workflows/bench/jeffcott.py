@@ -1,15 +1,15 @@
 """The kernels as the benchmarks call them, on the Bai 2006 rotor (`jeffcott_clearance`).
 
-Every `rotorkernels` name the kernel benchmarks use is imported here and nowhere else in
+Every `rotorsweep.kernels` name the kernel benchmarks use is imported here and nowhere else in
 workflows/bench, so that a rename in the kernels is one edit. Scaled units: tau = t / T,
 lengths in um, so the basic orbit has period 1."""
 import numpy as np
 from numba import njit
 
-from rotorkernels import continuation, floquet, integrators as ig, models, shooting
-from rotorkernels.continuation import events as boundary
-from rotorkernels.contact import ring_load
-from rotorkernels.models import jeffcott_clearance as jc
+from rotorsweep.kernels import continuation, floquet, integrators as ig, models, shooting
+from rotorsweep.kernels.continuation import events as boundary
+from rotorsweep.kernels.contact import ring_load
+from rotorsweep.kernels.models import jeffcott_clearance as jc
 
 from workflows.bench.scene import ATOL_OVER_RTOL, BAI, BOUNDARY, contact_angle, newton_tol, setting_label
 

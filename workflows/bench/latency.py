@@ -84,7 +84,7 @@ def run_command(tree, args, tree_name):
     env.pop("NUMBA_CACHE_DIR", None)            # each tree keys its own cache on its kernel sources
     env.pop("ROTORSWEEP_NUMBA_CACHE_DIR", None)
     argv = argv_of(args, tree_name)
-    cmd = [sys.executable, *argv] if argv[0] == "-c" else [sys.executable, "-m", "pipeline.cli", *argv]
+    cmd = [sys.executable, *argv] if argv[0] == "-c" else [sys.executable, "-m", "rotorsweep.pipeline.cli", *argv]
     (BUILD / tree_name).mkdir(parents=True, exist_ok=True)
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()

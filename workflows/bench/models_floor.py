@@ -6,7 +6,7 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
-from rotorkernels import integrators as ig, models, shooting, stages
+from rotorsweep.kernels import integrators as ig, models, shooting, stages
 from workflows.bench import jeffcott as jc
 from workflows.bench.cfloor import flow_ns
 from workflows.bench.common import best_time

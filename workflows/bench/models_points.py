@@ -2,11 +2,11 @@
 against the scipy peer at equal tolerances (see `workflows.bench.models`)."""
 import numpy as np
 
-from rotorkernels import continuation, floquet, integrators as ig, models, shooting
-from rotorkernels.continuation.arclength import Settings
-from rotorkernels.continuation.backbone import follow_backbone
-from rotorkernels.models import rigid_preloaded as rp
-from rotorkernels.orbits import AutonomousOrbitProblem
+from rotorsweep.kernels import continuation, floquet, integrators as ig, models, shooting
+from rotorsweep.kernels.continuation.arclength import Settings
+from rotorsweep.kernels.continuation.backbone import follow_backbone
+from rotorsweep.kernels.models import rigid_preloaded as rp
+from rotorsweep.kernels.orbits import AutonomousOrbitProblem
 from workflows.bench.peer_baseline import time_pair
 from workflows.bench.peers.rotor_scipy import RigidPreloadedPeer, SeriesRotorPeer
 from workflows.bench.references import complex_list, match

@@ -27,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-from rotorkernels import continuation as kc, integrators as ig, shooting
-from rotorkernels.models import rigid_preloaded as rp
-from rotorkernels.models.spec import Built
+from rotorsweep.kernels import continuation as kc, integrators as ig, shooting
+from rotorsweep.kernels.models import rigid_preloaded as rp
+from rotorsweep.kernels.models.spec import Built
 from workflows.bench import render
 from workflows.bench.common import DOCS, best_time, loadavg, log, provenance
 

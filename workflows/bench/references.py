@@ -147,7 +147,7 @@ def compute_boundary_reference(near_pd_state):
 
 
 METHOD = dict(
-    reference=f"state: rotorkernels.shooting (Newton, analytic variational monodromy) with "
+    reference=f"state: rotorsweep.kernels.shooting (Newton, analytic variational monodromy) with "
               f"DOP853 rtol {REF_RTOL:g}, atol {REF_ATOL:g}, Newton tolerance "
               f"{REF_NEWTON_TOL:g} (relative residual), started from a continuation chain "
               f"through 'approach_hz'; monodromy: element-wise median of "

@@ -20,7 +20,7 @@ from workflows.bench.common import DOCS, ROOT, loadavg, log, provenance
 
 CHILD = """
 import json, sys, time
-from pipeline import compute, config
+from rotorsweep.pipeline import compute, config
 text = open('configs/bai2006_fig13.toml').read().replace('attractor = true', 'attractor = false')
 cfg = config.parse_config(text, allow_large=True)
 data = cfg.scene if hasattr(cfg, 'scene') else cfg.data   # revisions before the scene object take the dict

@@ -10,12 +10,12 @@ Writes scaling.json (every measured number), scaling.md (templates/scaling.md fi
 machine, tables, what limits the speed-up, verdict against the target) and scaling.png (wall
 time against chunk size and the task timeline of the two-worker run).
 
-What is measured, every run through the public API `pipeline.run(cfg, output,
+What is measured, every run through the public API `rotorsweep.pipeline.run(cfg, output,
 scheduler=<the cluster>, chunk_points=..., overwrite=True)` on a fresh local cluster of k
-single-threaded worker processes, the one `rotorsweep run` starts (`pipeline.cluster.local_cluster`,
+single-threaded worker processes, the one `rotorsweep run` starts (`rotorsweep.pipeline.cluster.local_cluster`,
 with its relaxed housekeeping settings; `scaling_runs`):
 
-* wall time of the sweep (`pipeline.run`, from the call to the written cube), separately from
+* wall time of the sweep (`rotorsweep.pipeline.run`, from the call to the written cube), separately from
   the cluster start-up and from the workers' warm-up (import + loading Numba's on-disk cache:
   paid once per worker process, in parallel, by every real run too);
 * its phases, timed by wrapping the pipeline's own functions (nothing in pipeline/ changes):
@@ -122,7 +122,7 @@ def task_costs(cfg, n_workers=2):
     import pickle
     import statistics
 
-    from pipeline import sweep
+    from rotorsweep.pipeline import sweep
 
     chunks = sweep.chunks_for(cfg.scene, sweep.segments(cfg.scene), n_workers)
     chunk = sorted(chunks, key=lambda c: sum(len(s) for s in c))[len(chunks) // 2]

@@ -13,13 +13,13 @@ from workflows.bench.common import since, steal_seconds
 
 def _warm(scene, point):
     """Pool initializer: imports and Numba's on-disk cache loaded once per process, untimed."""
-    from pipeline import compute
+    from rotorsweep.pipeline import compute
 
     compute.solve_segment(scene, [point])
 
 
 def _solve(args):
-    from pipeline import sweep
+    from rotorsweep.pipeline import sweep
 
     start = time.process_time()
     sweep.compute_segments(*args)
@@ -38,7 +38,7 @@ def measure(cfg, repeats=3):
     """Median wall and CPU seconds with 1 and with 2 processes (their pools started and warmed
     first, the runs interleaved so that a drift of the machine's speed hits both), each on the
     pipeline's default chunk plan for that many workers."""
-    from pipeline import sweep
+    from rotorsweep.pipeline import sweep
 
     segs = sweep.segments(cfg.scene)
     # spawn: the benchmark process runs Dask's threads, which a forked child would inherit locked

@@ -13,23 +13,23 @@ from workflows.bench.scaling_scene import chunk_plan, first_point, scene_config
 
 # --- instrumentation ----------------------------------------------------------------------------
 
-# (phase, module, function). The first five follow one another in pipeline.sweep.run, except that
+# (phase, module, function). The first five follow one another in rotorsweep.pipeline.sweep.run, except that
 # driver_warmup runs inside compute (after the cluster has started); the last two run inside the
 # compute phase (in the driver, while the workers compute).
-PHASES = (("driver_warmup", "pipeline.warmup", "compile_scene"),
-          ("compute", "pipeline.sweep", "_run_chunks"),
-          ("assemble", "pipeline.cube", "Assembly.dataset"),
-          ("boundaries", "pipeline.boundaries", "add_boundary_table"),
-          ("write", "pipeline.cube", "write_cube"),
-          ("connect", "pipeline.cluster", "connect"),
-          ("part_files", "pipeline.cube", "write_part"))
+PHASES = (("driver_warmup", "rotorsweep.pipeline.warmup", "compile_scene"),
+          ("compute", "rotorsweep.pipeline.sweep", "_run_chunks"),
+          ("assemble", "rotorsweep.pipeline.cube", "Assembly.dataset"),
+          ("boundaries", "rotorsweep.pipeline.boundaries", "add_boundary_table"),
+          ("write", "rotorsweep.pipeline.cube", "write_cube"),
+          ("connect", "rotorsweep.pipeline.cluster", "connect"),
+          ("part_files", "rotorsweep.pipeline.cube", "write_part"))
 TOP_PHASES = ("driver_warmup", "compute", "assemble", "boundaries", "write")
 
 
 @contextlib.contextmanager
 def phase_timers():
     """Time the pipeline's phases by wrapping its functions for the duration (module attributes
-    are looked up at call time, so pipeline.sweep.run sees the wrappers). Yields a dict of
+    are looked up at call time, so rotorsweep.pipeline.sweep.run sees the wrappers). Yields a dict of
     seconds per phase (and the wall-clock epoch at which the compute phase started); a phase
     whose function does not exist (the pipeline changed) is left out."""
     import importlib
@@ -109,7 +109,7 @@ def task_summary(records, n_workers, phase_start_epoch, phase_seconds):
 def start_cluster(n_workers):
     from distributed import Client
 
-    from pipeline import cluster as runtime
+    from rotorsweep.pipeline import cluster as runtime
 
     cluster = runtime.local_cluster(n_workers)      # the cluster every command starts
     client = Client(cluster)
@@ -122,7 +122,7 @@ def worker_calls():
     value (the workers need not import this module); peak_rss_kib is imported there from
     workflows.bench.common (worker processes start with the driver's sys.path)."""
     def warm(scene, point):
-        from pipeline import compute, sweep  # noqa: F401  (what a real run's worker preload imports)
+        from rotorsweep.pipeline import compute, sweep  # noqa: F401  (what a real run's worker preload imports)
         compute.solve_segment(scene, [point])
         return True
 
@@ -136,7 +136,7 @@ def worker_calls():
 
 def measure_run(cfg, n_workers, chunk_points, work_dir, label, repeat=0):
     """One timed sweep on a fresh cluster of n_workers processes; returns the run's record."""
-    import pipeline
+    import rotorsweep.pipeline as pipeline
     from distributed import get_task_stream
 
     warm, max_rss, cpu_seconds = worker_calls()
@@ -194,8 +194,8 @@ def measure_run(cfg, n_workers, chunk_points, work_dir, label, repeat=0):
 def warm_up(work_dir):
     """Compile (or load from Numba's on-disk cache) every kernel a sweep uses and import the
     driver's modules with a tiny one-worker sweep, before any timed run."""
-    import pipeline
-    from pipeline import compute
+    import rotorsweep.pipeline as pipeline
+    from rotorsweep.pipeline import compute
 
     cfg = scene_config(speed=(100.0, 101.0, 0.5), clearances=(7.6e-6,), name="bench_warmup")
     t0 = time.perf_counter()

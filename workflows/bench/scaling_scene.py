@@ -14,8 +14,8 @@ QUICK_CLEARANCES = (7.6e-6, 19.0e-6)         # m: the most and the least regular
 def scene_config(speed=None, clearances=None, name=None, segment_length=None):
     """The Fig. 13 scene, optionally with another speed axis (start, stop, step) [Hz], other
     clearances [m], name or segment length, attractor diagnostics off: built by editing the TOML text of
-    configs/bai2006_fig13.toml and validated by pipeline.config.parse_config."""
-    from pipeline import config
+    configs/bai2006_fig13.toml and validated by rotorsweep.pipeline.config.parse_config."""
+    from rotorsweep.pipeline import config
 
     # orbits + Floquet only: the scaling of the paper's map, not of the attractor diagnostics
     text = re.sub(r"(?m)^attractor\s*=.*$", "attractor = false", FIG13.read_text())
@@ -46,7 +46,7 @@ def full_config():
 
 
 def scene_info(cfg):
-    from pipeline import sweep
+    from rotorsweep.pipeline import sweep
 
     segs = sweep.segments(cfg.scene)
     return dict(name=cfg.data["scene"]["name"], n_points=cfg.n_points,
@@ -58,9 +58,9 @@ def scene_info(cfg):
 
 
 def chunk_plan(cfg, n_workers, chunk_points):
-    """(number of chunks, median points per chunk) that pipeline.sweep.chunks_for makes of the
+    """(number of chunks, median points per chunk) that rotorsweep.pipeline.sweep.chunks_for makes of the
     scene's segments for n_workers (chunk_points None: the pipeline's default)."""
-    from pipeline import sweep
+    from rotorsweep.pipeline import sweep
 
     chunks = sweep.chunks_for(cfg.scene, sweep.segments(cfg.scene), n_workers, chunk_points)
     sizes = [sum(len(seg) for seg in chunk) for chunk in chunks]
@@ -80,6 +80,6 @@ def chunk_sizes_for(cfg, n_workers=2):
 
 
 def first_point(cfg):
-    from pipeline import sweep
+    from rotorsweep.pipeline import sweep
 
     return dict(sweep.segments(cfg.scene)[0].points[0])

@@ -1,4 +1,4 @@
-"""Benchmark of the torus solver (rotorkernels.torus) against brute force -> docs/benchmarks/tori.md.
+"""Benchmark of the torus solver (rotorsweep.kernels.torus) against brute force -> docs/benchmarks/tori.md.
 
 `python -m workflows.bench.tori`. Model: the validation model duffing2 (x'' + c x' + 2 x + 0.5 x^3
 = cos 2 pi tau + 0.5 cos(w2 tau + theta), w2 = 2 pi (sqrt 5 - 1) / 2, the golden mean), at two
@@ -22,9 +22,9 @@ import time
 
 import numpy as np
 
-from rotorkernels import integrators as ig, torus as tr
-from rotorkernels.continuation import engine, tori
-from rotorkernels.models import duffing2, get
+from rotorsweep.kernels import integrators as ig, torus as tr
+from rotorsweep.kernels.continuation import engine, tori
+from rotorsweep.kernels.models import duffing2, get
 from workflows.bench import torus_threads
 from workflows.bench.common import machine_info
 

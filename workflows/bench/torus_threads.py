@@ -15,8 +15,8 @@ from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 
 import numpy as np
 
-from pipeline import compute, config
-from rotorkernels import torus as tr
+from rotorsweep.pipeline import compute, config
+from rotorsweep.kernels import torus as tr
 
 SCENE = "configs/filipkovsky2016_map_tori.toml"
 POINT = {"speed": 250.0, "support_frequency": 323.6067977, "nominal_angle": 15.0}

@@ -11,12 +11,12 @@ import itertools
 
 import numpy as np
 
-from pipeline import schema
-from pipeline.report import style
-from pipeline.report.cubeinfo import continued_axis, other_axes
-from pipeline.report.plan import MAX_PANELS, axis_display, axis_label, fmt, where_label
-from pipeline.report.registry import Figure, register
-from pipeline.report.stability import stability_class
+from rotorsweep.pipeline import schema
+from rotorsweep.pipeline.report import style
+from rotorsweep.pipeline.report.cubeinfo import continued_axis, other_axes
+from rotorsweep.pipeline.report.plan import MAX_PANELS, axis_display, axis_label, fmt, where_label
+from rotorsweep.pipeline.report.registry import Figure, register
+from rotorsweep.pipeline.report.stability import stability_class
 
 
 # a continuous light ramp (pale to mid blue) so the black value in every cell stays readable

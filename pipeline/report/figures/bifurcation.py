@@ -5,15 +5,15 @@ Not hvplot: the Poincare samples are thinned per grid value (report/poincare.py)
 drawable in matplotlib PNGs; hvplot would draw all of them or rasterize (bokeh only)."""
 import numpy as np
 
-from pipeline import schema
-from pipeline.report import style
-from pipeline.report.branches import hover
-from pipeline.report.cubeinfo import continued_axis, has_attractor, has_down, select, sweep_labels
-from pipeline.report.figures.panels import line_figure, panel_opts
-from pipeline.report.plan import axis_label, line_plan
-from pipeline.report.poincare import THIN_LEVELS, bif_range, sweep_dots
-from pipeline.report.registry import Figure, register
-from pipeline.report.stability import class_colour, class_name, line_segments
+from rotorsweep.pipeline import schema
+from rotorsweep.pipeline.report import style
+from rotorsweep.pipeline.report.branches import hover
+from rotorsweep.pipeline.report.cubeinfo import continued_axis, has_attractor, has_down, select, sweep_labels
+from rotorsweep.pipeline.report.figures.panels import line_figure, panel_opts
+from rotorsweep.pipeline.report.plan import axis_label, line_plan
+from rotorsweep.pipeline.report.poincare import THIN_LEVELS, bif_range, sweep_dots
+from rotorsweep.pipeline.report.registry import Figure, register
+from rotorsweep.pipeline.report.stability import class_colour, class_name, line_segments
 
 HYSTERESIS_COLOUR = "#009E73"
 BIF_LABEL = "Poincaré x [µm]"

@@ -1,15 +1,15 @@
-"""Bode and polar plots: the first harmonic (pipeline.report.harmonics) of one observable of the
+"""Bode and polar plots: the first harmonic (rotorsweep.pipeline.report.harmonics) of one observable of the
 periodic orbits against the swept or continued parameter -- amplitude |X| and phase arg X
 (o ~ |X| cos(2 pi t / T + arg X), unwrapped along each line), and X in the complex plane --
 stable solid, unstable dashed, one colour per line (a value of the first other swept axis, or a
 continuation branch). The sweep report registers it; the continuation report calls fig_bode."""
 import numpy as np
 
-from pipeline import query
-from pipeline.report import harmonics, style
-from pipeline.report.branches import branch_elements
-from pipeline.report.points import scene_of
-from pipeline.report.registry import Figure, register
+from rotorsweep.pipeline import query
+from rotorsweep.pipeline.report import harmonics, style
+from rotorsweep.pipeline.report.branches import branch_elements
+from rotorsweep.pipeline.report.points import scene_of
+from rotorsweep.pipeline.report.registry import Figure, register
 
 
 def display_unit(unit):
@@ -65,7 +65,7 @@ def report_observable(scene):
 
 
 def _sweep_figure(ds, backend):
-    from pipeline.report.plan import axis_label
+    from rotorsweep.pipeline.report.plan import axis_label
 
     scene = scene_of(ds)
     spec = scene.model

@@ -4,20 +4,20 @@ marked LP / PD / NS); where the cube has attractors and the observable is the or
 coordinate, the brute-force attractor diagram (the Poincare samples) lies behind it.
 
 Not hvplot: a line dashed where unstable, joined to its solid part, with labelled special points
-(report/branches.py); hvplot draws one style per line (pipeline.explore.branches: gaps at the
+(report/branches.py); hvplot draws one style per line (rotorsweep.pipeline.explore.branches: gaps at the
 changes)."""
 import numpy as np
 
-from pipeline import schema
-from pipeline.report.branches import SPECIAL_LABELS, branch_elements
-from pipeline.report.cubeinfo import (branch_observables, branch_values, continued_axis,
+from rotorsweep.pipeline import schema
+from rotorsweep.pipeline.report.branches import SPECIAL_LABELS, branch_elements
+from rotorsweep.pipeline.report.cubeinfo import (branch_observables, branch_values, continued_axis,
                                       default_observable, has_attractor, has_down, select,
                                       stable_response, sweep_labels)
-from pipeline.report.figures.panels import line_figure, panel_opts
-from pipeline.report.plan import axis_label, unit_display
-from pipeline.report.poincare import THIN_LEVELS, bif_range, sweep_dots
-from pipeline.report.registry import Figure, register
-from pipeline.report.stability import refined_boundaries
+from rotorsweep.pipeline.report.figures.panels import line_figure, panel_opts
+from rotorsweep.pipeline.report.plan import axis_label, unit_display
+from rotorsweep.pipeline.report.poincare import THIN_LEVELS, bif_range, sweep_dots
+from rotorsweep.pipeline.report.registry import Figure, register
+from rotorsweep.pipeline.report.stability import refined_boundaries
 
 def _attractor_dots(hv, ds, line, observable, factor, backend, tooltips):
     """The Poincare samples of each sweep behind the branch of section_o."""

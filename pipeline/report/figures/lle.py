@@ -3,13 +3,13 @@
 Not hvplot: markers by estimation method over a standard-error band (hv.Spread) in one panel."""
 import numpy as np
 
-from pipeline import schema
-from pipeline.report import style
-from pipeline.report.branches import hover
-from pipeline.report.cubeinfo import continued_axis, has_attractor, has_down, select, sweep_labels
-from pipeline.report.figures.panels import line_figure, panel_opts
-from pipeline.report.plan import axis_display, axis_label
-from pipeline.report.registry import Figure, register
+from rotorsweep.pipeline import schema
+from rotorsweep.pipeline.report import style
+from rotorsweep.pipeline.report.branches import hover
+from rotorsweep.pipeline.report.cubeinfo import continued_axis, has_attractor, has_down, select, sweep_labels
+from rotorsweep.pipeline.report.figures.panels import line_figure, panel_opts
+from rotorsweep.pipeline.report.plan import axis_display, axis_label
+from rotorsweep.pipeline.report.registry import Figure, register
 
 LLE_LABEL = "largest Lyapunov exp. [1/s]"
 LLE_COLOURS = {"integrated": "#0072B2", "derived": "#999999", "chaotic": "#CC0000", "band": "#56B4E9"}

@@ -4,13 +4,13 @@ other swept axis, the stability limit |lambda| = 1 dashed.
 Not hvplot: drawn in the branch style (report/branches.py), which hvplot has no kind for."""
 import numpy as np
 
-from pipeline.report import style
-from pipeline.report.branches import SPECIAL_LABELS, branch_elements
-from pipeline.report.cubeinfo import continued_axis, select
-from pipeline.report.figures.panels import Sizes, facet_figure, panel_opts
-from pipeline.report.plan import axes_plan, axis_display, axis_label, where_label
-from pipeline.report.registry import Figure, register
-from pipeline.report.stability import refined_boundaries
+from rotorsweep.pipeline.report import style
+from rotorsweep.pipeline.report.branches import SPECIAL_LABELS, branch_elements
+from rotorsweep.pipeline.report.cubeinfo import continued_axis, select
+from rotorsweep.pipeline.report.figures.panels import Sizes, facet_figure, panel_opts
+from rotorsweep.pipeline.report.plan import axes_plan, axis_display, axis_label, where_label
+from rotorsweep.pipeline.report.registry import Figure, register
+from rotorsweep.pipeline.report.stability import refined_boundaries
 
 
 

@@ -1,7 +1,7 @@
-"""Campbell diagram of the linear modes (pipeline.modes.campbell): damped natural frequency
+"""Campbell diagram of the linear modes (rotorsweep.pipeline.modes.campbell): damped natural frequency
 against shaft speed, forward whirl solid, backward dashed, axial and non-whirling modes dotted,
 the damping ratio as the colour of the points; the 1x line and, where the scene has one, the
-support-frequency line; the critical speeds (pipeline.modes.critical_speeds: crossings of a mode
+support-frequency line; the critical speeds (rotorsweep.pipeline.modes.critical_speeds: crossings of a mode
 with those lines, located by a root solve) marked and labelled (in the HTML also listed in a table below); the scene's shaft
 speeds marked. For the models with a linearization and a shaft speed (their spec's
 `has_linearization`, `speed`); the sweep and the continuation reports both draw it from the
@@ -10,10 +10,10 @@ import json
 
 import numpy as np
 
-from pipeline import modes
-from pipeline.report import style
-from pipeline.report.registry import Figure, register
-from rotorkernels import models
+from rotorsweep.pipeline import modes
+from rotorsweep.pipeline.report import style
+from rotorsweep.pipeline.report.registry import Figure, register
+from rotorsweep.kernels import models
 
 CAMPBELL_SPEEDS = 41            # speeds of the drawn table, 0 to the top speed
 WHIRL_DASH = {"forward": False, "backward": True}       # others (axial, no whirl): dotted
@@ -113,7 +113,7 @@ def critical_table(hv, found):
 
 
 def fig_mode_campbell(scene, backend="bokeh", speeds=None, marks=()):
-    """The Campbell diagram of a scene (pipeline.scene.Scene) over `speeds` [Hz]
+    """The Campbell diagram of a scene (rotorsweep.pipeline.scene.Scene) over `speeds` [Hz]
     (default campbell_speeds), its excitation lines and critical speeds (table below when
     there are any), and vertical lines at `marks`."""
     hv = style.holoviews()
@@ -146,7 +146,7 @@ def fig_mode_campbell(scene, backend="bokeh", speeds=None, marks=()):
 def result_figure(ds, backend):
     """The Campbell diagram of a cube's or a continuation result's scene: to 1.25 x the top
     speed of the grid (or of the continued range), the grid's or the lines' speeds marked."""
-    from pipeline.report.points import scene_of
+    from rotorsweep.pipeline.report.points import scene_of
 
     scene = scene_of(ds)
     speed = scene.model.speed

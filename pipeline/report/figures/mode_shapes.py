@@ -1,15 +1,15 @@
 """Mode shapes of a rotor at the scene's first grid point: per mode, the orbit of each station
-(a bearing or journal centre, and the disc of a rigid rotor: pipeline.modes.station_shapes) over
+(a bearing or journal centre, and the disc of a rigid rotor: rotorsweep.pipeline.modes.station_shapes) over
 one period of the mode,
 x = Re(X e^{i theta}), y = Re(Y e^{i theta}), normalized so that the largest coordinate
 amplitude is 1, a dot where theta = 0 (the whirl direction runs from it). For the models with a
 linearization whose coordinates name stations ("x1", "y1", ...); drawn beside the Campbell diagram."""
 import numpy as np
 
-from pipeline import modes
-from pipeline.report import style
-from pipeline.report.registry import Figure, register
-from pipeline.report.figures.mode_campbell import has_linear_analysis
+from rotorsweep.pipeline import modes
+from rotorsweep.pipeline.report import style
+from rotorsweep.pipeline.report.registry import Figure, register
+from rotorsweep.pipeline.report.figures.mode_campbell import has_linear_analysis
 
 THETA = np.linspace(0.0, 2.0 * np.pi, 73)
 
@@ -60,14 +60,14 @@ def has_stations(ds):
     """has_linear_analysis and the model's coordinates name at least one station."""
     if not has_linear_analysis(ds):
         return False
-    from pipeline.report.points import scene_of
+    from rotorsweep.pipeline.report.points import scene_of
 
     found, coordinates, _ = scene_modes(scene_of(ds))
     return bool(found) and bool(modes.station_shapes(found[0], coordinates))
 
 
 def result_figure(ds, backend):
-    from pipeline.report.points import scene_of
+    from rotorsweep.pipeline.report.points import scene_of
 
     return fig_mode_shapes(scene_of(ds), backend)
 

@@ -7,13 +7,13 @@ against speed, figures/mode_campbell.py, for the models with a linearization).""
 import numpy as np
 import xarray as xr
 
-from pipeline import schema
-from pipeline.report import style
-from pipeline.report.branches import hover
-from pipeline.report.cubeinfo import continued_axis, select
-from pipeline.report.figures.panels import Sizes, facet_figure, panel_opts
-from pipeline.report.plan import axes_plan, axis_label, where_label
-from pipeline.report.registry import Figure, register
+from rotorsweep.pipeline import schema
+from rotorsweep.pipeline.report import style
+from rotorsweep.pipeline.report.branches import hover
+from rotorsweep.pipeline.report.cubeinfo import continued_axis, select
+from rotorsweep.pipeline.report.figures.panels import Sizes, facet_figure, panel_opts
+from rotorsweep.pipeline.report.plan import axes_plan, axis_label, where_label
+from rotorsweep.pipeline.report.registry import Figure, register
 
 FREQUENCY_LABEL = "frequency [Hz]"
 

@@ -5,12 +5,12 @@ Not hvplot: a few grid points picked around each boundary, in square frames besi
 circle; hv.Points takes the picked arrays directly."""
 import numpy as np
 
-from pipeline import query
-from pipeline.report import style
-from pipeline.report.branches import hover
-from pipeline.report.cubeinfo import continued_axis, other_axes, select
-from pipeline.report.plan import TYPE_NAMES, axis_display, axis_label, where_label
-from pipeline.report.registry import Figure, register
+from rotorsweep.pipeline import query
+from rotorsweep.pipeline.report import style
+from rotorsweep.pipeline.report.branches import hover
+from rotorsweep.pipeline.report.cubeinfo import continued_axis, other_axes, select
+from rotorsweep.pipeline.report.plan import TYPE_NAMES, axis_display, axis_label, where_label
+from rotorsweep.pipeline.report.registry import Figure, register
 
 MAX_BOUNDARIES = 6     # stability boundaries in the multiplier figure
 BOUNDARY_POINTS = 5    # grid points drawn on each side of a boundary

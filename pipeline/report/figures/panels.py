@@ -2,9 +2,9 @@
 placement, shared by the figures; each figure supplies the function that draws one panel."""
 from typing import NamedTuple
 
-from pipeline.report import style
-from pipeline.report.cubeinfo import axis_edges, continued_axis
-from pipeline.report.plan import axes_plan, axis_label, figure_title, line_plan, where_label
+from rotorsweep.pipeline.report import style
+from rotorsweep.pipeline.report.cubeinfo import axis_edges, continued_axis
+from rotorsweep.pipeline.report.plan import axes_plan, axis_label, figure_title, line_plan, where_label
 
 
 class Slot(NamedTuple):

@@ -2,8 +2,8 @@
 Drawn per requested point, not per cube, so it is not in the figure registry."""
 import numpy as np
 
-from pipeline.report import style
-from pipeline.report.points import POINT_STEPS, point_rows, point_title
+from rotorsweep.pipeline.report import style
+from rotorsweep.pipeline.report.points import POINT_STEPS, point_rows, point_title
 
 SPECTRUM_HARMONICS = 3.3   # spectrum drawn up to this multiple of the ball-passage frequency
 

@@ -3,14 +3,14 @@ continued axis, one line per value of the first other swept axis (stable solid, 
 one panel per observable and facet combination.
 
 Not hvplot: drawn in the branch style (report/branches.py), which hvplot has no kind for."""
-from pipeline import schema
-from pipeline.report import style
-from pipeline.report.branches import branch_elements
-from pipeline.report.cubeinfo import branch_values, continued_axis, select, stable_response
-from pipeline.report.figures.panels import Slot, panel_opts
-from pipeline.report.plan import (MAX_PANELS, axes_plan, axis_display, axis_label, figure_title,
+from rotorsweep.pipeline import schema
+from rotorsweep.pipeline.report import style
+from rotorsweep.pipeline.report.branches import branch_elements
+from rotorsweep.pipeline.report.cubeinfo import branch_values, continued_axis, select, stable_response
+from rotorsweep.pipeline.report.figures.panels import Slot, panel_opts
+from rotorsweep.pipeline.report.plan import (MAX_PANELS, axes_plan, axis_display, axis_label, figure_title,
                                   unit_display, where_label)
-from pipeline.report.registry import Figure, register
+from rotorsweep.pipeline.report.registry import Figure, register
 
 
 def _response_panel(hv, ds, where, backend, slot, observable, y):

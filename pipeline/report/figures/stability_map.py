@@ -2,14 +2,14 @@
 one band per value of the first other swept axis, one panel per facet combination.
 
 Not hvplot: its rectangles have the refined boundaries as edges; hvplot's grid kinds (quadmesh,
-heatmap) put edges midway between grid values (pipeline.explore.stability_map draws that)."""
+heatmap) put edges midway between grid values (rotorsweep.pipeline.explore.stability_map draws that)."""
 import numpy as np
 
-from pipeline.report import style
-from pipeline.report.figures.panels import Sizes, facet_figure, panel_opts
-from pipeline.report.plan import axes_plan, axis_display, axis_label, fmt, where_label
-from pipeline.report.registry import Figure, register
-from pipeline.report.stability import (BISTABLE, bistable_bands, class_colour, class_keys, class_name,
+from rotorsweep.pipeline.report import style
+from rotorsweep.pipeline.report.figures.panels import Sizes, facet_figure, panel_opts
+from rotorsweep.pipeline.report.plan import axes_plan, axis_display, axis_label, fmt, where_label
+from rotorsweep.pipeline.report.registry import Figure, register
+from rotorsweep.pipeline.report.stability import (BISTABLE, bistable_bands, class_colour, class_keys, class_name,
                                        line_segments, refined_edges)
 
 RECT_HALF = 0.45        # half height of a band in the stability map (gaps between lines)

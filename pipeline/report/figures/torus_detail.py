@@ -14,8 +14,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from pipeline.report import style
-from rotorkernels import shooting, torus as tr
+from rotorsweep.pipeline.report import style
+from rotorsweep.kernels import shooting, torus as tr
 
 CIRCLE_PHASES = 256
 TURNS = 40              # shaft turns of the trajectory drawn
@@ -58,7 +58,7 @@ def chosen_point(ds, value=None):
 
 def torus_detail(ds, scene):
     """The Detail of the chosen torus (module docstring), from the result and its scene."""
-    from pipeline import continuation, torus_branches
+    from rotorsweep.pipeline import continuation, torus_branches
 
     b, k = chosen_point(ds, scene.report.torus_detail)
     nodes = ds["torus_nodes"].values[b, k]
@@ -114,7 +114,7 @@ def _history(hv, d, backend):
 
 
 def _spectrum(hv, d, backend):
-    from pipeline import torus_branches
+    from rotorsweep.pipeline import torus_branches
 
     dims = [hv.Dimension("m", label="Fourier mode m in the forcing phase"),
             hv.Dimension("c", label="max |c_m| over the state (relative)")]
@@ -133,7 +133,7 @@ def _spectrum(hv, d, backend):
 
 
 def result_figure(ds, backend):
-    from pipeline.report.points import scene_of
+    from rotorsweep.pipeline.report.points import scene_of
 
     hv = style.holoviews()
     d = torus_detail(ds, scene_of(ds))

@@ -1,6 +1,6 @@
 """The forced Duffing oscillator x'' + 2 zeta x' + x + gamma x^3 = F cos(omega t) the way a scipy
 user writes it: the peer of our continuation (`ScipyContinuation`) and a tight fold reference
-(`fold_reference`). Numpy right-hand sides and `solve_ivp`; no code shared with rotorkernels."""
+(`fold_reference`). Numpy right-hand sides and `solve_ivp`; no code shared with rotorsweep.kernels."""
 from typing import NamedTuple
 
 import numpy as np
@@ -61,7 +61,7 @@ class ScipyContinuation:
     dphi/domega by a central difference of two plain integrations, tangent predictor, the step
     grows by `grow` after <= fast_newton iterations and halves after a failed or slow corrector
     or a tangent turn above max_angle; folds where det(M - I) changes sign, located by Brent on
-    the arclength. The same algorithm and settings as rotorkernels.continuation.arclength."""
+    the arclength. The same algorithm and settings as rotorsweep.kernels.continuation.arclength."""
 
     def __init__(self, duffing, scale, rtol, atol, settings):
         self.duffing, self.scale, self.rtol, self.atol, self.s = duffing, scale, rtol, atol, settings

@@ -1,4 +1,4 @@
-/* The scaled right-hand side of rotorkernels.models.jeffcott_rhs in plain C: 9-ball Hertz sum,
+/* The scaled right-hand side of rotorsweep.kernels.models.jeffcott_rhs in plain C: 9-ball Hertz sum,
    the other balls' angles by rotation (two trig calls per evaluation), as in contact.ring_load.
    Compiled and run by workflows/bench/peers/jeffcott_c.py. */
 #define _POSIX_C_SOURCE 199309L

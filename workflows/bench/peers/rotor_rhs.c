@@ -1,4 +1,4 @@
-/* The scaled right-hand sides of rotorkernels.models.rigid_preloaded (ball sums, law
+/* The scaled right-hand sides of rotorsweep.kernels.models.rigid_preloaded (ball sums, law
    "ball_sum") and of the series rotors symmetric4 / asymmetric5 (cubic series law) in plain C,
    with their variational derivatives [f, J Phi] (J = [[0, I], [A, B]]: the upper rows of J Phi
    are the lower rows of Phi, as the kernels' tangent product). Parameter vectors: the kernels'

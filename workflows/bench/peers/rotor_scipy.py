@@ -6,7 +6,7 @@
   augmented 110-dim system [u, Phi] integrated by `solve_ivp`, plain Newton on the return map.
 - `SeriesRotorPeer`: symmetric4 / asymmetric5 from their polynomial form (`PolynomialSystem`:
   M, G, K, Q2, Q3 in SI, contracted with einsum), the autonomous orbit at a given amplitude by
-  the same Gauss-Newton as `rotorkernels.orbits.AutonomousOrbitProblem`, with `solve_ivp`.
+  the same Gauss-Newton as `rotorsweep.kernels.orbits.AutonomousOrbitProblem`, with `solve_ivp`.
 
 Neither shares code with the kernels (the ball sum in contact.py, the series in cubic_law.py);
 tests/test_bench_smoke.py checks that they compute the kernels' equations. Why these equations are
