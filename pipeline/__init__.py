@@ -106,7 +106,8 @@ _around_import("numba.np.arraymath", _quick_blas_check)
 
 
 def as_config(cfg, allow_large=False, whole_grid=True):
-    """A validated Config from a path, a Config (as it is) or None (the embedded demo scene).
+    """A validated Config from a path (or the name of a shipped scene: rotorsweep.pipeline.scenes), a Config
+    (as it is) or None (the embedded demo scene).
     whole_grid: the caller computes the whole sweep grid (`run`), whose size is then checked."""
     from rotorsweep.pipeline import config as config_mod
 
@@ -115,7 +116,9 @@ def as_config(cfg, allow_large=False, whole_grid=True):
     if cfg is None:
         return config_mod.parse_config(config_mod.DEFAULT_CONFIG_TOML, path="<default scene>",
                                        allow_large=allow_large, whole_grid=whole_grid)
-    return config_mod.load_config(cfg, allow_large=allow_large, whole_grid=whole_grid)
+    from rotorsweep.pipeline import scenes
+
+    return config_mod.load_config(scenes.resolve(cfg), allow_large=allow_large, whole_grid=whole_grid)
 
 
 def _is_path(cube_or_path):

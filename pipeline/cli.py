@@ -1,4 +1,4 @@
-"""`rotorsweep` command line: run, continue, backbone, point, query, report, modes, warmup, info.
+"""`rotorsweep` command line: run, continue, backbone, point, query, report, modes, warmup, info, scenes.
 
 User mistakes (bad config, bad cube, bad query) print one clear message and exit with code 2;
 no traceback."""
@@ -369,7 +369,8 @@ def build_parser():
     sub = ap.add_subparsers(dest="command", required=True)
 
     r = sub.add_parser("run", help="run a sweep from a config into a netCDF cube")
-    r.add_argument("config", nargs="?", help="scene TOML (default: the embedded demo scene)")
+    r.add_argument("config", nargs="?", help="scene TOML, or the name of a shipped scene (`rotorsweep scenes`; "
+                                             "default: the embedded demo scene)")
     r.add_argument("-o", "--output", help="cube path (default out/<scene name>.nc)")
     _cluster_options(r)
     r.add_argument("--chunk-points", type=_positive_int, help="points per Dask task (default: automatic)")
@@ -464,7 +465,28 @@ def build_parser():
     i = sub.add_parser("info", help="what a cube holds")
     i.add_argument("cube", help="result cube (.nc) written by rotorsweep run")
     i.set_defaults(func=cmd_info)
+
+    s = sub.add_parser("scenes", help="list the shipped scenes (the papers' configs), or --copy one to edit")
+    s.add_argument("--copy", metavar="NAME", help="copy the shipped scene NAME to DEST (default ./NAME.toml)")
+    s.add_argument("dest", nargs="?", metavar="DEST", help="with --copy: the file or directory to copy to")
+    s.add_argument("--overwrite", action="store_true", help="with --copy: replace an existing file")
+    s.set_defaults(func=cmd_scenes)
     return ap
+
+
+def cmd_scenes(args):
+    from rotorsweep.pipeline import scenes
+
+    if args.copy is None:
+        if args.dest is not None:
+            raise config_mod.ConfigError(f"{args.dest}: DEST goes with --copy NAME")
+        rows = scenes.listing()
+        width = max(len(name) for name, _ in rows)
+        for name, text in rows:
+            print(f"{name:<{width}}  {text}")
+        return 0
+    print(f"{args.copy} -> {scenes.copy(args.copy, args.dest, overwrite=args.overwrite)}")
+    return 0
 
 
 def user_errors():
