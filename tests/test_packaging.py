@@ -4,6 +4,7 @@ shipped scenes (`rotorsweep scenes`, `rotorsweep run NAME`, `scenes --copy`); an
 built, inspected and installed into a fresh virtual environment that runs from an empty
 directory."""
 import os
+import shutil
 import subprocess
 import sys
 import zipfile
@@ -151,3 +152,23 @@ def test_installed_wheel_runs_a_shipped_scene_from_an_empty_directory(installed,
     assert info.returncode == 0 and "duffing_resonance" in info.stdout, info.stdout + info.stderr
     copied = _in_empty_dir(tmp_path, installed / "rotorsweep", "scenes", "--copy", "duffing_resonance", env=env)
     assert copied.returncode == 0 and (tmp_path / "empty" / "duffing_resonance.toml").exists(), copied.stderr
+
+
+# --- the revision benchmarks run other trees' code ------------------------------------------------
+def test_bench_runs_a_trees_own_code_under_its_names(tmp_path):
+    """workflows/bench/trees.py: a tree of the package-dir layout runs its own folders (not this
+    checkout's install) under rotorsweep.*; an older tree keeps its folder names as import names."""
+    from workflows.bench import trees
+    new, old = tmp_path / "new", tmp_path / "old"
+    for name in ("rotorsweep", "pipeline", "rotorkernels", "configs"):
+        shutil.copytree(ROOT / name, new / name, ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copy(ROOT / "pyproject.toml", new)
+    (old / "pipeline").mkdir(parents=True)
+    (old / "pyproject.toml").write_text('[project]\nname = "rotorsweep"\n')
+    assert (trees.pipeline_module(old), trees.env(old)["PYTHONPATH"]) == ("pipeline", str(old))
+    assert trees.cli_module(new) == "rotorsweep.pipeline.cli"
+    code = "import rotorsweep.pipeline.cli as c, rotorsweep.kernels.models as m; print(c.__file__, m.__file__)"
+    done = subprocess.run([sys.executable, "-c", code], cwd=new, env=trees.env(new), capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert [Path(f) for f in done.stdout.split()] == [new / "pipeline" / "cli.py",
+                                                      new / "rotorkernels" / "models" / "__init__.py"]

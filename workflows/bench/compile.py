@@ -23,7 +23,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from workflows.bench import render
+from workflows.bench import render, trees
 from workflows.bench.common import DOCS, ROOT, loadavg, log, provenance
 
 # The first point of each model's scene (linear_oscillator and damped_mathieu have none: tests
@@ -73,14 +73,14 @@ LISTED_S = 0.3
 def run_point(tree, cache, args):
     """(wall s, CPU s of the child, {function: exclusive compile CPU s}) of one `rotorsweep` command
     in a fresh process (through compile_probe)."""
-    env = {**os.environ, "PYTHONPATH": str(tree), "ROTORSWEEP_CACHE": str(cache), "NUMBA_NUM_THREADS": "1"}
+    env = {**trees.env(tree), "ROTORSWEEP_CACHE": str(cache), "NUMBA_NUM_THREADS": "1"}
     for name in ("NUMBA_CACHE_DIR", "ROTORSWEEP_NUMBA_CACHE_DIR", "ROTORSWEEP_MODELS"):
         env.pop(name, None)
     args = [a.replace("{out}", str(Path(cache) / "result.nc")) for a in args]
     probe = Path(cache) / "compile_times.json"
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
-    subprocess.run([sys.executable, str(PROBE), str(probe), *args], cwd=tree, env=env, check=True,
+    subprocess.run([sys.executable, str(PROBE), str(probe), trees.cli_module(tree), *args], cwd=tree, env=env, check=True,
                    capture_output=True, text=True)
     wall = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)

@@ -1,14 +1,16 @@
-"""`python workflows/bench/compile_probe.py OUT.json ARGS...`: run `rotorsweep ARGS...` and write
+"""`python workflows/bench/compile_probe.py OUT.json CLI_MODULE ARGS...`: run `rotorsweep ARGS...`
+(the command line module CLI_MODULE of the tree, workflows/bench/trees.py) and write
 the CPU seconds of every Numba compilation in this process, each without the compilations it
 started (exclusive), summed by function: where a cold first result's compile time goes.
 
-Run as a script, not a module, so that it measures the `rotorsweep.pipeline` on PYTHONPATH (another
+Run as a script, not a module, so that it measures the code of the tree it runs in (another
 revision's tree) and needs nothing from it but the CLI. Compilations in Dask workers are not
 seen (the driver compiles a scene's kernels before they start)."""
 import sys
 
 del sys.path[0]     # this script's directory: its modules (compile.py, common.py, ...) shadow no import
 
+import importlib  # noqa: E402
 import json  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -34,10 +36,10 @@ class ExclusiveTimes(event.Listener):
 
 
 def main(argv):
-    out, *args = argv
+    out, cli_module, *args = argv
     times = ExclusiveTimes()
     event.register("numba:compile", times)
-    from rotorsweep.pipeline import cli
+    cli = importlib.import_module(cli_module)
 
     try:
         return cli.main(args)

@@ -22,6 +22,7 @@ import sys
 import time
 from pathlib import Path
 
+from workflows.bench import trees
 from workflows.bench.common import DOCS, ROOT, loadavg, log, provenance
 
 BUILD = ROOT / "build" / "latency"
@@ -80,11 +81,11 @@ def argv_of(args, tree_name):
 
 def run_command(tree, args, tree_name):
     """(wall s, CPU s) of one command run in `tree` (its code first on PYTHONPATH)."""
-    env = {**os.environ, "PYTHONPATH": str(tree)}
+    env = trees.env(tree)
     env.pop("NUMBA_CACHE_DIR", None)            # each tree keys its own cache on its kernel sources
     env.pop("ROTORSWEEP_NUMBA_CACHE_DIR", None)
     argv = argv_of(args, tree_name)
-    cmd = [sys.executable, *argv] if argv[0] == "-c" else [sys.executable, "-m", "rotorsweep.pipeline.cli", *argv]
+    cmd = [sys.executable, *argv] if argv[0] == "-c" else [sys.executable, "-m", trees.cli_module(tree), *argv]
     (BUILD / tree_name).mkdir(parents=True, exist_ok=True)
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()

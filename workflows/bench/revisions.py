@@ -15,12 +15,12 @@ import subprocess
 import sys
 from pathlib import Path
 
-from workflows.bench import render
+from workflows.bench import render, trees
 from workflows.bench.common import DOCS, ROOT, loadavg, log, provenance
 
 CHILD = """
 import json, sys, time
-from rotorsweep.pipeline import compute, config
+from {pipeline} import compute, config
 text = open('configs/bai2006_fig13.toml').read().replace('attractor = true', 'attractor = false')
 cfg = config.parse_config(text, allow_large=True)
 data = cfg.scene if hasattr(cfg, 'scene') else cfg.data   # revisions before the scene object take the dict
@@ -45,10 +45,10 @@ def checkout(rev):
 
 
 def time_once(tree, repeats):
-    env = {**os.environ, "PYTHONPATH": str(tree)}
+    env = trees.env(tree)
     env.pop("NUMBA_CACHE_DIR", None)          # each tree keys its own cache on its sources
     env.pop("ROTORSWEEP_NUMBA_CACHE_DIR", None)
-    out = subprocess.run([sys.executable, "-c", CHILD, str(repeats)], cwd=tree, env=env, check=True,
+    out = subprocess.run([sys.executable, "-c", CHILD.replace("{pipeline}", trees.pipeline_module(tree)), str(repeats)], cwd=tree, env=env, check=True,
                          capture_output=True, text=True)
     return float(out.stdout.strip().splitlines()[-1])
 
