@@ -3,11 +3,8 @@
 Pages are Markdown (myst-parser): the guides, the model pages, the generated config reference
 (`python -m rotorsweep.pipeline.config_reference`), the gallery and the benchmark pages as the benchmarks write
 them; the API reference comes from the docstrings of `rotorsweep` (autodoc)."""
-import sys
-from pathlib import Path
-
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))      # the checkout's code, also without an editable install
+# autodoc imports the installed package (`make docs` installs the checkout editable): its names
+# (rotorsweep.pipeline, rotorsweep.kernels) map to the checkout's folders only through an install
 
 project = "rotorsweep"
 author = "rotorsweep contributors"
