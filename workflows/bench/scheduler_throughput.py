@@ -20,7 +20,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from workflows.bench.common import loadavg, log
+from workflows.bench.common import ROOT, loadavg, log
 
 N_TASKS = 2000
 START_TIMEOUT_S = 60
@@ -36,8 +36,11 @@ def _dask_cli():
 
 
 def _start(args, log_path):
+    # the tasks (_noop) are this module's: workflows/ is not installed, so the checkout goes on the
+    # path of the CLI's processes (a console script does not put the working directory there)
+    path = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))
     return subprocess.Popen([_dask_cli(), *args], stdout=open(log_path, "w"), stderr=subprocess.STDOUT,
-                            env={**os.environ, "NUMBA_NUM_THREADS": "1"})
+                            env={**os.environ, "NUMBA_NUM_THREADS": "1", "PYTHONPATH": path})
 
 
 def _wait_for(path, timeout):
