@@ -22,9 +22,9 @@ import rotorsweep.pipeline as pipeline
 # public name -> (module, attribute in it; None: the module itself)
 _API = {
     "explore": ("rotorsweep.pipeline.explore", None),
-    "make_report": ("pipeline", "make_report"), "open_cube": ("pipeline", "open_cube"),
-    "open_result": ("pipeline", "open_result"), "point": ("pipeline", "point"), "run": ("pipeline", "run"),
-    "unstable_intervals": ("pipeline", "unstable_intervals"),
+    "make_report": ("rotorsweep.pipeline", "make_report"), "open_cube": ("rotorsweep.pipeline", "open_cube"),
+    "open_result": ("rotorsweep.pipeline", "open_result"), "point": ("rotorsweep.pipeline", "point"), "run": ("rotorsweep.pipeline", "run"),
+    "unstable_intervals": ("rotorsweep.pipeline", "unstable_intervals"),
     "__version__": ("rotorsweep.pipeline.cluster", "VERSION"), "SweepError": ("rotorsweep.pipeline.cluster", "SweepError"),
     "ConfigError": ("rotorsweep.pipeline.config", "ConfigError"), "load_config": ("rotorsweep.pipeline.config", "load_config"),
     "parse_config": ("rotorsweep.pipeline.config", "parse_config"),
