@@ -475,7 +475,7 @@ def build_parser():
 
 
 def cmd_scenes(args):
-    from rotorsweep.pipeline import scenes
+    from rotorsweep.pipeline import config as config_mod, scenes
 
     if args.copy is None:
         if args.dest is not None:
