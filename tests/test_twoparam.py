@@ -44,7 +44,7 @@ def grid_boundary(scene, point):
     this is a second, independent method): the bracketing grid speeds, their orbits by
     solve_orbit from a neighbour, Brent on max|multiplier| - 1 with natural continuation
     (events.locate_boundary)."""
-    solve, _ = boundaries.axis_solver(scene, {**scene.fixed, "clearance": point.nu}, "speed")
+    solve = boundaries.axis_solver(scene, {**scene.fixed, "clearance": point.nu}, "speed")[0]
     low = GRID_START + GRID_STEP * math.floor((point.lam - GRID_START) / GRID_STEP)
     a, b = solve(low, point.state), solve(low + GRID_STEP, point.state)
     assert a.status == b.status == 0 and a.stable != b.stable     # the grid sees this boundary

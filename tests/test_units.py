@@ -156,7 +156,7 @@ def test_point_flags_with_wrong_dimensions_exit_2(point_kwargs, capsys, flags, f
 def test_modes_at_and_campbell_take_unit_strings(monkeypatch, capsys):
     seen = {}
 
-    def fake_command(cfg, at, campbell_text, output, as_json):
+    def fake_command(cfg, at, campbell_text, output, as_json, report=None):
         seen.update(at=at, speeds=modes.campbell_speeds(campbell_text, cfg.model, cfg.data))
         return ""
 
