@@ -22,20 +22,21 @@ import numpy as np
 
 from workflows.bench import render
 from workflows.bench.common import DOCS, ROOT, loadavg, log, provenance
+from workflows.bench import trees
 from workflows.bench.revisions import checkout
 
 CHILD = """
 import json, os, time
 from pathlib import Path
-from rotorsweep.pipeline import compute, config
+from {pipeline} import compute, config
 text = Path('configs/bai2006_fig13.toml').read_text()
 CLEARANCES = (7.6e-6, 15.2e-6, 19.0e-6)
 
 def scene_of(data):
     # (what compute.solve_segment takes, the fixed values): the scene object where the tree has
-    # one (rotorsweep.pipeline.scene), else the config dict (trees before it)
+    # one (the pipeline's scene module), else the config dict (trees before it)
     try:
-        from rotorsweep.pipeline import scene
+        from {pipeline} import scene
     except ImportError:
         return data, compute.fixed_values(data)
     built = scene.from_data(data)
@@ -59,10 +60,11 @@ print(json.dumps({'orbits': per_point(False, 30.0, 40), 'attractors': per_point(
 
 
 def time_once(tree):
-    env = {**os.environ, "PYTHONPATH": str(tree)}
+    env = trees.env(tree)                     # the tree's own code under its own names
     env.pop("NUMBA_CACHE_DIR", None)          # each tree keys its own cache on its sources
     env.pop("ROTORSWEEP_NUMBA_CACHE_DIR", None)
-    out = subprocess.run([sys.executable, "-c", CHILD], cwd=tree, env=env, check=True, capture_output=True,
+    child = CHILD.replace("{pipeline}", trees.pipeline_module(tree))
+    out = subprocess.run([sys.executable, "-c", child], cwd=tree, env=env, check=True, capture_output=True,
                          text=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
