@@ -57,7 +57,7 @@ bench: $(STAMP)  ## work-precision and baseline benchmarks -> docs/benchmarks/
 check-cf: $(STAMP)  ## CF checks of every result kind with cfchecker and the IOOS compliance-checker (needs libudunits2: apt-get install libudunits2-0)
 	$(BIN)/python -m pip install --quiet $(if $(CONSTRAINTS),-c $(CONSTRAINTS)) -e ".[test,cf]"
 	$(BIN)/python -c "import cfchecker.cfchecks, compliance_checker.runner"  # fails here, not as skipped tests, without udunits2
-	$(BIN)/python -m pytest -q -k cf_checkers tests/test_cube.py tests/test_continue_command.py tests/test_backbone_command.py
+	$(BIN)/python -m pytest -q -k cf_checkers tests/test_cube.py tests/test_continue_command.py tests/test_backbone_command.py tests/test_torus_points.py
 
 screenshots: demo fold screenshot-references  ## the demo and fold reports in headless Chromium (apt-get install chromium) -> docs/screenshots/*.png, and the tests' references
 	$(BIN)/python -m workflows.screenshots out/demo_report out/bai2006_fold_report -o docs/screenshots

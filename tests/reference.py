@@ -159,3 +159,28 @@ class PreloadedPoint(BaiPoint):
         sol = solve_ivp(self.rhs, (0.0, self.period), u0, method="DOP853", t_eval=t, rtol=rtol,
                         atol=1e-15 * np.abs(np.asarray(u0)).max())
         return t, sol.y.T
+
+
+def torus_half_swing(scene, ds, k, observable="y_B", turns=150):
+    """Half peak-to-peak of `observable` over `turns` shaft turns of a scipy DOP853 run (rtol
+    1e-10, 256 samples per turn) of the rigid_preloaded rotor from point k of a continuation
+    result's first (torus) branch, at that point's parameter: the torus's half-swing measured
+    without the torus solver (the run covers the torus densely at an irrational rotation; it
+    samples the sup from below)."""
+    from rotorsweep.kernels.models import rigid_preloaded as rp
+    from rotorsweep.pipeline import continuation, torus_branches
+
+    pl = continuation.plan(scene)
+    _, built = torus_branches.torus_family(scene, pl, pl.lines[0], 1)
+    b = built(float(ds["parameter"].values[0, k]))
+    p = b.p.copy()
+
+    def f(tau, u):
+        du = np.empty_like(u)
+        rp.rhs(tau, u, p, du)
+        return du
+    sol = solve_ivp(f, (0.0, turns), ds["orbit_state"].values[0, k], method="DOP853", rtol=1e-10, atol=1e-12,
+                    t_eval=np.linspace(0.0, turns, 256 * turns + 1))
+    assert sol.success
+    y = scene.model.observe(sol.y.T, b.period)[:, list(ds["observable"].values).index(observable)]
+    return 0.5 * (y.max() - y.min())

@@ -1,10 +1,10 @@
 """`rotorsweep continue` with quasi-periodic forcing (both forcings of rigid_preloaded on): the
 torus branch end to end, in-process, and one point checked against iterates of the stroboscopic
 map from its circle (a second method: the map iterated, not the collocation solved)."""
-import numpy as np
 import pytest
 
 from rotorsweep.pipeline import cli, config, continuation, result_kinds, torus_branches
+from tests.reference import torus_half_swing
 
 SCENE = "configs/filipkovsky2016_fig2b_tori.toml"
 
@@ -42,32 +42,11 @@ def test_a_torus_point_against_a_long_scipy_transient(result):
     sup from below: the result's in the forcing phase (64 phases, torus_branches docstring), the
     transient in time and phase; a swing varying smoothly over the torus is missed by each by
     ~(pi / 64)^2 / 2 ~ 1e-3 relative at most, hence the tolerance."""
-    from scipy.integrate import solve_ivp
-
-    from rotorsweep.kernels.models import rigid_preloaded as rp
-
     d, data = result
     ds = continuation.open_result(d / "tori.nc")
-    spec = data.model
-    pl = continuation.plan(data)
-    _, built = torus_branches.torus_family(data, pl, pl.lines[0], 1)
     k = 1
-    lam = float(ds["parameter"].values[0, k])
-    b = built(lam)
-    p = b.p.copy()
-
-    def f(tau, u):
-        du = np.empty_like(u)
-        rp.rhs(tau, u, p, du)
-        return du
-    turns = 150
-    t = np.linspace(0.0, turns, 256 * turns + 1)
-    sol = solve_ivp(f, (0.0, turns), ds["orbit_state"].values[0, k], method="DOP853", rtol=1e-10, atol=1e-12,
-                    t_eval=t)
-    assert sol.success
     j = list(ds["observable"].values).index("y_B")
-    y = spec.observe(sol.y.T, b.period)[:, j]
-    half_swing = 0.5 * (y.max() - y.min())
+    half_swing = torus_half_swing(data, ds, k)
     assert ds["amplitude_half_pp"].values[0, k, j] == pytest.approx(half_swing, rel=1e-3)
 
 
