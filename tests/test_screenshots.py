@@ -80,3 +80,16 @@ def test_the_comparison_passes_a_moved_or_blurred_page_and_fails_one_missing_a_p
     blank = page.copy()
     blank[251:580, 38:587] = 1.0
     assert difference(blank)[0] > 2 * browser.FRACTION_TOL
+
+
+@needs_chromium
+def test_a_wide_table_scrolls_inside_a_page_that_fits_the_window(tmp_path):
+    """A located-points table of a five-observable continuation has ~20 columns; the report page
+    must still fit a 1400 px window (issue 34): its tables and config scroll sideways instead."""
+    from rotorsweep.pipeline.report import page
+
+    cols = {f"amplitude half pp of observable {k} [m]": [1.234567890123e-05] * 3 for k in range(24)}
+    page.save_html(tmp_path / "report.html", "wide", "<h1>wide</h1>", [], page.columns_html("Located points", cols),
+                   "x = " + "1" * 400)
+    shot = screenshots.capture(tmp_path / "report.html", tmp_path / "shot.png")
+    assert not shot.errors and shot.width <= screenshots.WIDTH, shot

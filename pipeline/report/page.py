@@ -14,6 +14,7 @@ from rotorsweep.pipeline.report.style import holoviews
 
 _CSS = """<style>
 table.intervals {border-collapse: collapse; font-family: sans-serif; font-size: 10pt}
+table.intervals, pre.config {display: block; max-width: 100%; overflow-x: auto}  /* wide tables scroll, the page fits */
 table.intervals th, table.intervals td {border: 1px solid #bbb; padding: 2px 8px; text-align: right}
 table.intervals th {background: #eef2f6}
 body {font-family: sans-serif; margin: 1.5em 2em; max-width: 1250px}
