@@ -10,6 +10,7 @@ import math
 import re
 from dataclasses import dataclass, field, replace
 from functools import cached_property
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -146,31 +147,8 @@ SCHEMA = {
 RUN_SECTION = "run"
 REQUIRED_SECTIONS = ("scene", "sweep")
 
-DEFAULT_CONFIG_TOML = """\
-# The embedded default scene (same as configs/demo.toml): Bai 2006, 209 bearing, the paper's constant.
-[scene]
-name = "demo"
-model = "jeffcott_clearance"
-description = "Bai 2006 rotor on the 209 bearing: stability vs speed for two clearances"
-
-[bearing]
-preset = "209"
-stiffness = "bai2006"
-
-[rotor]
-mass = 2.0
-damping = 300.0
-radial_load = "gravity"
-gravity = 9.8
-
-[sweep]
-speed = {start = 20.0, stop = 220.0, step = 2.0}
-clearance = [7.6e-6, 19.0e-6]
-
-[analysis]
-attractor = true             # also what the rotor settles on: Poincare section, period, chaos
-lyapunov_max_periods = 500
-"""
+# the embedded default scene: configs/demo.toml, shipped as package data (rotorsweep.scenes)
+DEFAULT_CONFIG_TOML = (resources.files("rotorsweep.scenes") / "demo.toml").read_text(encoding="utf-8")
 
 
 # --- value checks --------------------------------------------------------------------------------
