@@ -321,7 +321,8 @@ def build_parser():
     q.add_argument("--where", action="append", metavar="AXIS=SEL",
                    help="speed=80:120 (range), clearance=3.8e-6 (value, m), preload=0,100 (list); repeatable")
     q.add_argument("--var", action="append", metavar="NAME", help="variable to print; repeatable")
-    q.add_argument("--unstable", action="store_true", help="print the unstable speed intervals")
+    q.add_argument("--unstable", action="store_true", help="print the unstable speed intervals (unstable and failed tori "
+                   "too); of a continuation result: the unstable stretches of its branches")
     q.add_argument("--bistable", action="store_true",
                    help="print the bistable speed intervals: between the fold pair of each jump of the sweep")
     q.add_argument("--attractors", nargs="?", const="up", choices=["up", "down"],

@@ -316,6 +316,8 @@ def _torus_variables(records, stable):
              "torus_exponent": pad("torus_exponent", np.nan, float), "torus_nodes": _torus_nodes(records, stable.shape),
              "event_note": np.array([note for _, r in records for note in r.get("event_note", [""] * len(r["event_type"]))],
                                     object),
+             "event_periods": np.array([k for _, r in records
+                                        for k in r.get("event_periods", [r["periods"]] * len(r["event_type"]))], "int32"),
              "stable": np.where(torus, status == torus_branches.TORUS_STATUS["stable"], stable).astype("int8")}, {})
 
 
@@ -519,6 +521,12 @@ def _peak_lines(ds, par, unit):
             for k in np.flatnonzero(ds["event_type"].values == al.PEAK)]
 
 
+def _event_periods(ds):
+    """Forcing periods of each event's orbit: event_periods where written (a torus branch's locked
+    p/q row: q), else its branch's."""
+    return ds["event_periods"].values if "event_periods" in ds else ds["branch_periods"].values[ds["event_branch"].values]
+
+
 def events_table(ds):
     """The located events as columns (for query's renderer), each orbit once (its first record):
     type, branch, parameter, period, the critical multiplier, max |observable|."""
@@ -531,7 +539,7 @@ def events_table(ds):
                 for m, t in zip(mult, targets)] if len(kinds) else []
     branch = ds["event_branch"].values
     cols = {"type": [al.EVENT_LABELS[int(k)] for k in kinds], "branch": branch.tolist(),
-            "periods": ds["branch_periods"].values[branch].tolist() if len(branch) else [],
+            "periods": _event_periods(ds).tolist(),
             par: ds["event_parameter"].values.tolist(),
             "multiplier_real": [float(c.real) for c in critical], "multiplier_imag": [float(c.imag) for c in critical]}
     for c in ds.coords:

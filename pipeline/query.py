@@ -238,17 +238,21 @@ def _coexisting_orbit(ds, k, prefix, along):
 def unstable_intervals(ds):
     """Maximal runs of consecutive values of the continued axis (speed) whose periodic orbit is
     not stable (unstable, or not found), one list entry per run and per combination of the other
-    swept axes. Points whose orbit is `not_applicable` (no periodic orbit by design) belong to
-    no interval.
+    swept axes. Points whose orbit is `not_applicable` (no periodic orbit by design: quasi-periodic
+    forcing) belong to no such run; where they have their torus (rotorsweep.pipeline.torus_points),
+    the runs of unstable tori and of failed ones are listed too (_torus_runs), in the classes of
+    point_classes.
 
     Each entry: the other axes' values, `start`/`end` (the first and last grid value of the
     run), `onset`/`offset` (the refined crossings of the cube's boundary table just below
     `start` and just above `end`; NaN where there is none, e.g. at a grid edge or next to a point
-    without orbit), `n_points`, `type` (fold / period_doubling / neimark_sacker / no_orbit: how
-    the stable orbit before the run lost stability, from the boundary table where the onset is
-    refined -- a fold there although the run's first grid orbit, on another branch, may be
-    period-doubled -- else the state at the run's first point) and the run's largest
-    `max_abs_multiplier`."""
+    without orbit, and for tori), `n_points`, `type` (fold / period_doubling / neimark_sacker /
+    no_orbit: how the stable orbit before the run lost stability, from the boundary table where
+    the onset is refined -- a fold there although the run's first grid orbit, on another branch,
+    may be period-doubled -- else the state at the run's first point; quasi_periodic_unstable /
+    torus_failed for a run of tori) and the run's largest `max_abs_multiplier`. A cube with torus
+    variables adds to every entry `max_torus_exponent` (the run's largest normal exponent [1/s])
+    and `reason` (a failed torus run's torus_status names; "" elsewhere)."""
     others = _other_axes(ds)
     speed = ds[schema.continued_axis(ds)].values
     refined = _refined_crossings(ds, others)
@@ -259,9 +263,10 @@ def unstable_intervals(ds):
         status = line["orbit_status"].values
         # a point with no orbit by design (quasi-periodic forcing) lost no stability
         not_stable = ((line["stable"].values != 1) | (status != 0)) & (status != NOT_APPLICABLE)
+        runs = []
         for i0, i1 in _runs(not_stable):
             mu = line["max_abs_multiplier"].values[i0:i1 + 1] if "max_abs_multiplier" in line else np.full(1, np.nan)
-            out.append({
+            runs.append({
                 **{a: float(v) for a, v in where.items()},
                 "start": float(speed[i0]),
                 "end": float(speed[i1]),
@@ -269,8 +274,35 @@ def unstable_intervals(ds):
                 "offset": refined.get((*values, float(speed[i1])), (float("nan"),))[0],
                 "n_points": int(i1 - i0 + 1),
                 "type": refined.get((*values, float(speed[i0])), (None, _run_type(line, i0)))[1],
-                "max_abs_multiplier": float(np.nanmax(mu)) if np.isfinite(mu).any() else float("nan"),
+                "max_abs_multiplier": _nanmax(mu),
+                **({"max_torus_exponent": float("nan"), "reason": ""} if "torus_status" in ds else {}),
             })
+        out += sorted(runs + _torus_runs(line, where, speed), key=lambda run: run["start"])
+    return out
+
+
+def _nanmax(values):
+    return float(np.nanmax(values)) if np.isfinite(values).any() else float("nan")
+
+
+TORUS_UNSTABLE = ("quasi_periodic_unstable", "torus_failed")    # the torus classes `query --unstable` lists
+
+
+def _torus_runs(line, where, speed):
+    """unstable_intervals' entries of one line's runs of tori of one class in TORUS_UNSTABLE
+    (torus_class_names); a failed run's `reason`: its points' torus_status names."""
+    if "torus_status" not in line:
+        return []
+    names = torus_class_names(line)
+    out = []
+    for cls in TORUS_UNSTABLE:
+        for i0, i1 in _runs(names == cls):
+            status = sorted({schema.TORUS_STATUS[int(k)] for k in line["torus_status"].values[i0:i1 + 1]})
+            out.append({**{a: float(v) for a, v in where.items()}, "start": float(speed[i0]), "end": float(speed[i1]),
+                        "onset": float("nan"), "offset": float("nan"), "n_points": int(i1 - i0 + 1), "type": cls,
+                        "max_abs_multiplier": float("nan"),
+                        "max_torus_exponent": _nanmax(line["torus_exponent"].values[i0:i1 + 1]),
+                        "reason": ",".join(status) if cls == "torus_failed" else ""})
     return out
 
 
@@ -335,17 +367,28 @@ def class_runs(ds):
     return out
 
 
-def _torus_classes(ds, values):
-    """A point without orbit by design that has its torus (rotorsweep.pipeline.torus_points) is
-    "quasi_periodic_<stable|unstable|undecided>", or "torus_failed" where its torus did not converge."""
+def torus_class_names(ds):
+    """Per point (array over orbit_status' dims): where the point has no orbit by design and its
+    torus was attempted (rotorsweep.pipeline.torus_points) "quasi_periodic_<stable|unstable|undecided>",
+    or "torus_failed" where its torus did not converge; None elsewhere (no torus variables: all None)."""
+    out = np.full(ds["orbit_status"].shape, None, dtype=object)
     if "torus_status" not in ds:
-        return
-    status, stab = ds["torus_status"].values, ds["torus_stability"].values
+        return out
+    status = ds["torus_status"].transpose(*ds["orbit_status"].dims).values
+    stab = ds["torus_stability"].transpose(*ds["orbit_status"].dims).values
     solved = (ds["orbit_status"].values == NOT_APPLICABLE) & (status >= 0)
     names = np.array([f"quasi_periodic_{name}" for name in schema.TORUS_STABILITY] + ["torus_failed"], dtype=object)
     converged = status == schema.TORUS_STATUS.index("converged")
     pick = np.where(converged & (stab >= 0), stab, len(schema.TORUS_STABILITY))
-    values[solved] = names[pick[solved]]
+    out[solved] = names[pick[solved]]
+    return out
+
+
+def _torus_classes(ds, values):
+    """point_classes' values (in place) at the points with their torus: torus_class_names."""
+    names = torus_class_names(ds)
+    has = names.astype(bool)
+    values[has] = names[has]
 
 
 def attractor_label(code, k):
@@ -393,4 +436,45 @@ def attractor_intervals(ds, direction="up"):
                 "attractor": str(labels[i0]),
                 "max_lle": float(np.nanmax(seg)) if np.isfinite(seg).any() else float("nan"),
             })
+    return out
+
+
+# --- continuation results ---------------------------------------------------------------------
+
+def branch_unstable_stretches(ds):
+    """`query --unstable` of a continuation result: the maximal runs of unstable points along each
+    distinct branch (in branch order), an orbit branch's (stable 0) and a torus branch's
+    (rotorsweep.pipeline.torus_branches: torus_status unstable, "quasi_periodic_unstable" in
+    point_classes' vocabulary; an undecided torus is listed by neither, as in a cube).
+
+    Each entry: the line's coordinates, `branch`, `kind` (periodic_orbit / torus), `start`/`end`
+    (the parameter at the run's first and last point), `onset`/`offset` (the located fold, period
+    doubling, Neimark-Sacker or branch point just before / after the run; NaN where none: at a
+    branch end, and on torus branches, whose stability changes are flagged between points, not
+    located), `n_points`, `type` (the onset's event name, "none" without one, or
+    quasi_periodic_unstable), the run's largest `max_abs_multiplier` (orbits) and
+    `max_torus_exponent` [1/s] (tori)."""
+    from rotorsweep.pipeline import coexistence
+    from rotorsweep.kernels.continuation import events as ev
+
+    tori = ds["branch_kind"].values == 1 if "branch_kind" in ds else np.zeros(ds.sizes["branch"], bool)
+    lines = [c for c in ds.coords if ds[c].dims == ("branch",)]
+    located = {(int(b), int(p)): (float(v), ev.EVENT_TYPES[int(k)]) for b, p, v, k in zip(
+        ds["event_branch"].values, ds["event_point"].values, ds["event_parameter"].values, ds["event_type"].values)
+        if k in (ev.FOLD, ev.PERIOD_DOUBLING, ev.NEIMARK_SACKER, ev.BRANCH_POINT)}
+    out = []
+    for b in coexistence.distinct_branches(ds):
+        n = int(ds["branch_points"].values[b])
+        lam = ds["parameter"].values[b, :n]
+        torus = bool(tori[b])
+        unstable = (ds["torus_status"].values[b, :n] == 0) if torus else (ds["stable"].values[b, :n] == 0)
+        for i0, i1 in _runs(unstable):
+            onset, offset = located.get((b, i0 - 1), (np.nan, "none")), located.get((b, i1), (np.nan, None))
+            out.append({**{c: float(ds[c].values[b]) for c in lines}, "branch": int(b),
+                        "kind": "torus" if torus else "periodic_orbit", "start": float(lam[i0]), "end": float(lam[i1]),
+                        "onset": onset[0], "offset": offset[0], "n_points": int(i1 - i0 + 1),
+                        "type": "quasi_periodic_unstable" if torus else onset[1],
+                        "max_abs_multiplier": _nanmax(ds["max_abs_multiplier"].values[b, i0:i1 + 1]),
+                        "max_torus_exponent": _nanmax(ds["torus_exponent"].values[b, i0:i1 + 1])
+                        if "torus_exponent" in ds else float("nan")})
     return out

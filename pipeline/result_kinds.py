@@ -132,6 +132,8 @@ CONTINUATION_VARIABLES = {
                                                    "comment": "values at the support forcing's phases 2 pi j / N (N: the "
                                                               "branch's non-NaN nodes); the trigonometric interpolant of "
                                                               "them is the circle (rotorsweep.kernels.torus.Torus.at)"}),
+    "event_periods": (("event",), {"units": "1", "long_name": "forcing periods per orbit at the event (k of period-k; "
+                                                               "a torus branch's locked p/q row: q)"}),
     "event_note": (("event",), {"long_name": "the event in words (torus branches: flags, locked ratios p/q and "
                                              "their linked periodic orbits)"}),
     # with report.frequency_unit = "omega_l"
@@ -152,7 +154,8 @@ CONTINUATION_VARIABLES = {
 # continuation.curves_in
 # (piece_*: written since the coexistence counts distinct orbits; a file without them is read by
 # counting stable runs, rotorsweep.pipeline.coexistence.coexistence)
-CONTINUATION_OPTIONAL = ("branch_kind", "torus_status", "torus_error", "torus_exponent", "torus_nodes", "event_note", "parameter_over_omega_l",
+CONTINUATION_OPTIONAL = ("branch_kind", "torus_status", "torus_error", "torus_exponent", "torus_nodes", "event_note",
+                         "event_periods", "parameter_over_omega_l",
                          "event_parameter_over_omega_l", "curve_parameter", "curve_second", "curve_critical_real",
                          "curve_critical_imag", "curve_type", "curve_points", "curve_end", "curve_detail",
                          "piece_lo", "piece_hi", "piece_line", "piece_branches", "event_copy_of",
@@ -293,8 +296,10 @@ def _query_cube(ds, fmt, where=None, var=None, unstable=False, attractors=None, 
     return query.to_table(ds, var or None, fmt=fmt)
 
 
-def _query_continuation(ds, fmt):
+def _query_continuation(ds, fmt, unstable=False):
     from rotorsweep.pipeline import continuation, query
+    if unstable:
+        return query.intervals_table(query.branch_unstable_stretches(ds), fmt=fmt)
     return query.render(continuation.events_table(ds), fmt)
 
 
@@ -322,7 +327,7 @@ KINDS = {kind.name: kind for kind in (
     ResultKind(SWEEP, "run", "a sweep cube", "rotorsweep result cube", None, cube.check_cube, _describe_cube, _query_cube, _report_cube,
                query_options=("where", "var", "unstable", "attractors", "bistable"), report_options=("point",)),
     ResultKind(CONTINUATION, "continue", "a continuation result", "rotorsweep continuation", CONTINUATION_VARIABLES, None,
-               _describe_continuation, _query_continuation, _report_continuation,
+               _describe_continuation, _query_continuation, _report_continuation, query_options=("unstable",),
                optional=CONTINUATION_OPTIONAL, coords=("observable",), attrs=("parameter", "range")),
     ResultKind(BACKBONE, "backbone", "a backbone result", "rotorsweep backbones", BACKBONE_VARIABLES, None,
                _describe_backbone, _query_backbone, _report_backbone, report_options=("over",),

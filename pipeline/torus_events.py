@@ -26,7 +26,9 @@ LINK_TOL = 1e-6
 
 def event_rows(model, family, built, run, amplitudes):
     """The record's event_* arrays of a torus Run (amplitudes: (points, 2, observables), the
-    points' max |o| and half-swing), plus event_note (words per event)."""
+    points' max |o| and half-swing), plus event_note (words per event) and event_periods (forcing
+    periods of the event's orbit: a locked p/q row's linked orbit closes after q shaft turns; 1 on a
+    flag's row, the branch's)."""
     rows = [_locked_row(model, family, built, f) if f.event.code == ev.LOCKED else _flag_row(family, run, f, amplitudes)
             for f in run.found]
     n, n_obs = family.kernel.n_state, len(model.observables)
@@ -39,6 +41,7 @@ def event_rows(model, family, built, run, amplitudes):
         "event_amplitude_max": np.array([r[3] for r in rows], float).reshape(len(rows), n_obs),
         "event_amplitude_half_pp": np.array([r[4] for r in rows], float).reshape(len(rows), n_obs),
         "event_note": [r[5] for r in rows],
+        "event_periods": np.array([f.event.q if f.event.code == ev.LOCKED else 1 for f in run.found], int),
     }
 
 

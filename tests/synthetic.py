@@ -201,3 +201,46 @@ def _hysteresis_window(up, stable, kind, n=2):
                         down[name][b, j] = up[name][src, j]
                     hyst[b, j] = int(up["period"][src, j] != up["period"][b, j])
     return down, hyst
+
+
+# ----------------------------------------------------------------------------- tori
+
+TORUS_KINDS = {"stable": (0, 1, -2.0), "unstable": (0, 0, 3.0), "undecided": (0, 2, 0.0),
+               "failed": (schema.TORUS_STATUS.index("fourier_decay_failed"), schema.INT_FILL, np.nan)}
+
+
+def with_tori(ds, kinds):
+    """ds with the torus variables of a quasi-periodically forced sweep (schema.TORUS_VARIABLES,
+    rotorsweep.pipeline.torus_points): kinds (array over (speed, clearance) of "orbit" or a
+    TORUS_KINDS key) marks each point a periodic one (its orbit kept) or a torus point
+    (orbit_status not_applicable, no multipliers) that is stable / unstable / undecided
+    (exponent -2, 3, 0 times 1 + speed / 1000 1/s) or failed (fourier_decay_failed, NaN values,
+    amplitudes NaN). A torus point's amplitudes stay the cube's (its torus's half-swing)."""
+    kinds = np.asarray(kinds, object)
+    torus = kinds != "orbit"
+    out = ds.copy()
+    speed = out["speed"].values[:, None] * np.ones(kinds.shape)
+    status = np.full(kinds.shape, schema.INT_FILL, "int8")
+    stab = np.full(kinds.shape, schema.INT_FILL, "int8")
+    exponent = np.full(kinds.shape, np.nan)
+    for name, (st, sb, ex) in TORUS_KINDS.items():
+        at = kinds == name
+        status[at], stab[at], exponent[at] = st, sb, ex * (1 + speed[at] / 1000)
+    at_torus, at_failed = (xr.DataArray(m, dims=("speed", "clearance")) for m in (torus, kinds == "failed"))
+    out["orbit_status"] = out["orbit_status"].where(~at_torus, schema.ORBIT_STATUS.index("not_applicable"))
+    for name in ("stable", "bifurcation"):        # as a sweep writes a point without orbit
+        out[name] = out[name].where(~at_torus, schema.INT_FILL)
+    for name in ("max_abs_multiplier", "multiplier_real", "multiplier_imag"):
+        out[name] = out[name].where(~at_torus)
+    failed = kinds == "failed"
+    for name in ("amplitude_x", "amplitude_y"):
+        out[name] = out[name].where(~at_failed)
+    values = {"torus_status": status, "torus_stability": stab, "torus_exponent": exponent,
+              "torus_exponent_error": np.where(torus, 1e-3, np.nan),
+              "torus_rotation_number": np.where(torus, 1.6180339887, np.nan),
+              "torus_modes": np.where(torus, 7, schema.INT_FILL), "torus_error": np.where(torus & ~failed, 1e-9, np.nan),
+              "torus_amplitude_error": np.where(torus & ~failed, 1e-4, np.nan)}
+    for name, v in values.items():
+        _, dtype, attrs = schema.TORUS_VARIABLES[name]
+        out[name] = (("speed", "clearance"), v.astype(dtype), dict(attrs))
+    return out

@@ -73,11 +73,26 @@ def test_info_and_query_open_the_file_once(paths, kind, capsys, opens):
     assert ds.rotorsweep.describe() == info.rstrip("\n")
 
 
-@pytest.mark.parametrize("kind", [result_kinds.CONTINUATION, result_kinds.BACKBONE])
-def test_query_options_of_a_sweep_cube_are_refused_on_the_others(paths, kind, capsys):
-    assert cli.main(["query", str(paths[kind]), "--unstable"]) == cli.EXIT_USAGE
+@pytest.mark.parametrize("kind, option, applies", [
+    (result_kinds.CONTINUATION, "bistable", "a sweep cube (rotorsweep run)"),
+    (result_kinds.BACKBONE, "unstable", "a sweep cube (rotorsweep run) or a continuation result (rotorsweep continue)")])
+def test_query_options_of_a_sweep_cube_are_refused_on_the_others(paths, kind, option, applies, capsys):
+    assert cli.main(["query", str(paths[kind]), f"--{option}"]) == cli.EXIT_USAGE
     err = capsys.readouterr().err
-    assert f"--unstable applies to a sweep cube (rotorsweep run), not to a {kind} result" in err
+    assert f"--{option} applies to {applies}, not to a {kind} result" in err
+
+
+def test_query_unstable_of_a_continuation_lists_its_unstable_stretches(paths, capsys):
+    assert cli.main(["query", str(paths[result_kinds.CONTINUATION]), "--unstable", "--format", "csv"]) == 0
+    """The hardening resonance: unstable between its two folds, the stretch bounded by them."""
+    import csv
+    import io
+
+    rows = list(csv.DictReader(io.StringIO(capsys.readouterr().out)))
+    (r,) = rows
+    assert (r["kind"], r["type"]) == ("periodic_orbit", "fold")
+    assert float(r["onset"]) < float(r["start"]) and float(r["end"]) < float(r["offset"]) or \
+        float(r["onset"]) > float(r["start"]) > float(r["end"]) > float(r["offset"])
 
 
 @pytest.mark.parametrize("kind", KINDS)

@@ -36,6 +36,7 @@ def test_the_branch_lists_the_locked_ratio_in_the_events_and_info(result, capsys
     assert note.startswith("3/5: torus stable") and "5 shaft turns linked" in note
     table = continuation.events_table(ds)
     assert table["type"] == ["locked"] and table["note"] == [note] and table["stable"] == [1]
+    assert table["periods"] == [5] and ds["branch_periods"].values.tolist() == [1]    # the linked orbit's q
     assert ds["event_amplitude_half_pp"].values[k[0]].max() > 0
 
 

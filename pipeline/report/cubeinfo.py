@@ -56,6 +56,12 @@ def has_attractor(ds):
     return all(v in ds.variables for v in ("attractor", "period", "lle", "poincare_x"))
 
 
+def has_orbits(ds):
+    """Whether any grid point has a converged periodic orbit (a cube of tori alone has none: no
+    multipliers to draw)."""
+    return bool((ds["orbit_status"].values == 0).any())
+
+
 def has_down(ds):
     return "poincare_x" + schema.DOWN_SUFFIX in ds.variables
 

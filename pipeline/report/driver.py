@@ -25,7 +25,7 @@ def _load(ds):
     names = [v for v in _VARS if v in ds.variables]
     names += [v for v in schema.observable_variables(schema.model_of(ds)) if v in ds.variables]
     names += [v + sfx for v in _ATTRACTOR_VARS for sfx in ("", schema.DOWN_SUFFIX) if v + sfx in ds.variables]
-    names += [v for v in ("hysteresis", "torus_status", "torus_stability") if v in ds.variables]
+    names += [v for v in ("hysteresis", "torus_status", "torus_stability", "torus_exponent") if v in ds.variables]
     names += [v for v in ds.data_vars if ds[v].dims == ("boundary",)]     # the boundary table
     return ds[names].load()
 

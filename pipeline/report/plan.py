@@ -19,7 +19,8 @@ _SHORT_NAMES = {"speed": "shaft speed", "clearance": "radial clearance",
 # display names of the instability types of query.unstable_intervals
 TYPE_NAMES = {"fold": "fold", "period_doubling": "period doubling",
               "neimark_sacker": "Neimark-Sacker", "no_orbit": "no periodic orbit",
-              "none": "unclassified"}
+              "none": "unclassified", "quasi_periodic_unstable": "quasi-periodic unstable",
+              "torus_failed": "torus failed"}
 
 
 def unit_display(units):

@@ -10,13 +10,15 @@ from rotorsweep.pipeline.report.plan import TYPE_NAMES, axis_display, axis_label
 
 def interval_rows(ds, intervals, machine=False):
     """The unstable-interval table as (header, rows of strings) in display units. machine=True:
-    ASCII header and the query's type codes (fold, period_doubling, neimark_sacker, no_orbit),
-    for the CSV."""
+    ASCII header and the query's type codes (fold, period_doubling, neimark_sacker, no_orbit,
+    quasi_periodic_unstable, torus_failed), for the CSV. A cube with tori adds the runs' largest
+    normal exponent of the torus and a failed torus run's reason."""
     others = other_axes(ds)
     unit = axis_display(ds, continued_axis(ds))[1]
+    tori = "torus_status" in ds
     header = ([axis_label(ds, a) for a in others]
               + [f"start [{unit}]", f"end [{unit}]", f"refined onset [{unit}]", f"refined offset [{unit}]",
-                 "points", "type", "max |multiplier|"])
+                 "points", "type", "max |multiplier|"] + (["max torus exponent [1/s]", "torus failed: status"] if tori else []))
     factors = [axis_display(ds, a)[0] for a in others]
     rows = []
     for iv in intervals:
@@ -24,7 +26,8 @@ def interval_rows(ds, intervals, machine=False):
                     + [f"{iv['start']:.6g}", f"{iv['end']:.6g}", _refined(iv, "onset"),
                        _refined(iv, "offset"), str(iv["n_points"]),
                        iv["type"] if machine else TYPE_NAMES.get(iv["type"], iv["type"]),
-                       f"{iv['max_abs_multiplier']:.4g}"])
+                       f"{iv['max_abs_multiplier']:.4g}"]
+                    + ([_number(iv["max_torus_exponent"]), iv["reason"] or "-"] if tori else []))
     if machine:
         header = [h.replace("µ", "u").replace("|multiplier|", "abs multiplier") for h in header]
     return header, rows
@@ -63,6 +66,10 @@ def _orbit_cell(ds, column, value):
     if column.startswith("amplitude_"):
         return f"{value * _display(ds, column)[0]:.6g}"
     return str(value) if column == "periods" else f"{value:.4g}"
+
+
+def _number(value):
+    return f"{value:.4g}" if np.isfinite(value) else "-"
 
 
 def _refined(iv, key):

@@ -11,7 +11,7 @@ import numpy as np
 from rotorsweep.pipeline import schema
 from rotorsweep.pipeline.report.branches import SPECIAL_LABELS, branch_elements
 from rotorsweep.pipeline.report.cubeinfo import (branch_observables, branch_values, continued_axis,
-                                      default_observable, has_attractor, has_down, select,
+                                      default_observable, has_attractor, has_down, has_orbits, select,
                                       stable_response, sweep_labels)
 from rotorsweep.pipeline.report.figures.panels import line_figure, panel_opts
 from rotorsweep.pipeline.report.plan import axis_label, unit_display
@@ -64,9 +64,5 @@ def fig_branches(ds, backend="bokeh", observable=None):
     return line_figure(ds, backend, f"Periodic orbit branch: {label}", panel)
 
 
-def _has_orbits(ds):
-    return bool((ds["orbit_status"].values == 0).any())
-
-
 register(Figure(name="branches", filename="branches.png", title="Periodic orbit branches vs {axis}",
-                applies=_has_orbits, build=lambda ds, backend, intervals: fig_branches(ds, backend)))
+                applies=has_orbits, build=lambda ds, backend, intervals: fig_branches(ds, backend)))

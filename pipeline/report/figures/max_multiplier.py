@@ -6,7 +6,7 @@ import numpy as np
 
 from rotorsweep.pipeline.report import style
 from rotorsweep.pipeline.report.branches import SPECIAL_LABELS, branch_elements
-from rotorsweep.pipeline.report.cubeinfo import continued_axis, select
+from rotorsweep.pipeline.report.cubeinfo import continued_axis, has_orbits, select
 from rotorsweep.pipeline.report.figures.panels import Sizes, facet_figure, panel_opts
 from rotorsweep.pipeline.report.plan import axes_plan, axis_display, axis_label, where_label
 from rotorsweep.pipeline.report.registry import Figure, register
@@ -69,4 +69,4 @@ def fig_max_multiplier(ds, backend="bokeh"):
 
 register(Figure(name="max_multiplier", filename="max_multiplier.png",
                 title="Largest Floquet multiplier vs {axis}",
-                build=lambda ds, backend, intervals: fig_max_multiplier(ds, backend)))
+                applies=has_orbits, build=lambda ds, backend, intervals: fig_max_multiplier(ds, backend)))

@@ -8,7 +8,7 @@ import numpy as np
 from rotorsweep.pipeline import query
 from rotorsweep.pipeline.report import style
 from rotorsweep.pipeline.report.branches import hover
-from rotorsweep.pipeline.report.cubeinfo import continued_axis, other_axes, select
+from rotorsweep.pipeline.report.cubeinfo import continued_axis, has_orbits, other_axes, select
 from rotorsweep.pipeline.report.plan import TYPE_NAMES, axis_display, axis_label, where_label
 from rotorsweep.pipeline.report.registry import Figure, register
 
@@ -30,7 +30,7 @@ def stability_boundaries(ds, intervals=None):
     others = other_axes(ds)
     grid = ds[continued_axis(ds)].values
     cands = []
-    for iv in intervals:
+    for iv in (iv for iv in intervals if iv["type"] not in query.TORUS_UNSTABLE):    # tori have no multipliers
         common = {"where": {a: iv[a] for a in others}, "type": iv["type"]}
         i0 = int(np.argmin(np.abs(grid - iv["start"])))
         i1 = int(np.argmin(np.abs(grid - iv["end"])))
@@ -131,4 +131,4 @@ def fig_multiplier_paths(ds, backend="bokeh", intervals=None):
 
 
 register(Figure(name="multiplier_paths", filename="multiplier_paths.png",
-                title="Floquet multipliers around stability boundaries", build=fig_multiplier_paths))
+                title="Floquet multipliers around stability boundaries", applies=has_orbits, build=fig_multiplier_paths))
