@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo docs test test-slow check-cf screenshots screenshot-references upgrade bench bench-scaling bench-atlas bench-chunk-plans bench-attractor bench-revisions bench-extrema bench-continuation bench-reductions bench-compile bench-backbone bench-models bench-latency fig13 cascade fold backbone clean
+.PHONY: demo docs test test-slow check-cf screenshots screenshot-references upgrade bench bench-scaling bench-atlas bench-chunk-plans bench-attractor bench-revisions bench-extrema bench-continuation bench-reductions bench-compile bench-backbone bench-models bench-latency fig13 cascade fold tori backbone clean
 
 # CONSTRAINTS: the versions the tests passed with (empty: the newest versions pyproject allows)
 CONSTRAINTS ?= constraints.txt
@@ -47,6 +47,9 @@ cascade: $(STAMP)  ## 19 um route to chaos, attractors swept up and down, with t
 fold: $(STAMP)  ## Bai 2006 by continuation: the 7.6 um fold pair, the 19 um cascade's branches (~1 min)
 	$(BIN)/rotorsweep continue configs/bai2006_fold.toml -o out/bai2006_fold.nc --overwrite --report out/bai2006_fold_report
 
+tori: $(STAMP)  ## Filipkovsky 2016 Fig. 2b's quasi-periodic stretch: the torus branch with its locked 5/4 orbit (~20 s of CPU)
+	$(BIN)/rotorsweep continue configs/filipkovsky2016_fig2b_tori.toml -o out/filipkovsky2016_fig2b_tori.nc --overwrite --report out/filipkovsky2016_fig2b_tori_report
+
 backbone: $(STAMP)  ## Filipkovsky 2010 nonlinear normal modes: manifold vs continuation backbones of both rotors (~2 min)
 	$(BIN)/rotorsweep backbone configs/filipkovsky2010_axial.toml -o out/filipkovsky2010_axial_backbone.nc --overwrite --report out/filipkovsky2010_axial_backbone_report
 	$(BIN)/rotorsweep backbone configs/filipkovsky2010_symmetric.toml -o out/filipkovsky2010_symmetric_backbone.nc --overwrite --report out/filipkovsky2010_symmetric_backbone_report
@@ -59,8 +62,8 @@ check-cf: $(STAMP)  ## CF checks of every result kind with cfchecker and the IOO
 	$(BIN)/python -c "import cfchecker.cfchecks, compliance_checker.runner"  # fails here, not as skipped tests, without udunits2
 	$(BIN)/python -m pytest -q -k cf_checkers tests/test_cube.py tests/test_continue_command.py tests/test_backbone_command.py tests/test_torus_points.py
 
-screenshots: demo fold screenshot-references  ## the demo and fold reports in headless Chromium (apt-get install chromium) -> docs/screenshots/*.png, and the tests' references
-	$(BIN)/python -m workflows.screenshots out/demo_report out/bai2006_fold_report -o docs/screenshots
+screenshots: demo fold tori screenshot-references  ## the demo, fold and torus-continuation reports in headless Chromium (apt-get install chromium) -> docs/screenshots/*.png, and the tests' references
+	$(BIN)/python -m workflows.screenshots out/demo_report out/bai2006_fold_report out/filipkovsky2016_fig2b_tori_report -o docs/screenshots
 
 screenshot-references: $(STAMP)  ## the reference screenshots the browser tests compare with (sweep, continuation, backbone, modes report; ~3 min) -> tests/screenshots/*.png
 	ROTORSWEEP_UPDATE_SCREENSHOTS=1 $(BIN)/python -m pytest -q -k renders_in_a_browser tests/test_screenshots.py tests/test_continue_command.py tests/test_backbone_command.py tests/test_modes_report.py

@@ -6,8 +6,9 @@ Each REPORT_DIR/report.html is opened offline (file://, no network needed: the r
 bokeh) with a fixed window width; the page's JavaScript runs for a virtual 20 s, the page is
 captured and cropped below its last non-white row, and the browser's console is searched for
 JavaScript errors, which fail the run, as does a figure that bokeh did not render (a probe script
-appended to a copy of the page counts them). Defaults: the reports `make demo` and `make fold` write
-(a sweep with attractors, a continuation), into docs/screenshots/<report dir name>.png.
+appended to a copy of the page counts them). Defaults: the reports `make demo`, `make fold` and
+`make tori` write (a sweep with attractors, a continuation, a torus continuation), into
+docs/screenshots/<report dir name>.png.
 
 Chromium is found as $CHROMIUM or chromium, chromium-browser, google-chrome on the PATH (Debian:
 `apt-get install chromium`). It is not a dependency of rotorsweep: tests of the bokeh models
@@ -25,7 +26,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 ROOT = Path(__file__).resolve().parents[1]
-DEFAULT_REPORTS = ("out/demo_report", "out/bai2006_fold_report")
+DEFAULT_REPORTS = ("out/demo_report", "out/bai2006_fold_report", "out/filipkovsky2016_fig2b_tori_report")
 BROWSERS = ("chromium", "chromium-browser", "google-chrome")
 WIDTH = 1400
 MAX_HEIGHT = 16000     # the window is this tall, then cropped: headless Chromium has no full-page capture
