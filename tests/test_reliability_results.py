@@ -101,6 +101,8 @@ def test_a_full_disk_keeps_the_finished_lines_and_resume_gives_the_uninterrupted
     rc, err = run_cli(capsys, *args, "--resume")
     assert rc == 0 and not cube.parts_dir(out).exists()
     assert_same_result(reference, out)
+    # the log keeps the interrupted runs: the first, the failed write and the resume that finished
+    assert (tmp_path / "full.nc.log").read_text().count(f"rotorsweep continue -> {out}") == 3
 
 
 def test_resume_after_the_driver_is_killed_gives_the_uninterrupted_result(lines_config, reference, tmp_path):
