@@ -26,8 +26,8 @@ def scene_at(scene, point):
 
 
 def mode_columns(rec):
-    """{header: values} of the modes in a records() dict (MODE_COLUMNS; a |zeta| at rounding level 0)."""
-    zeta = [m["damping_ratio"] if abs(m["damping_ratio"]) > modes.ZETA_ROUNDING else 0.0 for m in rec["modes"]]
+    """{header: values} of the modes in a records() dict (MODE_COLUMNS)."""
+    zeta = [m["damping_ratio"] for m in rec["modes"]]
     values = (list(range(len(rec["modes"]))), [m["damped_frequency_hz"] for m in rec["modes"]],
               [m["undamped_frequency_hz"] for m in rec["modes"]], zeta,
               [float(modes.log_decrement(z)) for z in zeta], [m["whirl"] for m in rec["modes"]],
