@@ -10,8 +10,8 @@ import xarray as xr
 
 from rotorsweep.pipeline import cli, cube, results
 from tests.faults import disk_full_after_one_part
+from tests.harness import config_file, run_cli, wait_for_parts
 from tests.test_pipeline import CLI
-from tests.test_reliability import wait_for_parts
 
 # three lines (clearances) of Bai 2006's rotor, ~1 s each once compiled
 LINES = """
@@ -34,9 +34,7 @@ period_doubling_switches = 0
 
 @pytest.fixture(scope="module")
 def lines_config(tmp_path_factory):
-    path = tmp_path_factory.mktemp("cfg") / "lines.toml"
-    path.write_text(LINES)
-    return path
+    return config_file(tmp_path_factory.mktemp("cfg"), "lines.toml", LINES)
 
 
 @pytest.fixture(scope="module")
@@ -52,13 +50,6 @@ def assert_same_result(reference, other):
     assert set(a.variables) == set(b.variables)
     for name in a.variables:
         np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
-
-
-def run_cli(capsys, *args):
-    rc = cli.main([str(a) for a in args])
-    err = capsys.readouterr().err
-    assert "Traceback" not in err
-    return rc, err
 
 
 def test_a_line_result_goes_through_a_part_file_exactly(tmp_path):
