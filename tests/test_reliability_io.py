@@ -261,6 +261,31 @@ def test_a_report_never_goes_into_a_file_or_a_foreign_directory(two_cubes, tmp_p
     assert _files(mine) == ["thesis.tex"] and a_file.read_text() == "mine"
 
 
+def test_ctrl_c_between_the_two_renames_of_a_report_keeps_the_old_one(tmp_path, monkeypatch):
+    """replaced_dir sets the old report aside, then renames the new one into place: interrupted
+    in between, the old one comes back; uninterrupted, only the new one is left."""
+    out = tmp_path / "rep"
+    out.mkdir()
+    (out / "report.html").write_text("old")
+    rename, calls = os.rename, []
+
+    def interrupted_second(src, dst):
+        calls.append(dst)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return rename(src, dst)
+
+    monkeypatch.setattr(os, "rename", interrupted_second)
+    with pytest.raises(KeyboardInterrupt), fileio.replaced_dir(out) as tmp:
+        (tmp / "report.html").write_text("new")
+    assert _files(out) == ["report.html"] and (out / "report.html").read_text() == "old"
+    assert _files(tmp_path) == ["rep"]
+    monkeypatch.undo()
+    with fileio.replaced_dir(out) as tmp:
+        (tmp / "modes.csv").write_text("new")
+    assert _files(out) == ["modes.csv"] and _files(tmp_path) == ["rep"]
+
+
 # --- item 6: Ctrl-C is one line -----------------------------------------------------------------
 
 def test_ctrl_c_prints_one_line_and_no_worker_traceback(tmp_path):
