@@ -19,7 +19,6 @@ Importing pipeline imports nothing heavy and installs import hooks for short com
 import contextlib
 import importlib.abc
 import importlib.util
-import json
 import sys
 
 
@@ -236,10 +235,8 @@ def make_report(cube_or_path, out_dir, points=None, overwrite=False, over=None, 
 
         forced = result_kinds.open_kind(over, result_kinds.CONTINUATION)
         backbone_result.check_forced(ds, forced)
-    with fileio.replaced_dir(out_dir) as tmp:
-        files = kind.report(ds, tmp, points=points, forced=forced, say=sweep.phase_printer(stream))
-        (tmp / fileio.REPORT_MARKER).write_text(json.dumps(identity, indent=2) + "\n")
-    return fileio.moved(files, tmp, out_dir)
+    return fileio.report_into(out_dir, lambda tmp: kind.report(ds, tmp, points=points, forced=forced,
+                                                               say=sweep.phase_printer(stream)), identity)
 
 
 def backbones(config=None, output=None, **kwargs):

@@ -29,7 +29,7 @@ import numpy as np
 import xarray as xr
 from scipy.interpolate import CubicSpline
 
-from rotorsweep.pipeline import cluster, result_kinds, results, runlog
+from rotorsweep.pipeline import cluster, result_kinds, results
 from rotorsweep.pipeline.config import ConfigError, settings_problems
 from rotorsweep.kernels import nnm
 from rotorsweep.kernels.continuation import backbone as cb
@@ -401,18 +401,16 @@ def open_result(path):
 
 def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr, resume=False):
     """Compute the backbones a config asks for into a netCDF result at `output`; returns its path.
-    Each finished line is kept as a part file until the result is written (`resume`: computes
-    only the lines missing, see rotorsweep.pipeline.results)."""
+    Line by line, each kept as a part file until the result is written (`resume`: see results.run_result)."""
     pl = plan(cfg.scene)
-    with (results.result_output(cfg, output, overwrite, scheduler, resume) as (output, parts),
-          runlog.log_file(output, "backbone")):
+
+    def dataset(parts):
         results.say(stream, f"backbones of {cfg.scene.model_name} on {len(pl.lines)} line(s)"
                             f"{'' if pl.continuation else ' (manifold only)'}")
         lines = results.run_lines(cfg, backbone_line, pl.lines, workers, scheduler, stream, _line_summary, parts,
                                   unit="backbone_line")
-        provenance = cluster.provenance(cfg, result_kinds.BACKBONE)
-        results.say(stream, f"writing the result: {output}")
-        return results.finish(to_dataset(cfg.scene, pl, lines, provenance), output, parts)
+        return to_dataset(cfg.scene, pl, lines, cluster.provenance(cfg, result_kinds.BACKBONE))
+    return results.run_result(cfg, result_kinds.BACKBONE, output, dataset, stream, overwrite, scheduler, resume)
 
 
 def _line_summary(line):

@@ -478,7 +478,7 @@ INTERRUPTED = {
     "continue": ("lines", "the output"),
     "backbone": ("lines", "the output"),
     "report": (None, "the report directory"),
-    "modes": (None, "the Campbell table file"),
+    "modes": (None, "the Campbell table file (-o) and the report directory"),
 }
 
 

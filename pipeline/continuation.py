@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from rotorsweep.pipeline import cluster, compute, result_kinds, results, runlog, schema, torus_branches
+from rotorsweep.pipeline import cluster, compute, result_kinds, results, schema, torus_branches
 from rotorsweep.pipeline.coexistence import (  # noqa: F401 (the continuation result's readers use these names)
     bistable_intervals, branch_copy_of, coexistence, distinct_branches, distinct_events, event_copy_of, line_coexistence,
     mark_copies, stability_classes,
@@ -453,15 +453,13 @@ def open_result(path):
 
 def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr, resume=False):
     """Run the continuation a config asks for into a netCDF result at `output`; returns its path.
-    Each finished line is kept as a part file until the result is written (`resume`: computes
-    only the lines missing, see rotorsweep.pipeline.results)."""
+    Line by line, each kept as a part file until the result is written (`resume`: see results.run_result)."""
     pl = plan(cfg.scene)
-    with (results.result_output(cfg, output, overwrite, scheduler, resume) as (output, parts),
-          runlog.log_file(output, "continue")):
+
+    def dataset(parts):
         lines = _run_lines(cfg, pl, workers, scheduler, stream, parts)
-        ds = to_dataset(cfg.scene, pl, lines, cluster.provenance(cfg, result_kinds.CONTINUATION))
-        results.say(stream, f"writing the result: {output}")
-        return results.finish(ds, output, parts)
+        return to_dataset(cfg.scene, pl, lines, cluster.provenance(cfg, result_kinds.CONTINUATION))
+    return results.run_result(cfg, result_kinds.CONTINUATION, output, dataset, stream, overwrite, scheduler, resume)
 
 
 def _run_lines(cfg, pl, workers, scheduler, stream, parts):

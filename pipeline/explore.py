@@ -270,10 +270,8 @@ def campbell(ds, **kwargs):
     """
     from rotorsweep.pipeline.report.figures import mode_campbell
 
-    if not mode_campbell.has_linear_analysis(ds):
-        raise ValueError(f"model {ds.attrs.get('model')}: no Campbell diagram (it needs a linearization, a shaft "
-                         "speed and the scene stored in the result)")
-    return mode_campbell.result_figure(ds, "bokeh").opts(**kwargs)
+    return _linear_figure(ds, mode_campbell, mode_campbell.has_linear_analysis(ds), "Campbell diagram",
+                          "a linearization, a shaft speed", kwargs)
 
 
 @plotting
@@ -288,9 +286,15 @@ def mode_shapes(ds, **kwargs):
     """
     from rotorsweep.pipeline.report.figures import mode_shapes as figure
 
-    if not figure.has_stations(ds):
-        raise ValueError(f"model {ds.attrs.get('model')}: no mode shapes (they need a linearization, a shaft "
-                         "speed, coordinates that name stations and the scene stored in the result)")
+    return _linear_figure(ds, figure, figure.has_stations(ds), "mode shapes",
+                          "a linearization, a shaft speed, coordinates that name stations", kwargs)
+
+
+def _linear_figure(ds, figure, available, what, needs, kwargs):
+    """A figure of the scene's linearization (figure.result_figure), or a ValueError saying what it needs."""
+    if not available:
+        raise ValueError(f"model {ds.attrs.get('model')}: no {what} (it needs {needs} and the scene stored in "
+                         "the result)")
     return figure.result_figure(ds, "bokeh").opts(**kwargs)
 
 

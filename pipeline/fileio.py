@@ -199,21 +199,46 @@ def _read_json(path):
 @contextlib.contextmanager
 def replaced_dir(out):
     """Yield a new temp directory next to `out`; on success it takes the place of `out` (the
-    old directory and every file in it go), so no file of an earlier report survives."""
+    old directory and every file in it go), so no file of an earlier report survives. A failure
+    or Ctrl-C before the end leaves `out` as it was (or absent) and removes the temp directory."""
     out = Path(out).absolute()
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp"))
     try:
         yield tmp
         os.chmod(tmp, 0o777 & ~_umask())            # mkdtemp makes it 0700
-        old = tmp.with_suffix(".old")
-        if out.exists():
-            os.rename(out, old)
-        os.rename(tmp, out)
-        shutil.rmtree(old, ignore_errors=True)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+    _swap_in(tmp, out)
+
+
+def _swap_in(tmp, out):
+    """Rename `tmp` to `out`, the old `out` set aside first and removed after; interrupted between
+    the two renames (Ctrl-C lands between any two Python statements), the old `out` comes back."""
+    old = tmp.with_suffix(".old")
+    try:
+        if out.exists():
+            os.rename(out, old)
+        os.rename(tmp, out)
+    except BaseException:
+        if old.exists() and not out.exists():
+            os.rename(old, out)
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def report_into(out, build, identity=None):
+    """The report `build(directory)` -> its paths (a dict, as make_report returns) built in a temp
+    directory next to `out`, with the marker of `identity` (None: none), then put in `out`'s place
+    whole (replaced_dir); returns the paths as they are in `out`. Check `out` first (check_report_dir):
+    whatever `out` holds is replaced."""
+    with replaced_dir(out) as tmp:
+        files = build(tmp)
+        if identity is not None:
+            (tmp / REPORT_MARKER).write_text(json.dumps(identity, indent=2) + "\n")
+    return moved(files, tmp, out)
 
 
 def moved(paths, old_dir, new_dir):

@@ -15,7 +15,7 @@ import os
 
 import numpy as np
 
-from rotorsweep.pipeline import cluster, cube, fileio, runlog, warmup, workload
+from rotorsweep.pipeline import cluster, cube, fileio, result_kinds, runlog, warmup, workload
 
 
 def write(ds, path):
@@ -85,6 +85,19 @@ def _write_failure(exc, output, parts):
     kept = (f"the {n} finished line(s) are kept in {parts}; fix the cause and rerun with --resume"
             if n else "no finished line was kept")
     return f"the run into {output} stopped: {fileio.os_error_text(exc)}; {kept}"
+
+
+def run_result(cfg, kind, output, dataset, stream, overwrite=False, scheduler=None, resume=False):
+    """The frame of a command that writes a result line by line (rotorsweep continue, backbone):
+    the output locked with its parts (result_output), the run logged into `<output>.log` (appended
+    to on a resume), `dataset(parts)` -> the result's Dataset, written and its parts dropped;
+    returns the absolute output path."""
+    command = result_kinds.KINDS[kind].command
+    with (result_output(cfg, output, overwrite, scheduler, resume) as (output, parts),
+          runlog.log_file(output, command, append=resume)):
+        ds = dataset(parts)
+        say(stream, f"writing the result: {output}")
+        return finish(ds, output, parts)
 
 
 def finish(ds, output, parts):

@@ -125,8 +125,9 @@ _ANGULAR_DEFAULT_DEG = 26
 # i.e. R1 + 2 R_K = 27.8505 mm and 2 R_K - d = 0.3455 mm (e.g. R_K ~ 5.9253, d ~ 11.505 mm) instead
 # of 27.86 and 0.35 mm. The published angles are therefore the geometric free angles of a slightly
 # different ball/groove pair than the one printed. `table_geometry` takes the printed values as
-# printed (nominal angle = a label, free angle from R1, R2, R_K, d: groove_free_angle); the older
-# `preset("angular_contact_medium", angle)` keeps the nominal angle as its free angle.
+# printed (nominal angle = a label, free angle from R1, R2, R_K, d: groove_free_angle), and so does
+# `preset("angular_contact_medium", angle, free_angle="geometry")`; `preset`'s default keeps the
+# label as the free angle (FREE_ANGLE_SOURCES), the reading jeffcott_clearance's scenes use.
 PRESETS = {
     "209": "Bai 2006 deep-groove ball bearing 209: D_m = 65.0 mm, D_b = 12.7 mm, "
            "r_i = r_o = 6.6 mm, 9 balls, E = 2.08e11 Pa, nu = 0.3; contact angle from clearance",
@@ -137,8 +138,18 @@ PRESETS = {
 }
 
 
-def preset(name: str, nominal_angle_deg: float | None = None) -> BearingGeometry:
-    """Named bearing geometry. ``nominal_angle_deg`` selects the angular-contact variant."""
+# Where an angular-contact preset's free (unloaded) contact angle comes from: its row's label, or its
+# groove geometry (groove_free_angle), as rigid_preloaded's `bearing.free_angle` says it.
+FREE_ANGLE_SOURCES = ("nominal", "geometry")
+
+
+def preset(name: str, nominal_angle_deg: float | None = None, free_angle: str = "nominal") -> BearingGeometry:
+    """Named bearing geometry. ``nominal_angle_deg`` selects the angular-contact variant (a row of
+    the 2016 table); ``free_angle`` (FREE_ANGLE_SOURCES) its nominal_contact_angle: "nominal", the
+    row's label (1.6 to 5.1 deg above what the printed radii give), or "geometry", from R1, R2, R_K, d as
+    table_geometry has it. The deep-groove 209 has no free angle of its own (0: from the clearance)."""
+    if free_angle not in FREE_ANGLE_SOURCES:
+        raise ValueError(f"free_angle must be one of {FREE_ANGLE_SOURCES}, got {free_angle!r}")
     if name == "209":
         if nominal_angle_deg not in (None, 0, 0.0):
             raise ValueError("preset '209' is a deep-groove bearing: its contact angle follows from "
@@ -153,8 +164,8 @@ def preset(name: str, nominal_angle_deg: float | None = None) -> BearingGeometry
         if key is None:
             raise ValueError(f"preset 'angular_contact_medium': nominal_angle_deg must be one of "
                              f"{sorted(_ANGULAR_R2_MM)} deg, got {nominal_angle_deg}")
-        geom = table_geometry("filipkovsky2016", key)
-        return replace(geom, name=f"angular_contact_medium_{key}deg", nominal_contact_angle=math.radians(key))
+        geom = replace(table_geometry("filipkovsky2016", key), name=f"angular_contact_medium_{key}deg")
+        return geom if free_angle == "geometry" else replace(geom, nominal_contact_angle=math.radians(key))
     raise ValueError(f"unknown bearing preset {name!r}; allowed: {sorted(PRESETS)}")
 
 

@@ -60,3 +60,11 @@ def tiny_run(tmp_path_factory):
 @pytest.fixture(scope="session")
 def tiny_cube(tiny_run):
     return tiny_run[0]
+
+
+@pytest.fixture
+def small_config(tmp_path):
+    """tests/test_pipeline.py's SMALL sweep as a config file (that module has a module-scoped one)."""
+    from tests.harness import config_file
+    from tests.test_pipeline import SMALL
+    return config_file(tmp_path, "small.toml", SMALL)

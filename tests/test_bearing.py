@@ -1,4 +1,5 @@
 """Tests of rotorsweep.kernels.bearing: Hertz constants, contact angles, preload state, presets."""
+import dataclasses
 import math
 
 import numpy as np
@@ -439,6 +440,21 @@ def test_angular_contact_radii_encode_the_angle(angle):
     cos_a0 = (16.0 + 2 * 5.93 - r2_mm) / (2 * 5.93 - 11.51)
     assert groove_free_angle(geom) == pytest.approx(math.acos(cos_a0), rel=1e-9)
     assert math.degrees(groove_free_angle(geom)) < angle - 1.5
+
+
+@pytest.mark.parametrize("angle", ANGLES)
+def test_an_angular_preset_takes_its_free_angle_from_the_groove_geometry_when_asked(angle):
+    """free_angle="geometry": eq. 10 at zero load on the radii typed here from the 2016 table
+    (cos a0 = (R1 + 2 R_K - R2) / (2 R_K - d); rounding of the sums: 1e-9), as table_geometry and
+    rigid_preloaded's default have it; the default keeps the label; the preload starts from it."""
+    geom = preset("angular_contact_medium", angle, free_angle="geometry")
+    closed_form = math.acos((R1_MM + 2 * RK_MM - R2_MM[angle]) / (2 * RK_MM - D_MM))
+    assert geom.nominal_contact_angle == pytest.approx(closed_form, rel=1e-9)
+    assert geom == dataclasses.replace(table_geometry("filipkovsky2016", angle), name=geom.name)
+    assert preset("angular_contact_medium", angle).nominal_contact_angle == math.radians(angle)
+    assert preload_state(geom, 0.0).contact_angle == geom.nominal_contact_angle
+    with pytest.raises(ValueError, match="free_angle must be one of"):
+        preset("angular_contact_medium", angle, free_angle="label")
 
 
 def test_geometry_validation():

@@ -33,6 +33,9 @@ COMMANDS = {
                              "max_abs_multiplier"], HEAVY + ("pint",)),
     "point": (["-m", "rotorsweep.pipeline.cli", "point", "--speed", "100", "--clearance", "7.6e-6"],
               HEAVY + ("xarray", "pandas", "netCDF4", "pint")),
+    # a unit string loads pint, and pint alone (not the Dask it would import: units._pint_without_dask)
+    "point with units": (["-m", "rotorsweep.pipeline.cli", "point", "--speed", "600 rpm", "--clearance", "7.6 um"],
+                         HEAVY + ("xarray", "pandas", "netCDF4")),
 }
 
 

@@ -234,3 +234,36 @@ def test_mode_shapes_figure_has_a_panel_per_mode():
     assert [c.label for c in fig.values()[0].values() if c.label] == ["station 1", "station 2", "disc"]
     with style.backend("bokeh") as hv:
         hv.render(fig, backend="bokeh")
+
+
+def test_an_undamped_scene_has_exactly_zero_damping_in_every_table_and_the_campbell_colours():
+    """The 2010 papers' rotor has no damping: the eigen-solver's noise in -Re s / |s| (1e-17 to
+    4e-16 here, as modal.modes_of gives it) lies below modes.zeta_rounding's LAPACK error bound
+    (2e-15 to 1.5e-14) and comes out as exactly 0: the table, --json and the Campbell diagram's colour
+    scale of the damping ratio."""
+    from rotorsweep.pipeline import config
+    from rotorsweep.pipeline.report.figures import mode_campbell
+
+    cfg = config.load_config(ROOT_CONFIGS / "filipkovsky2010_symmetric.toml", whole_grid=False)
+    spec, values = cfg.model, modes.scene_values(cfg.scene, modes.at_point(cfg, {}))
+    _, system = spec.linear_system(values)
+    raw = [m.damping_ratio for m in modal.modes_of(system.M, system.C, system.G, system.K, None)]
+    upper, rounding = modes.zeta_rounding(system)
+    assert any(z != 0.0 for z in raw) and max(np.abs(raw)) <= min(rounding) < 1e-13
+    assert [m["damping_ratio"] for m in modes.records(spec, values)["modes"]] == [0.0] * 4
+    assert {row[3] for row in modes.campbell(spec, values, [0.0, 100.0, 400.0, 1000.0])} == {0.0}
+    diagram = mode_campbell.fig_mode_campbell(cfg.scene, "bokeh", speeds=np.linspace(10.0, 1000.0, 12))[0]
+    (points,) = [e for e in diagram if "zeta" in [d.name for d in e.vdims]]
+    assert set(points.dimension_values("zeta")) == {0.0}
+
+
+def test_a_light_but_real_damping_ratio_is_kept():
+    """x'' + 2 zeta x' + x = 0 with zeta = 1e-9: far above the rounding bound of this 2x2
+    problem (2 eps ||B||_1 / |s| ~ 1e-15), the damping ratio is zeta to the eigenvalue's own
+    error, eps |s| = 2e-16 absolute."""
+    from rotorsweep.pipeline import config
+
+    text = (ROOT_CONFIGS / "duffing_resonance.toml").read_text().replace("zeta = 0.05", "zeta = 1e-9")
+    cfg = config.parse_config(text)
+    (mode,) = modes.records(cfg.model, modes.scene_values(cfg.scene, modes.at_point(cfg, {})))["modes"]
+    assert mode["damping_ratio"] == pytest.approx(1e-9, abs=1e-15)

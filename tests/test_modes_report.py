@@ -145,3 +145,37 @@ def test_the_reference_catches_a_missing_mode_shapes_plot(quick_report, tmp_path
     page = browser.blank_figure(quick_report[0] / "report.html", tmp_path / "blank.html", 1)
     screenshots.capture(page, tmp_path / "blank.png")
     assert browser.difference(tmp_path / "blank.png", browser.REFERENCES / "modes.png")[0] > browser.FRACTION_TOL
+
+
+def _contents(directory):
+    return {p.name: p.read_bytes() for p in directory.iterdir()}
+
+
+def test_an_interrupted_report_leaves_the_earlier_one_or_none(tmp_path, monkeypatch, capsys):
+    """Ctrl-C after modes.csv is written and before report.html: the directory is as it was
+    (absent, or the earlier report byte for byte) and no temp directory is left next to it."""
+    from rotorsweep.pipeline.report import page
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    out, duffing = tmp_path / "report", str(ROOT_CONFIGS / "duffing_resonance.toml")
+    monkeypatch.setattr(page, "save_html", interrupted)
+    assert cli.main(["modes", duffing, "--report", str(out)]) == 130
+    assert "report directory is as it was" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+    monkeypatch.undo()
+    assert cli.main(["modes", duffing, "--report", str(out)]) == 0
+    before = _contents(out)
+    monkeypatch.setattr(page, "save_html", interrupted)
+    assert cli.main(["modes", duffing, "--at", "omega=1.3", "--report", str(out)]) == 130
+    assert _contents(out) == before and [p.name for p in tmp_path.iterdir()] == ["report"]
+
+
+def test_a_modes_report_never_goes_into_a_foreign_directory(tmp_path, capsys):
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "thesis.tex").write_text("precious")
+    assert cli.main(["modes", str(ROOT_CONFIGS / "duffing_resonance.toml"), "--report", str(mine)]) == 2
+    assert "holds no rotorsweep report" in capsys.readouterr().err
+    assert _contents(mine) == {"thesis.tex": b"precious"}

@@ -13,7 +13,8 @@ import pytest
 
 from rotorsweep.pipeline import compute, config, cube, scene, schema, sweep
 from rotorsweep.pipeline.cluster import connect
-from tests.test_pipeline import CLI, SMALL, data_vars, rotorsweep
+from tests.harness import assert_same_cube, config_file, wait_for_parts
+from tests.test_pipeline import CLI, SMALL, rotorsweep
 
 LONG = SMALL.replace("speed = {start = 70.0, stop = 100.0, step = 3.0}",
                      "speed = {start = 10.0, stop = 250.0, step = 0.5}").replace(
@@ -23,9 +24,7 @@ LONG = SMALL.replace("speed = {start = 70.0, stop = 100.0, step = 3.0}",
 
 @pytest.fixture(scope="module")
 def long_config(tmp_path_factory):
-    path = tmp_path_factory.mktemp("cfg") / "long.toml"
-    path.write_text(LONG)
-    return path
+    return config_file(tmp_path_factory.mktemp("cfg"), "long.toml", LONG)
 
 
 @pytest.fixture(scope="module")
@@ -33,16 +32,6 @@ def uninterrupted(long_config, tmp_path_factory):
     out = tmp_path_factory.mktemp("ref") / "long.nc"
     rotorsweep("run", long_config, "-o", out, "--workers", "2", "-q")
     return out
-
-
-def wait_for_parts(parts, proc, minimum=1, timeout=300):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if parts.is_dir() and len([p for p in parts.iterdir() if p.suffix == ".npz"]) >= minimum:
-            return
-        assert proc.poll() is None, "the sweep ended before it could be interrupted"
-        time.sleep(0.05)
-    raise AssertionError("no part file appeared")
 
 
 def test_resume_after_sigkill_gives_the_uninterrupted_cube(long_config, uninterrupted, tmp_path):
@@ -57,9 +46,7 @@ def test_resume_after_sigkill_gives_the_uninterrupted_cube(long_config, uninterr
     resumed = rotorsweep("run", long_config, "-o", out, "--workers", "2", "--resume")
     first = re.search(r"\] (\d+)/(\d+) points", resumed.stderr)
     assert first and 0 < int(first.group(1)) < int(first.group(2)), resumed.stderr  # only missing work
-    a, b = data_vars(uninterrupted), data_vars(out)
-    for name in a.data_vars:
-        np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+    assert_same_cube(uninterrupted, out)
 
 
 def test_resume_refuses_parts_of_a_changed_config(long_config, tmp_path):
@@ -95,9 +82,7 @@ def test_sweep_survives_the_loss_of_a_worker(long_config, uninterrupted, tmp_pat
             time.sleep(0.05)
         os.kill(next(iter(pids.values())), signal.SIGKILL)     # one worker dies mid-sweep
         runner.join(timeout=600)
-    a, b = data_vars(uninterrupted), data_vars(out)
-    for name in a.data_vars:
-        np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+    assert_same_cube(uninterrupted, out)
 
 
 def test_numerical_faults_are_statuses_not_crashes():

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from rotorsweep.pipeline import cube
-from tests.test_pipeline import CLI, SMALL, data_vars, rotorsweep
-from tests.test_reliability import wait_for_parts
+from tests.harness import assert_same_cube, stop, wait_for_file, wait_for_parts
+from tests.test_pipeline import CLI, SMALL, rotorsweep
 
 DASK = str(Path(sys.executable).with_name("dask"))
 
@@ -39,9 +39,7 @@ def dask_cluster(tmp_path, n_workers, nanny):
     procs = [subprocess.Popen([DASK, "scheduler", *local, "--port", "0", "--dashboard-address", "127.0.0.1:0",
                                "--scheduler-file", str(sched_file)], stderr=subprocess.DEVNULL)]
     try:
-        deadline = time.monotonic() + 60
-        while not sched_file.exists() and time.monotonic() < deadline:
-            time.sleep(0.1)
+        wait_for_file(sched_file)
         env = {**os.environ, "NUMBA_NUM_THREADS": "1"}
         procs += [subprocess.Popen([DASK, "worker", *local, "--nthreads", "1", "--scheduler-file", str(sched_file),
                                     "--nanny" if nanny else "--no-nanny"], stderr=subprocess.DEVNULL, env=env)
@@ -50,25 +48,12 @@ def dask_cluster(tmp_path, n_workers, nanny):
             client.wait_for_workers(n_workers, timeout=120)
             yield json.loads(sched_file.read_text())["address"], client
     finally:
-        for proc in reversed(procs):
-            proc.terminate()
-        for proc in procs:
-            try:
-                proc.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                proc.kill()
+        stop(procs[::-1])
 
 
 def worker_pids(client):
     """pid of each worker process (the one that computes; under a nanny, the nanny's child)."""
     return list(client.run(os.getpid).values())
-
-
-def assert_same_cube(reference, other):
-    a, b = data_vars(reference), data_vars(other)
-    assert set(a.data_vars) == set(b.data_vars)
-    for name in a.data_vars:
-        np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
 
 
 @pytest.mark.slow    # 17-41 s: the default suite stays under 15 min on 2 cores (make test-slow)

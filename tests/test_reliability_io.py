@@ -12,14 +12,8 @@ import pytest
 from rotorsweep.pipeline import cli, config, cube, fileio, gridsize, sweep
 from tests.test_cube import AXES4, PROVENANCE, random_results, _write_random_parts
 from tests.faults import disk_full_after_one_part
+from tests.harness import run_cli, wait_for_parts
 from tests.test_pipeline import CLI, SMALL, rotorsweep
-
-
-@pytest.fixture
-def small_config(tmp_path):
-    path = tmp_path / "small.toml"
-    path.write_text(SMALL)
-    return path
 
 
 # --- item 1: one run per output, parts of one config ------------------------------------------
@@ -106,13 +100,6 @@ def test_an_unreachable_scheduler_fails_fast_before_any_work(small_config, tmp_p
     assert proc.returncode == 2 and address in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
     assert time.monotonic() - t0 < 20          # not Dask's 30 s connect timeout
     assert not cube.parts_dir(out).exists() and not fileio.lock_path(out).exists()
-
-
-def run_cli(capsys, *args):
-    rc = cli.main([str(a) for a in args])
-    err = capsys.readouterr().err
-    assert "Traceback" not in err
-    return rc, err
 
 
 def test_a_read_only_output_directory_is_one_line(small_config, tmp_path, monkeypatch, capsys):
@@ -274,12 +261,37 @@ def test_a_report_never_goes_into_a_file_or_a_foreign_directory(two_cubes, tmp_p
     assert _files(mine) == ["thesis.tex"] and a_file.read_text() == "mine"
 
 
+def test_ctrl_c_between_the_two_renames_of_a_report_keeps_the_old_one(tmp_path, monkeypatch):
+    """replaced_dir sets the old report aside, then renames the new one into place: interrupted
+    in between, the old one comes back; uninterrupted, only the new one is left."""
+    out = tmp_path / "rep"
+    out.mkdir()
+    (out / "report.html").write_text("old")
+    rename, calls = os.rename, []
+
+    def interrupted_second(src, dst):
+        calls.append(dst)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return rename(src, dst)
+
+    monkeypatch.setattr(os, "rename", interrupted_second)
+    with pytest.raises(KeyboardInterrupt), fileio.replaced_dir(out) as tmp:
+        (tmp / "report.html").write_text("new")
+    assert _files(out) == ["report.html"] and (out / "report.html").read_text() == "old"
+    assert _files(tmp_path) == ["rep"]
+    monkeypatch.undo()
+    with fileio.replaced_dir(out) as tmp:
+        (tmp / "modes.csv").write_text("new")
+    assert _files(out) == ["modes.csv"] and _files(tmp_path) == ["rep"]
+
+
 # --- item 6: Ctrl-C is one line -----------------------------------------------------------------
 
 def test_ctrl_c_prints_one_line_and_no_worker_traceback(tmp_path):
     import signal
 
-    from tests.test_reliability import LONG, wait_for_parts
+    from tests.test_reliability import LONG
 
     cfg = tmp_path / "long.toml"
     # 9604 points: seconds of sweeping left after the first part file, so the interrupt cannot

@@ -10,8 +10,8 @@ import xarray as xr
 
 from rotorsweep.pipeline import cli, cube, results
 from tests.faults import disk_full_after_one_part
+from tests.harness import config_file, run_cli, wait_for_parts
 from tests.test_pipeline import CLI
-from tests.test_reliability import wait_for_parts
 
 # three lines (clearances) of Bai 2006's rotor, ~1 s each once compiled
 LINES = """
@@ -34,9 +34,7 @@ period_doubling_switches = 0
 
 @pytest.fixture(scope="module")
 def lines_config(tmp_path_factory):
-    path = tmp_path_factory.mktemp("cfg") / "lines.toml"
-    path.write_text(LINES)
-    return path
+    return config_file(tmp_path_factory.mktemp("cfg"), "lines.toml", LINES)
 
 
 @pytest.fixture(scope="module")
@@ -52,13 +50,6 @@ def assert_same_result(reference, other):
     assert set(a.variables) == set(b.variables)
     for name in a.variables:
         np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
-
-
-def run_cli(capsys, *args):
-    rc = cli.main([str(a) for a in args])
-    err = capsys.readouterr().err
-    assert "Traceback" not in err
-    return rc, err
 
 
 def test_a_line_result_goes_through_a_part_file_exactly(tmp_path):
@@ -101,6 +92,8 @@ def test_a_full_disk_keeps_the_finished_lines_and_resume_gives_the_uninterrupted
     rc, err = run_cli(capsys, *args, "--resume")
     assert rc == 0 and not cube.parts_dir(out).exists()
     assert_same_result(reference, out)
+    # the log keeps the interrupted runs: the first, the failed write and the resume that finished
+    assert (tmp_path / "full.nc.log").read_text().count(f"rotorsweep continue -> {out}") == 3
 
 
 def test_resume_after_the_driver_is_killed_gives_the_uninterrupted_result(lines_config, reference, tmp_path):

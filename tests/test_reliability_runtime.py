@@ -16,24 +16,10 @@ from pathlib import Path
 import pytest
 
 from rotorsweep.pipeline import cli, cluster, cube, fileio, gridsize, preflight, sweep
-from tests.test_pipeline import SMALL, rotorsweep
+from tests.harness import run_cli, stop, wait_for_file, wait_for_parts
 
 CONFIG = Path(__file__).parents[1] / "configs"
 LISTEN_S = 60       # the fake services stop by themselves after this, whatever the test does
-
-
-@pytest.fixture
-def small_config(tmp_path):
-    path = tmp_path / "small.toml"
-    path.write_text(SMALL)
-    return path
-
-
-def run_cli(capsys, *args):
-    rc = cli.main([str(a) for a in args])
-    err = capsys.readouterr().err
-    assert "Traceback" not in err
-    return rc, err
 
 
 def nothing_left(out):
@@ -201,7 +187,7 @@ def test_no_port_of_a_running_sweep_answers_another_process(tmp_path):
     from distributed.security import Security
 
     from tests.test_pipeline import CLI
-    from tests.test_reliability import LONG, wait_for_parts
+    from tests.test_reliability import LONG
 
     cfg = tmp_path / "long.toml"
     cfg.write_text(LONG)
@@ -426,7 +412,6 @@ def test_a_secure_dask_cli_cluster_as_the_readme_starts_it(small_config, tmp_pat
     files; `rotorsweep run --scheduler tls://... --tls-*` sweeps on it, a client without the
     files is one line."""
     import subprocess
-    import sys
 
     from tests.test_reliability_cluster import DASK
 
@@ -439,9 +424,7 @@ def test_a_secure_dask_cli_cluster_as_the_readme_starts_it(small_config, tmp_pat
                                "--dashboard-address", "127.0.0.1:0", "--scheduler-file", str(sched_file)],
                               stderr=subprocess.DEVNULL)]
     try:
-        deadline = time.monotonic() + 60
-        while not sched_file.exists() and time.monotonic() < deadline:
-            time.sleep(0.1)
+        wait_for_file(sched_file)
         address = json.loads(sched_file.read_text())["address"]
         assert address.startswith("tls://127.0.0.1:")
         procs.append(subprocess.Popen([DASK, "worker", address, "--nthreads", "1", "--no-nanny", *tls],
@@ -454,10 +437,4 @@ def test_a_secure_dask_cli_cluster_as_the_readme_starts_it(small_config, tmp_pat
                           "--scheduler-timeout", "2")
         assert rc == 2 and "TLS setting" in err, err
     finally:
-        for proc in procs:
-            proc.terminate()
-        for proc in procs:
-            try:
-                proc.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                proc.kill()
+        stop(procs)

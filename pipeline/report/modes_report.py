@@ -9,7 +9,7 @@ import html
 
 import numpy as np
 
-from rotorsweep.pipeline import modes, query
+from rotorsweep.pipeline import fileio, modes, query
 from rotorsweep.pipeline.report import page
 from rotorsweep.pipeline.report.figures import mode_campbell, mode_shapes
 
@@ -26,8 +26,8 @@ def scene_at(scene, point):
 
 
 def mode_columns(rec):
-    """{header: values} of the modes in a records() dict (MODE_COLUMNS; a |zeta| at rounding level 0)."""
-    zeta = [m["damping_ratio"] if abs(m["damping_ratio"]) > modes.ZETA_ROUNDING else 0.0 for m in rec["modes"]]
+    """{header: values} of the modes in a records() dict (MODE_COLUMNS)."""
+    zeta = [m["damping_ratio"] for m in rec["modes"]]
     values = (list(range(len(rec["modes"]))), [m["damped_frequency_hz"] for m in rec["modes"]],
               [m["undamped_frequency_hz"] for m in rec["modes"]], zeta,
               [float(modes.log_decrement(z)) for z in zeta], [m["whirl"] for m in rec["modes"]],
@@ -75,7 +75,10 @@ def header_html(scene, rec, point, title):
 def make_report(cfg, point, out_dir, campbell_speeds_hz=None, title=None):
     """report.html, a PNG per figure and modes.csv into out_dir for the scene `cfg` at `point`
     {axis: value} (rotorsweep.pipeline.modes.at_point); returns the paths as rotorsweep.pipeline.report.make_report
-    does. campbell_speeds_hz: the Campbell diagram's speeds (default campbell_speeds)."""
+    does. campbell_speeds_hz: the Campbell diagram's speeds (default campbell_speeds). The page is
+    built next to out_dir and replaces an earlier report there whole, once complete (a directory
+    that holds no report is refused: fileio.check_report_dir)."""
+    fileio.check_report_dir(out_dir, None, overwrite=True)
     spec = cfg.model
     scene = scene_at(cfg.scene, point)
     values = modes.scene_values(cfg.scene, point)
@@ -85,7 +88,6 @@ def make_report(cfg, point, out_dir, campbell_speeds_hz=None, title=None):
     title = title or f"Linear modes: {cfg.scene.name}"
     cols = mode_columns(rec)
     # the modes table first, then the figures (the tables of write_result_report go below them)
-    return page.write_result_report(out_dir, title, header_html(cfg.scene, rec, point, title)
-                                    + page.columns_html("Modes", cols, 6),
-                                    lambda backend: figures(scene, grid, speeds, backend), "", cfg.source,
-                                    "modes.csv", query.render(cols, "csv"))
+    return fileio.report_into(out_dir, lambda tmp: page.write_result_report(
+        tmp, title, header_html(cfg.scene, rec, point, title) + page.columns_html("Modes", cols, 6),
+        lambda backend: figures(scene, grid, speeds, backend), "", cfg.source, "modes.csv", query.render(cols, "csv")))
