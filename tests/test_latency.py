@@ -2,6 +2,7 @@
 Dask cluster) changes no result bit; `import rotorsweep`, the command line's parsing, `info`,
 `query` and `point` import no module they do not use (plotting, Dask, scipy's solvers, ...); the
 README's Python example runs as a plain script and in an exec (issue 37)."""
+import json
 import os
 import re
 import subprocess
@@ -104,9 +105,37 @@ def test_measured_unit_costs_are_kept_in_the_cache(tmp_path, monkeypatch):
     assert workload.estimate("point", "duffing", 10) == 10 * workload.DEFAULT_COSTS["point"]
     workload.record("point", "duffing", 4, 2.0)
     assert workload.estimate("point", "duffing", 10) == pytest.approx(5.0)
-    workload.record("point", "duffing", 4, 1.0)        # the largest cost measured is kept
-    assert workload.estimate("point", "duffing", 10) == pytest.approx(5.0)
     assert workload.unit_cost("point", "jeffcott_clearance") == workload.DEFAULT_COSTS["point"]
+
+
+def test_a_unit_costs_the_median_of_its_latest_measurements(tmp_path, monkeypatch):
+    """A run inflated by loading or compiling kernels (the largest cost, which the cache once kept
+    for good) moves the estimate little, and is forgotten after workload.RECENT more runs."""
+    monkeypatch.setenv("ROTORSWEEP_CACHE", str(tmp_path))
+    workload.record("point", "duffing", 10, 200.0)            # compiling: 20 s a point
+    for seconds in (0.1, 0.3, 0.2):
+        workload.record("point", "duffing", 10, seconds)
+    assert workload.unit_cost("point", "duffing") == pytest.approx(0.025)     # median of 20, 0.01, 0.03, 0.02
+    workload.record("point", "duffing", 10, 0.2)
+    assert workload.unit_cost("point", "duffing") == pytest.approx(0.02)
+    for _ in range(workload.RECENT):
+        workload.record("point", "duffing", 10, 0.5)
+    assert workload.unit_cost("point", "duffing") == pytest.approx(0.05)
+    assert len(json.loads(Path(workload.costs_path()).read_text())["point:duffing"]) == workload.RECENT
+
+
+def test_a_cache_written_before_keeps_its_cost_as_one_measurement(tmp_path, monkeypatch):
+    monkeypatch.setenv("ROTORSWEEP_CACHE", str(tmp_path))
+    Path(workload.costs_path()).write_text(json.dumps({"point:duffing": 0.3, "point:other": "bad"}))
+    assert workload.unit_cost("point", "duffing") == pytest.approx(0.3)
+    assert workload.unit_cost("point", "other") == workload.DEFAULT_COSTS["point"]
+    workload.record("point", "duffing", 1, 0.1)
+    workload.record("point", "duffing", 1, 0.2)
+    assert workload.unit_cost("point", "duffing") == pytest.approx(0.2)
+
+
+def test_a_quick_line_does_not_lower_the_default(tmp_path, monkeypatch):
+    monkeypatch.setenv("ROTORSWEEP_CACHE", str(tmp_path))
     workload.record("continuation_line", "duffing", 1, 0.07)       # a quick line does not lower the default
     assert workload.unit_cost("continuation_line", "duffing") == workload.DEFAULT_COSTS["continuation_line"]
 
