@@ -60,6 +60,31 @@ def test_a_continuation_in_process_and_on_a_cluster_give_the_same_bits(tmp_path)
         np.testing.assert_array_equal(here[name].values, there[name].values, err_msg=name)
 
 
+def same_bits(a, b):
+    """Nested records (dicts, lists, tuples, arrays, numbers, text) equal bit for bit."""
+    if isinstance(a, dict):
+        return a.keys() == b.keys() and all(same_bits(a[k], b[k]) for k in a)
+    if isinstance(a, (list, tuple)):
+        return len(a) == len(b) and all(same_bits(x, y) for x, y in zip(a, b))
+    if isinstance(a, str) or a is None:
+        return a == b
+    a, b = np.asarray(a), np.asarray(b)
+    return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+
+
+BAI_FOLD_76 = (ROOT / "configs" / "bai2006_fold.toml").read_text().replace("clearance = [7.6e-6, 19.0e-6]",
+                                                                           "clearance = [7.6e-6]")
+
+
+@pytest.mark.parametrize("text", [DUFFING, BAI_FOLD_76], ids=["duffing", "bai2006_fold_7.6um"])
+def test_kernel_inputs_kept_per_parameter_value_change_no_bit(text, monkeypatch):
+    scene = config.parse_config(text).scene
+    where, = continuation.plan(scene).lines
+    kept = continuation.continue_line(scene, where)
+    monkeypatch.setattr(continuation, "BUILT_KEPT", 0)         # every value built again
+    assert same_bits(kept, continuation.continue_line(scene, where))
+
+
 def test_where_a_command_runs():
     assert cluster.runs_in_process(None, None, 0.1)
     assert not cluster.runs_in_process(None, None, 1e3)
