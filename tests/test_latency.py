@@ -2,6 +2,7 @@
 Dask cluster) changes no result bit; `import rotorsweep`, the command line's parsing, `info`,
 `query` and `point` import no module they do not use (plotting, Dask, scipy's solvers, ...); the
 README's Python example runs as a plain script and in an exec (issue 37)."""
+import gc
 import json
 import os
 import re
@@ -163,6 +164,20 @@ def test_a_quick_line_does_not_lower_the_default(tmp_path, monkeypatch):
     monkeypatch.setenv("ROTORSWEEP_CACHE", str(tmp_path))
     workload.record("continuation_line", "duffing", 1, 0.07)       # a quick line does not lower the default
     assert workload.unit_cost("continuation_line", "duffing") == workload.DEFAULT_COSTS["continuation_line"]
+
+
+def test_only_the_command_line_process_freezes_its_heap_for_the_exit(capsys):
+    """cli.main() as the process (argv from sys.argv) leaves its objects out of the interpreter's
+    shutdown collections; called with arguments (from Python, the tests) it leaves gc as it was."""
+    from rotorsweep.pipeline import cli
+
+    frozen = gc.get_freeze_count()
+    assert cli.main(["scenes"]) == 0 and gc.get_freeze_count() == frozen
+    program = ("import gc, sys; from rotorsweep.pipeline import cli; sys.argv = ['rotorsweep', 'scenes']; "
+               "code = cli.main(); print(code, gc.get_freeze_count() > 0, file=sys.stderr)")
+    proc = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, env=env(), cwd=ROOT,
+                          timeout=300)
+    assert proc.returncode == 0 and proc.stderr.split()[-2:] == ["0", "True"], proc.stderr[-2000:]
 
 
 def test_in_process_tasks_run_by_priority_and_raise_on_result():
