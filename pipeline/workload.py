@@ -2,9 +2,9 @@
 the number of units (sweep points, continuation or backbone lines) times the cost of a unit of
 that kind for the scene's model, the median of the last RECENT measured by earlier in-process runs
 on this machine, kept in the cache directory ($ROTORSWEEP_CACHE, default ~/.cache/rotorsweep:
-costs.json), else a conservative default. The median, not the largest: a run's first units carry
-the one-off cost of loading kernels from the Numba cache or compiling them (seconds), which the
-largest measurement kept for good; one such run among RECENT moves the median little. A wrong
+costs.json), else a conservative default. The median, not the largest: a run's units may carry
+one-off costs (a kernel the warm-up did not load, loaded from the Numba cache or compiled; a busy
+machine), which the largest measurement kept for good; one such run among RECENT moves the median little. A wrong
 estimate costs only time, never results: they are the same bit for bit wherever a command runs."""
 import json
 import math
