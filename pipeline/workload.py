@@ -4,8 +4,9 @@ that kind for the scene's model, the median of the last RECENT measured by earli
 on this machine, kept in the cache directory ($ROTORSWEEP_CACHE, default ~/.cache/rotorsweep:
 costs.json), else a conservative default. The median, not the largest: a run's units may carry
 one-off costs (a kernel the warm-up did not load, loaded from the Numba cache or compiled; a busy
-machine), which the largest measurement kept for good; one such run among RECENT moves the median little. A wrong
-estimate costs only time, never results: they are the same bit for bit wherever a command runs."""
+machine), which the largest measurement kept for good; one such run among RECENT moves the
+median little. A wrong estimate costs only time, never results: they are the same bit for bit
+wherever a command runs."""
 import json
 import math
 import os
