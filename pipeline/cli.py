@@ -3,6 +3,7 @@
 User mistakes (bad config, bad cube, bad query) print one clear message and exit with code 2;
 no traceback."""
 import argparse
+import gc
 import json
 import logging
 import os
@@ -420,6 +421,7 @@ def _recording_interrupts(seen):
 
 
 def main(argv=None):
+    """The command line (argv None: sys.argv, and the process exits when this returns)."""
     args = build_parser().parse_args(argv)
     interrupts = []
     disabled = logging.root.manager.disable
@@ -430,6 +432,11 @@ def main(argv=None):
         if previous is not None:
             signal.signal(signal.SIGINT, previous)
         logging.disable(disabled)
+        if argv is None:
+            # the interpreter's shutdown collections walk every object left (the imports' 300k+
+            # with numba and xarray: 0.1-0.4 s CPU, a third of a small command); frozen, they
+            # are still freed, only not walked (objects in reference cycles stay unfreed)
+            gc.freeze()
 
 
 def _dispatch(args, interrupts):

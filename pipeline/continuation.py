@@ -10,8 +10,10 @@ of the range, and each period doubling met spawns the period-2k branch (branch s
 dimension (its points along `point`, padded with NaN / INT_FILL), its located fold / period
 doubling / Neimark-Sacker points entries of the `event` dimension.
 """
+import functools
 import itertools
 import json
+import math
 import sys
 from dataclasses import dataclass
 
@@ -125,13 +127,23 @@ def _within(value, par):
     return above and below
 
 
+# Kernel inputs kept per line (about 1 kB each): a branch point asks for those of one parameter
+# value several times (its corrector's last iterate, its amplitudes, its record)
+BUILT_KEPT = 4096
+
+
 def line_family(scene, pl, where):
-    """(arclength Family along the parameter at the line `where`, lambda -> Built)."""
+    """(arclength Family along the parameter at the line `where`, lambda -> Built, each value's
+    built once while among the BUILT_KEPT latest)."""
     build = compute.builder(scene)
     values = {**scene.fixed, **where}
 
-    def built(lam):
+    @functools.lru_cache(maxsize=BUILT_KEPT)
+    def built_signed(lam, sign):
         return build({**values, pl.parameter: lam})
+
+    def built(lam):      # keyed with the sign: 0.0 == -0.0, but a build may tell them apart
+        return built_signed(lam, math.copysign(1.0, lam))
     model = scene.model
     # the observables read positions, so their weights do not depend on the forcing period
     weights = extrema.observable_weights(model, built(pl.start).period)

@@ -1,12 +1,16 @@
 """How much work a command's plan is, to choose where it runs (rotorsweep.pipeline.cluster.runs_in_process):
 the number of units (sweep points, continuation or backbone lines) times the cost of a unit of
-that kind for the scene's model, the largest measured by earlier in-process runs on this machine
-(units of one model cost 100-fold more in one scene than in another: a chaotic point, a line through
-a period-doubling cascade) and kept in the cache directory ($ROTORSWEEP_CACHE, default
-~/.cache/rotorsweep: costs.json), else a conservative default. A wrong estimate costs only time, never results: they are the same bit for
-bit wherever a command runs."""
+that kind for the scene's model, the median of the last RECENT measured by earlier in-process runs
+on this machine, kept in the cache directory ($ROTORSWEEP_CACHE, default ~/.cache/rotorsweep:
+costs.json), else a conservative default. The median, not the largest: a run's units may carry
+one-off costs (a kernel the warm-up did not load, loaded from the Numba cache or compiled; a busy
+machine), which the largest measurement kept for good; one such run among RECENT moves the
+median little. A wrong estimate costs only time, never results: they are the same bit for bit
+wherever a command runs."""
 import json
+import math
 import os
+import statistics
 import time
 
 # Default CPU seconds of one unit, where this machine has measured none: above the measured costs
@@ -27,13 +31,25 @@ def _key(unit, model):
     return f"{unit}:{model}"
 
 
+# How many of the latest measurements of a unit's cost the cache keeps (their median is the cost)
+RECENT = 5
+
+
 def _measured():
+    """{key: [latest costs, oldest first]} from the cache (a file of one cost per key, as written
+    before RECENT, reads as one measurement each; anything else as none)."""
     try:
         with open(costs_path()) as f:
             costs = json.load(f)
-        return costs if isinstance(costs, dict) else {}
     except (OSError, ValueError):
         return {}
+    if not isinstance(costs, dict):
+        return {}
+    return {k: [float(c) for c in (v if isinstance(v, list) else [v]) if _is_cost(c)] for k, v in costs.items()}
+
+
+def _is_cost(value):
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and value >= 0 and math.isfinite(value)
 
 
 # Units whose cost depends on the branch far more than on the model (a Bai fold line 0.15 s, its
@@ -43,12 +59,13 @@ FLOORED = ("continuation_line", "backbone_line")
 
 
 def unit_cost(unit, model):
-    """CPU seconds of one `unit` (a DEFAULT_COSTS key) of `model`: measured, else the default
-    (at least the default for FLOORED units)."""
-    cost = _measured().get(_key(unit, model))
-    if not isinstance(cost, (int, float)) or cost < 0:
+    """CPU seconds of one `unit` (a DEFAULT_COSTS key) of `model`: the median of the RECENT
+    latest measured, else the default (at least the default for FLOORED units)."""
+    recent = _measured().get(_key(unit, model))
+    if not recent:
         return DEFAULT_COSTS[unit]
-    return max(float(cost), DEFAULT_COSTS[unit]) if unit in FLOORED else float(cost)
+    cost = statistics.median(recent)
+    return max(cost, DEFAULT_COSTS[unit]) if unit in FLOORED else cost
 
 
 def estimate(unit, model, n):
@@ -57,15 +74,13 @@ def estimate(unit, model, n):
 
 
 def record(unit, model, n, seconds):
-    """Keep the measured cost of a unit (seconds of n units) where it is the largest so far; a
-    cache that cannot be written is left as it is."""
-    if n <= 0:
+    """Add the measured cost of a unit (seconds of n units) to the RECENT latest kept; a cache
+    that cannot be written is left as it is."""
+    if n <= 0 or not _is_cost(seconds / n):
         return
     costs = _measured()
-    earlier = costs.get(_key(unit, model))
-    if isinstance(earlier, (int, float)) and earlier >= seconds / n:
-        return
-    costs[_key(unit, model)] = seconds / n
+    key = _key(unit, model)
+    costs[key] = (costs.get(key, []) + [seconds / n])[-RECENT:]
     path = costs_path()
     tmp = f"{path}.{os.getpid()}.tmp"
     try:

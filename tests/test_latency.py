@@ -2,6 +2,8 @@
 Dask cluster) changes no result bit; `import rotorsweep`, the command line's parsing, `info`,
 `query` and `point` import no module they do not use (plotting, Dask, scipy's solvers, ...); the
 README's Python example runs as a plain script and in an exec (issue 37)."""
+import gc
+import json
 import os
 import re
 import subprocess
@@ -62,6 +64,31 @@ def test_a_continuation_in_process_and_on_a_cluster_give_the_same_bits(tmp_path)
         np.testing.assert_array_equal(here[name].values, there[name].values, err_msg=name)
 
 
+def same_bits(a, b):
+    """Nested records (dicts, lists, tuples, arrays, numbers, text) equal bit for bit."""
+    if isinstance(a, dict):
+        return a.keys() == b.keys() and all(same_bits(a[k], b[k]) for k in a)
+    if isinstance(a, (list, tuple)):
+        return len(a) == len(b) and all(same_bits(x, y) for x, y in zip(a, b))
+    if isinstance(a, str) or a is None:
+        return a == b
+    a, b = np.asarray(a), np.asarray(b)
+    return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+
+
+BAI_FOLD_76 = (ROOT / "configs" / "bai2006_fold.toml").read_text().replace("clearance = [7.6e-6, 19.0e-6]",
+                                                                           "clearance = [7.6e-6]")
+
+
+@pytest.mark.parametrize("text", [DUFFING, BAI_FOLD_76], ids=["duffing", "bai2006_fold_7.6um"])
+def test_kernel_inputs_kept_per_parameter_value_change_no_bit(text, monkeypatch):
+    scene = config.parse_config(text).scene
+    where, = continuation.plan(scene).lines
+    kept = continuation.continue_line(scene, where)
+    monkeypatch.setattr(continuation, "BUILT_KEPT", 0)         # every value built again
+    assert same_bits(kept, continuation.continue_line(scene, where))
+
+
 def test_where_a_command_runs():
     assert cluster.runs_in_process(None, None, 0.1)
     assert not cluster.runs_in_process(None, None, 1e3)
@@ -107,11 +134,53 @@ def test_measured_unit_costs_are_kept_in_the_cache(tmp_path, monkeypatch):
     assert workload.estimate("point", "duffing", 10) == 10 * workload.DEFAULT_COSTS["point"]
     workload.record("point", "duffing", 4, 2.0)
     assert workload.estimate("point", "duffing", 10) == pytest.approx(5.0)
-    workload.record("point", "duffing", 4, 1.0)        # the largest cost measured is kept
-    assert workload.estimate("point", "duffing", 10) == pytest.approx(5.0)
     assert workload.unit_cost("point", "jeffcott_clearance") == workload.DEFAULT_COSTS["point"]
+
+
+def test_a_unit_costs_the_median_of_its_latest_measurements(tmp_path, monkeypatch):
+    """A run inflated by loading or compiling kernels (the largest cost, which the cache once kept
+    for good) moves the estimate little, and is forgotten after workload.RECENT more runs."""
+    monkeypatch.setenv("ROTORSWEEP_CACHE", str(tmp_path))
+    workload.record("point", "duffing", 10, 200.0)            # compiling: 20 s a point
+    for seconds in (0.1, 0.3, 0.2):
+        workload.record("point", "duffing", 10, seconds)
+    assert workload.unit_cost("point", "duffing") == pytest.approx(0.025)     # median of 20, 0.01, 0.03, 0.02
+    workload.record("point", "duffing", 10, 0.2)
+    assert workload.unit_cost("point", "duffing") == pytest.approx(0.02)
+    for _ in range(workload.RECENT):
+        workload.record("point", "duffing", 10, 0.5)
+    assert workload.unit_cost("point", "duffing") == pytest.approx(0.05)
+    assert len(json.loads(Path(workload.costs_path()).read_text())["point:duffing"]) == workload.RECENT
+
+
+def test_a_cache_written_before_keeps_its_cost_as_one_measurement(tmp_path, monkeypatch):
+    monkeypatch.setenv("ROTORSWEEP_CACHE", str(tmp_path))
+    Path(workload.costs_path()).write_text(json.dumps({"point:duffing": 0.3, "point:other": "bad"}))
+    assert workload.unit_cost("point", "duffing") == pytest.approx(0.3)
+    assert workload.unit_cost("point", "other") == workload.DEFAULT_COSTS["point"]
+    workload.record("point", "duffing", 1, 0.1)
+    workload.record("point", "duffing", 1, 0.2)
+    assert workload.unit_cost("point", "duffing") == pytest.approx(0.2)
+
+
+def test_a_quick_line_does_not_lower_the_default(tmp_path, monkeypatch):
+    monkeypatch.setenv("ROTORSWEEP_CACHE", str(tmp_path))
     workload.record("continuation_line", "duffing", 1, 0.07)       # a quick line does not lower the default
     assert workload.unit_cost("continuation_line", "duffing") == workload.DEFAULT_COSTS["continuation_line"]
+
+
+def test_only_the_command_line_process_freezes_its_heap_for_the_exit(capsys):
+    """cli.main() as the process (argv from sys.argv) leaves its objects out of the interpreter's
+    shutdown collections; called with arguments (from Python, the tests) it leaves gc as it was."""
+    from rotorsweep.pipeline import cli
+
+    frozen = gc.get_freeze_count()
+    assert cli.main(["scenes"]) == 0 and gc.get_freeze_count() == frozen
+    program = ("import gc, sys; from rotorsweep.pipeline import cli; sys.argv = ['rotorsweep', 'scenes']; "
+               "code = cli.main(); print(code, gc.get_freeze_count() > 0, file=sys.stderr)")
+    proc = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, env=env(), cwd=ROOT,
+                          timeout=300)
+    assert proc.returncode == 0 and proc.stderr.split()[-2:] == ["0", "True"], proc.stderr[-2000:]
 
 
 def test_in_process_tasks_run_by_priority_and_raise_on_result():
