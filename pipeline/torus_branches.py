@@ -9,8 +9,9 @@ and solved (torus.solve_torus, nodes grown until the Fourier tail is below DECAY
 branch the node count adapts to the circle's spectral decay (tori.follow_tori): it grows (N ->
 2N + 1, at most MAX_NODES) where a point's tail exceeds BREAKDOWN_TOL and shrinks (to no fewer than
 MIN_NODES) where a coarser count keeps it a thousandfold below; the branch ends `torus_breakdown`
-where even MAX_NODES nodes do not bring the tail within BREAKDOWN_TOL. Each point records its
-count (torus_modes: K of its 2K + 1 nodes).
+where even MAX_NODES nodes do not bring the tail within BREAKDOWN_TOL, its detail saying whether a
+contact opens along the last circle (contact_note: contact_loss, the usual cause). Each point
+records its count (torus_modes: K of its 2K + 1 nodes).
 
 Per point: the half-swing (half peak-to-peak) and max |o| of each observable over the torus,
 the torus error estimate and Fourier modes, the normal stability and its largest exponent. The amplitudes are the
@@ -23,7 +24,7 @@ relative for a swing varying over the phase by O(1) of itself, less for weak pha
 """
 import numpy as np
 
-from rotorsweep.pipeline import compute, torus_events
+from rotorsweep.pipeline import compute, torus_events, torus_points
 from rotorsweep.pipeline.torus_points import AMPLITUDE_PHASES, DECAY_TOL, FIRST_NODES, FIT_PERIODS, MAX_NODES, SETTLE_PERIODS
 from rotorsweep.kernels import torus as tr
 from rotorsweep.kernels.continuation import engine, events as ev, tori
@@ -89,9 +90,24 @@ def continue_torus_line(scene, pl, where):
     else:
         run = polished(family, tori.follow_tori(family, first, pl.range, pl.settings, counter,
                                                 torus_events.LOCK_DENOMINATOR))
+        run = run._replace(detail=run.detail + contact_note(spec, family, run))
     record = torus_record(spec, family, built, run, counter.n)
     record["coexistence"] = stable_pieces(record, pl.range)
     return [record]
+
+
+def contact_note(spec, family, run):
+    """Where the branch ends torus_breakdown on a model with contacts: whether a contact opens along
+    its last circle (torus_points.contact_margin), the usual cause (module docstring of
+    torus_points); "" otherwise."""
+    if run.end != engine.TORUS_BREAKDOWN or spec.contact_margin is None or not run.points:
+        return ""
+    last = run.points[-1]
+    margin = torus_points.contact_margin(spec, family.torus(last), family.params(last.lam), family.opts)
+    if not margin < 0:
+        return f"; every contact stays closed along the last circle (smallest deflection {margin:+.3g} of the static one)"
+    return (f"; contact_loss: a contact opens along the last circle (smallest deflection {margin:+.3g} of the "
+            f"static one), the contact force is not smooth there")
 
 
 def polished(family, run):

@@ -75,3 +75,19 @@ def test_a_ball_lifts_off_on_an_independent_run_from_the_circle(point):
             lowest = min(lowest, delta.min() / p[rp.P_OFFSET])
     assert lowest < 0.0
     assert lowest == pytest.approx(margin, abs=0.02)
+
+
+def test_a_branch_ending_torus_breakdown_there_says_contact_loss(point):
+    """A torus branch that ends torus_breakdown at that circle: its detail names the lift-off
+    (torus_branches.contact_note, the same margin as the point's)."""
+    from rotorsweep.kernels.continuation import engine, tori
+    from rotorsweep.pipeline import torus_branches
+
+    data, built, circle = point
+    fam = tori.TorusFamily(data.model.kernel, lambda lam: built.p, lambda lam: built.p[rp.P_WS], rp.P_PHASE,
+                           data.integrator, circle.nodes.shape[0])
+    last = tori.Point(np.append(circle.nodes.ravel(), 0.0), 0.0, None, 0, circle.residual, circle.tail,
+                      tr.stability(circle), circle.monodromies)
+    note = torus_branches.contact_note(data.model, fam, engine.Run([last], [], engine.TORUS_BREAKDOWN, ""))
+    assert note.startswith("; contact_loss: a contact opens along the last circle (smallest deflection -0.03")
+    assert torus_branches.contact_note(data.model, fam, engine.Run([last], [], engine.LEFT_RANGE, "")) == ""
