@@ -19,10 +19,10 @@ shifted nodes theta_j + rho. N grows until the interpolant's highest modes fall 
 tolerance, else the torus ends `fourier_decay_failed` (a torus losing smoothness before it breaks
 down), or `non_smooth_circle` where the tail falls only by a power of N as N doubles (a spectrum
 |c_m| ~ m^-s: the circle is finitely smooth, e.g. where a contact force that is not smooth in the
-state acts along it; `power_law`), the count it would take then projected beyond max_nodes. Each torus carries an error estimate: the invariance defect between the nodes (at the
-midpoints, where collocation does not force it to zero) times the norm of the inverse Jacobian
-(the defect's amplification into a distance from the invariant circle), and not below the Fourier
-tail.
+state acts along it; `power_law`), the count it would take then projected beyond max_nodes. Each
+torus carries an error estimate: the invariance defect between the nodes (at the midpoints, where
+collocation does not force it to zero) times the norm of the inverse Jacobian (the defect's
+amplification into a distance from the invariant circle), and not below the Fourier tail.
 
 Stability (`stability`): the normal Lyapunov exponents of the linearized map over the rotation,
 v -> M(theta) v, theta -> theta + rho (the linearized invariance equation), by QR iteration with

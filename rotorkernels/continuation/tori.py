@@ -3,9 +3,10 @@
 
 Unknowns X = (U, mu): the torus's node values U (N x n, rotorsweep.kernels.torus) and mu = lambda /
 scale. Equations: the collocation residual R(U, lambda) = 0 (the rotation rho(lambda) and the
-kernel vector p(lambda) both follow lambda) and one scalar condition c . X = target. Bordered Newton with dR/dU from the nodes' monodromies and the shift operator,
-dR/dmu by a central difference of two plain collocation residuals (as arclength.Family's
-dphi/dmu: it enters only the Newton matrix and the tangent, never the residual).
+kernel vector p(lambda) both follow lambda) and one scalar condition c . X = target. Bordered
+Newton with dR/dU from the nodes' monodromies and the shift operator, dR/dmu by a central
+difference of two plain collocation residuals (as arclength.Family's dphi/dmu: it enters only the
+Newton matrix and the tangent, never the residual).
 
 The imposed forcing phase is the torus coordinate, so a rational ratio omega / Omega = p / q is
 no special point: there the circle is the union of the q-periodic orbits' stroboscopic points
@@ -320,18 +321,25 @@ def refined(family, point, settings, counter):
 def follow_tori(family, first, lam_range, settings=engine.Settings(), counter=None, max_q=0):
     """engine.follow from `first` within lam_range with the torus events (Resolution, StabilityChange,
     Fold, and Locked at each ratio p / q with q <= max_q), the node count adapted between the
-    engine's runs within family.node_bounds (module docstring): a Run whose points may differ in N."""
+    engine's runs within family.node_bounds (module docstring): a Run whose points may differ in N.
+    (A closed loop is recognized only within one run: its first point is that run's.)"""
     counter = counter or engine.Counter()
     events = (Resolution(), StabilityChange(), Fold(), *locked_ratios(family, lam_range, max_q))
     family = family._replace(min_nodes=family.node_bounds[0], max_nodes=family.node_bounds[1])
     points, found, ds = [], [], settings.ds
     while True:
         family = family._replace(n_nodes=family.nodes(first.X).shape[0])
-        budget = replace(settings, ds=ds, max_steps=max(1, settings.max_steps - len(points)))
+        if len(points) >= settings.max_steps:
+            return engine.Run(points + [first], found, engine.STEP_BUDGET, f"{settings.max_steps} steps")
+        budget = replace(settings, ds=ds, max_steps=settings.max_steps - len(points))
         run = engine.follow(family, first, [tuple(lam_range)], budget, events, counter)
         found += [f._replace(index=f.index + len(points)) for f in run.found if not isinstance(f.event, Resolution)]
         if run.end != TORUS_BREAKDOWN:
-            return engine.Run(points + run.points, found, run.end, run.detail)
+            last = run.points[-1]
+            if last.tail > family.decay_tol:    # an edge point (solved after the run's last step)
+                last = refined(family, last, settings, counter)[0] or last
+            detail = run.detail.replace(f"{budget.max_steps} steps", f"{settings.max_steps} steps", 1)
+            return engine.Run(points + run.points[:-1] + [last], found, run.end, detail)
         b = run.points[-1]
         new, n_nodes = refined(family, b, settings, counter)
         if new is None and n_nodes > family.nodes(b.X).shape[0]:
