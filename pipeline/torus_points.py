@@ -6,8 +6,9 @@ response ([analysis] floquet), the response is an invariant 2-torus, solved here
 The circle comes from a settled transient (torus.torus_from_transient: SETTLE_PERIODS iterates of
 the stroboscopic map, FIT_PERIODS samples fitted by FIRST_NODES nodes, then Newton on all nodes
 with the node count grown until the Fourier tail is below DECAY_TOL, at most MAX_NODES); along a
-segment a point first tries the previous quasi-periodic point's circle as its guess (natural
-continuation, as the orbits are chained: it keeps following one torus where tori coexist, and
+segment a point first tries the previous quasi-periodic point's circle as its guess (on the fewest
+nodes, not below FIRST_NODES, that keep its tail a thousandfold below DECAY_TOL: torus.coarsened;
+natural continuation, as the orbits are chained: it keeps following one torus where tori coexist, and
 reaches tori a transient leaves; not cheaper: a few variational Newton steps cost about what the
 ~500 plain stroboscopic steps of the transient do), the transient only where that fails. The
 same settings serve the torus lines of `rotorsweep continue` (rotorsweep.pipeline.torus_branches).
@@ -51,7 +52,8 @@ def solve(model, built, opts, tol, guess=None):
     p = built.p
     settings = {"tol": tol, "decay_tol": DECAY_TOL, "max_nodes": MAX_NODES}
     if guess is not None:
-        circle = tr.solve_torus(model.kernel, guess, p, phase, p[freq], opts, **settings)
+        circle = tr.solve_torus(model.kernel, tr.coarsened(guess, DECAY_TOL, FIRST_NODES), p, phase, p[freq], opts,
+                                **settings)
         if circle.status == tr.CONVERGED:
             return circle
     return tr.torus_from_transient(model.kernel, model.cold_guess(p), p, phase, p[freq], opts, SETTLE_PERIODS,

@@ -45,6 +45,7 @@ _FINE = 100.0      # tolerance ratio of the error estimate's reference flow
 # not accelerate: geometric decay (an analytic circle) doubles the exponent at each doubling.
 _ACCELERATION = 1.5
 _ROUNDOFF = 1e-12  # a tail this small has reached the coefficients' rounding: no decay law read from it
+COARSEN = 1e-3     # fewer nodes only where their tail stays below this times the decay tolerance (hysteresis)
 
 
 class Torus(NamedTuple):
@@ -170,6 +171,24 @@ def _newton(kernel, nodes, p, phase_index, rho, period, opts, tol, max_iter):
 def resample(nodes, n_nodes):
     """The circle's node values at another (odd) number of nodes, by its interpolant."""
     return interpolation_matrix(nodes.shape[0], node_phases(n_nodes)) @ nodes
+
+
+def coarser(n_nodes):
+    """The next count down the ladder N -> 2N + 1 (odd)."""
+    m = (n_nodes - 1) // 2
+    return m if m % 2 else m + 1
+
+
+def coarsened(nodes, decay_tol, min_nodes):
+    """The circle at the fewest nodes down the ladder (not below min_nodes) that keep its tail
+    below COARSEN times decay_tol (nodes resampled; as given where none does): a guess that
+    does not carry more nodes than its circle needs."""
+    while coarser(nodes.shape[0]) >= min_nodes:
+        small = resample(nodes, coarser(nodes.shape[0]))
+        if fourier_tail(small) > COARSEN * decay_tol:
+            break
+        nodes = small
+    return nodes
 
 
 def error_estimate(kernel, nodes, jac, p, phase_index, rho, period, opts, tail):

@@ -106,7 +106,7 @@ def test_the_node_count_grows_where_the_spectrum_widens():
 
 def test_the_node_count_shrinks_once_where_the_spectrum_narrows():
     """Back from f2 = 8 to 0.5 from 31 nodes: the count shrinks to 15 (where 15 nodes keep the
-    tail below COARSEN times the tolerance) and no further (7 nodes leave a tail ~1e-5), once:
+    tail below torus.COARSEN times the tolerance) and no further (7 nodes leave a tail ~1e-5), once:
     the hysteresis keeps it from going back and forth; the tail stays within the tolerance."""
     fam, run = f2_branch(8.0, 0.5, 31, (7, 63))
     assert run.end == engine.LEFT_RANGE, run.detail

@@ -137,3 +137,15 @@ def test_the_sampled_torus_has_the_linear_half_swing():
     exact = abs(f1 / (k - 4 * np.pi ** 2 + 2j * np.pi * c)) + abs(f2 / (k - w2 ** 2 + 1j * c * w2))
     half = (x.max() - x.min()) / 2.0
     assert exact * np.cos(np.pi / n) <= half <= exact + 1e-10
+
+
+def test_coarsened_keeps_the_fewest_nodes_that_resolve_the_circle():
+    """A trigonometric polynomial of degree 4 on 63 nodes: 15 nodes (K = 7) hold it exactly (tail
+    at rounding), 7 (K = 3) alias its fourth mode onto the third (tail 1e-3): it comes down to 15,
+    and there it is the same circle; with min_nodes 31 it stops at 31."""
+    theta = torus.node_phases(63)[:, None]
+    nodes = np.hstack([np.sin(theta) + 1e-3 * np.sin(4 * theta), np.cos(theta)])
+    small = torus.coarsened(nodes, 1e-9, 7)
+    assert small.shape == (15, 2)
+    assert np.abs(torus.resample(small, 63) - nodes).max() < 1e-13     # two resamplings: ~N eps each
+    assert torus.coarsened(nodes, 1e-9, 31).shape == (31, 2)

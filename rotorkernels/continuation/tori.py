@@ -15,9 +15,9 @@ over the forcing phases, and the branch passes through it.
 The node count N adapts to the circle's spectral decay (`follow_tori`): N is fixed within a run of
 the engine (X keeps its size), and a run ends where an accepted point's N no longer fits its circle
 (`Resolution`): its Fourier tail exceeds the decay tolerance (N -> 2N + 1), or the tail the next
-coarser count would have (the circle resampled there) is below COARSEN times it (N -> (N - 1) / 2,
-odd): the gap of 1/COARSEN between the two thresholds is the hysteresis that keeps N from
-oscillating. The point is then solved again at the new count at its lambda (its circle
+coarser count would have (the circle resampled there) is below torus.COARSEN times it (N -> (N -
+1) / 2, odd): the gap of 1/COARSEN (1e3) between the two thresholds is the hysteresis that keeps N
+from oscillating. The point is then solved again at the new count at its lambda (its circle
 re-interpolated, i.e. its Fourier coefficients zero-padded or truncated, its tangent likewise) and
 the next run goes on from it. A count above the family's max_nodes (or a growth whose re-solve
 fails) ends the branch with `torus_breakdown` (the circle is losing smoothness: no N within the
@@ -187,15 +187,6 @@ def _bordered(jac, col, c):
     return A
 
 
-COARSEN = 1e-3     # shrink N only where the coarser count's tail is below this times the decay tolerance
-
-
-def coarser(n_nodes):
-    """The next count down the ladder N -> 2N + 1 (odd)."""
-    m = (n_nodes - 1) // 2
-    return m if m % 2 else m + 1
-
-
 def wanted_nodes(family, point):
     """The node count the point's circle asks for: 2N + 1 where its tail exceeds the decay
     tolerance (even beyond max_nodes: the caller ends the branch there), the coarser count
@@ -205,8 +196,8 @@ def wanted_nodes(family, point):
     n_nodes = nodes.shape[0]
     if point.tail > family.decay_tol:
         return 2 * n_nodes + 1
-    small = coarser(n_nodes)
-    if small >= family.node_bounds[0] and tr.fourier_tail(tr.resample(nodes, small)) <= COARSEN * family.decay_tol:
+    small = tr.coarser(n_nodes)
+    if small >= family.node_bounds[0] and tr.fourier_tail(tr.resample(nodes, small)) <= tr.COARSEN * family.decay_tol:
         return small
     return n_nodes
 
