@@ -2,16 +2,16 @@
 frequencies, the model's `torus_forcing`), the response is an invariant 2-torus, followed along
 the parameter by rotorsweep.kernels.continuation.tori instead of a periodic orbit.
 
-The first torus comes from a settled transient: the stroboscopic map (one first-forcing period
-T, the second forcing's phase advancing by rho) iterated SETTLE_PERIODS times from the model's
-cold guess, then FIT_PERIODS samples fitted by a trigonometric interpolant (torus.fitted_guess)
-and solved (torus.solve_torus, nodes grown until the Fourier tail is below DECAY_TOL). Along the
-branch the node count adapts to the circle's spectral decay (tori.follow_tori): it grows (N ->
-2N + 1, at most MAX_NODES) where a point's tail exceeds BREAKDOWN_TOL and shrinks (to no fewer than
-MIN_NODES) where a coarser count keeps it a thousandfold below; the branch ends `torus_breakdown`
-where even MAX_NODES nodes do not bring the tail within BREAKDOWN_TOL, its detail saying whether a
-contact opens along the last circle (contact_note: contact_loss, the usual cause). Each point
-records its count (torus_modes: K of its 2K + 1 nodes).
+The first torus comes from a settled transient: the stroboscopic map (one first-forcing period T,
+the second forcing's phase advancing by rho) iterated SETTLE_PERIODS times from the model's cold
+guess, then FIT_PERIODS samples fitted by a trigonometric interpolant (torus.fitted_guess) and
+solved (torus.solve_torus, nodes grown until the Fourier tail is below DECAY_TOL). Along the branch
+the node count adapts to the circle's spectral decay (tori.follow_tori): it grows (N -> 2N + 1, at
+most MAX_NODES) where a point's tail exceeds DECAY_TOL, as the first torus's, and shrinks (to no
+fewer than MIN_NODES) where a coarser count keeps it a thousandfold below; at MAX_NODES the tail
+may rise to BREAKDOWN_TOL, and the branch ends `torus_breakdown` where it exceeds that, its detail
+saying whether a contact opens along the last circle (contact_note: contact_loss, the usual cause).
+Each point records its count (torus_modes: K of its 2K + 1 nodes).
 
 Per point: the half-swing (half peak-to-peak) and max |o| of each observable over the torus,
 the torus error estimate and Fourier modes, the normal stability and its largest exponent. The amplitudes are the
@@ -29,7 +29,7 @@ from rotorsweep.pipeline.torus_points import AMPLITUDE_PHASES, DECAY_TOL, FIRST_
 from rotorsweep.kernels import torus as tr
 from rotorsweep.kernels.continuation import engine, events as ev, tori
 
-BREAKDOWN_TOL = 1e-7    # a branch point's tail above it: more nodes (none beyond MAX_NODES: the branch ends)
+BREAKDOWN_TOL = 1e-7    # a tail above it at MAX_NODES ends the branch (below it: more nodes above DECAY_TOL)
 MIN_NODES = 7           # the fewest nodes a branch shrinks to (3 Fourier modes)
 POLISH_TOL = 1e-12      # each stored circle's residual, relative to max(1, max |U|) (tori.polish)
 TORUS_STATUS = {tr.UNSTABLE: 0, tr.STABLE: 1, tr.UNDECIDED: 2}
@@ -56,7 +56,8 @@ def torus_family(scene, pl, where, n_nodes):
     built = _builder(scene, where, pl.parameter)
     return tori.TorusFamily(spec.kernel, lambda lam: built(lam).p, lambda lam: float(built(lam).p[freq]), phase,
                             scene.integrator, n_nodes, scale=pl.range[1] - pl.range[0],
-                            decay_tol=BREAKDOWN_TOL, min_nodes=MIN_NODES, max_nodes=MAX_NODES), built
+                            decay_tol=DECAY_TOL, min_nodes=MIN_NODES, max_nodes=MAX_NODES,
+                            breakdown_tol=BREAKDOWN_TOL), built
 
 
 def first_torus(scene, pl, where):

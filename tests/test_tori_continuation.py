@@ -65,9 +65,10 @@ def f2_params(f2):
     return np.array([2.0, 0.1, 0.5, 1.0, f2, GOLDEN_W2, 0.0])
 
 
-def f2_branch(f2_from, f2_to, n_nodes, bounds, decay_tol=1e-9):
+def f2_branch(f2_from, f2_to, n_nodes, bounds, decay_tol=1e-9, breakdown_tol=0.0):
     fam = tori.TorusFamily(MODEL.kernel, f2_params, lambda f2: GOLDEN_W2, duffing2.P_PHASE, OPTS, n_nodes,
-                           scale=1.0, decay_tol=decay_tol, min_nodes=bounds[0], max_nodes=bounds[1])
+                           scale=1.0, decay_tol=decay_tol, min_nodes=bounds[0], max_nodes=bounds[1],
+                           breakdown_tol=breakdown_tol)
     tor = tr.solve_torus(MODEL.kernel, np.zeros((n_nodes, 2)), f2_params(f2_from), duffing2.P_PHASE, GOLDEN_W2,
                          OPTS, max_nodes=n_nodes)
     first = tori.start(fam, f2_from, tor.nodes, direction=1 if f2_to > f2_from else -1)
@@ -113,3 +114,12 @@ def test_the_node_count_shrinks_once_where_the_spectrum_narrows():
     counts = node_counts(fam, run)
     assert counts[0] == 31 and counts[-1] == 15 and np.count_nonzero(np.diff(counts)) == 1
     assert max(p.tail for p in run.points) <= 1e-9
+
+
+def test_at_the_top_count_the_tail_may_rise_to_the_breakdown_tolerance():
+    """Capped at 15 nodes with a breakdown tolerance of 1e-6: the branch keeps 15 nodes to f2 = 8
+    (tail 1.7e-7 there) instead of ending where the tail passes the decay tolerance (1e-9)."""
+    fam, run = f2_branch(1.0, 8.0, 15, (7, 15), breakdown_tol=1e-6)
+    assert run.end == engine.LEFT_RANGE, run.detail
+    assert set(node_counts(fam, run)) == {15}
+    assert 1e-9 < max(p.tail for p in run.points) <= 1e-6

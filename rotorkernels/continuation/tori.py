@@ -19,8 +19,9 @@ coarser count would have (the circle resampled there) is below torus.COARSEN tim
 1) / 2, odd): the gap of 1/COARSEN (1e3) between the two thresholds is the hysteresis that keeps N
 from oscillating. The point is then solved again at the new count at its lambda (its circle
 re-interpolated, i.e. its Fourier coefficients zero-padded or truncated, its tangent likewise) and
-the next run goes on from it. A count above the family's max_nodes (or a growth whose re-solve
-fails) ends the branch with `torus_breakdown` (the circle is losing smoothness: no N within the
+the next run goes on from it. At the top count (2N + 1 beyond max_nodes) the tail may rise to the
+family's breakdown_tol (default: the decay tolerance) before the branch ends with
+`torus_breakdown` (as does a growth whose re-solve fails) (the circle is losing smoothness: no N within the
 bounds resolves it); a coarser count whose re-solve misses the tolerance is not tried again on that
 branch. Default bounds min_nodes = max_nodes = the family's n_nodes: a fixed count.
 
@@ -73,6 +74,7 @@ class TorusFamily(NamedTuple):
     decay_tol: float = 1e-8
     min_nodes: int = 0      # bounds of the adaptive node count (0: n_nodes, a fixed count)
     max_nodes: int = 0
+    breakdown_tol: float = 0.0  # the tail that ends the branch at max_nodes (0: decay_tol)
 
     @property
     def node_bounds(self):
@@ -187,14 +189,21 @@ def _bordered(jac, col, c):
     return A
 
 
+def acceptable_tail(family, n_nodes):
+    """The largest tail a circle on n_nodes nodes may keep: the decay tolerance while the count can
+    still grow within max_nodes, the breakdown tolerance at the top of the ladder."""
+    top = 2 * n_nodes + 1 > family.node_bounds[1]
+    return (family.breakdown_tol or family.decay_tol) if top else family.decay_tol
+
+
 def wanted_nodes(family, point):
-    """The node count the point's circle asks for: 2N + 1 where its tail exceeds the decay
-    tolerance (even beyond max_nodes: the caller ends the branch there), the coarser count
+    """The node count the point's circle asks for: 2N + 1 where its tail exceeds the acceptable one
+    (even beyond max_nodes: the caller ends the branch there), the coarser count
     where the circle resampled there keeps its tail below COARSEN times the tolerance (not below
     min_nodes), else its own N."""
     nodes = family.nodes(point.X)
     n_nodes = nodes.shape[0]
-    if point.tail > family.decay_tol:
+    if point.tail > acceptable_tail(family, n_nodes):
         return 2 * n_nodes + 1
     small = tr.coarser(n_nodes)
     if small >= family.node_bounds[0] and tr.fourier_tail(tr.resample(nodes, small)) <= tr.COARSEN * family.decay_tol:
@@ -212,8 +221,9 @@ class Resolution(ev.BranchEvent):
         return wanted_nodes(problem, b) != problem.nodes(b.X).shape[0]
 
     def end_detail(self, problem, point, a, b):
-        return (f"Fourier decay failed at {problem.where(b)}: tail {b.tail:.2g} > {problem.decay_tol:g} "
-                f"with {problem.nodes(b.X).shape[0]} nodes (at most {problem.node_bounds[1]})")
+        n_nodes = problem.nodes(b.X).shape[0]
+        return (f"Fourier decay failed at {problem.where(b)}: tail {b.tail:.2g} > "
+                f"{acceptable_tail(problem, n_nodes):g} with {n_nodes} nodes (at most {problem.node_bounds[1]})")
 
 
 class StabilityChange(ev.BranchEvent):
@@ -289,12 +299,12 @@ def resampled(family, vector, n_nodes):
 
 def resolved(family, point, n_nodes, settings, counter):
     """The point solved again with n_nodes nodes at its lambda, from its circle and tangent
-    re-interpolated there: a Point, or None where Newton fails or the tail still exceeds the decay
-    tolerance."""
+    re-interpolated there: a Point, or None where Newton fails or the tail still exceeds the
+    acceptable one."""
     t = resampled(family, point.tangent, n_nodes)
     new = solve_at_lambda(family, resampled(family, point.X, n_nodes), engine.Seed(t / np.linalg.norm(t)),
                           settings, counter)
-    return new if new is not None and new.tail <= family.decay_tol else None
+    return new if new is not None and new.tail <= acceptable_tail(family, n_nodes) else None
 
 
 def refined(family, point, settings, counter):
@@ -327,7 +337,7 @@ def follow_tori(family, first, lam_range, settings=engine.Settings(), counter=No
         found += [f._replace(index=f.index + len(points)) for f in run.found if not isinstance(f.event, Resolution)]
         if run.end != TORUS_BREAKDOWN:
             last = run.points[-1]
-            if last.tail > family.decay_tol:    # an edge point (solved after the run's last step)
+            if last.tail > acceptable_tail(family, family.n_nodes):   # an edge point (solved after the last step)
                 last = refined(family, last, settings, counter)[0] or last
             detail = run.detail.replace(f"{budget.max_steps} steps", f"{settings.max_steps} steps", 1)
             return engine.Run(points + run.points[:-1] + [last], found, run.end, detail)
