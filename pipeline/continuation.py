@@ -325,7 +325,8 @@ def _torus_variables(records, stable):
     torus = status >= 0
     return ({"branch_kind": np.array([int("torus_status" in r) for _, r in records], "int8"),
              "torus_status": status, "torus_error": pad("torus_error", np.nan, float),
-             "torus_exponent": pad("torus_exponent", np.nan, float), "torus_nodes": _torus_nodes(records, stable.shape),
+             "torus_exponent": pad("torus_exponent", np.nan, float), "torus_modes": pad("torus_modes", -1, "int16"),
+             "torus_nodes": _torus_nodes(records, stable.shape),
              "event_note": np.array([note for _, r in records for note in r.get("event_note", [""] * len(r["event_type"]))],
                                     object),
              "event_periods": np.array([k for _, r in records
@@ -335,7 +336,7 @@ def _torus_variables(records, stable):
 
 def _torus_nodes(records, shape):
     """(branch, point, torus_node, state) node values of the tori's circles, NaN-padded (each
-    torus branch keeps its node count; orbit branches hold NaN)."""
+    torus point's own node count: torus_modes; orbit branches hold NaN)."""
     held = [r["torus_nodes"] for _, r in records if "torus_nodes" in r]
     n_nodes = max([h.shape[1] for h in held] + [1])
     out = np.full(shape + (n_nodes, held[0].shape[2] if held else 1), np.nan)

@@ -128,9 +128,11 @@ CONTINUATION_VARIABLES = {
                                      "defect between nodes times ||dR/dU^-1||, not below the Fourier tail"}),
     "torus_exponent": (_BP, {"units": "s-1", "long_name": "largest normal Lyapunov exponent of the torus",
                              "comment": "< 0: attracting (stable)"}),
+    "torus_modes": (_BP, {"units": "1", "long_name": "Fourier modes K of the invariant circle (2 K + 1 collocation nodes)",
+                          "comment": "adapted along the branch to the circle's spectral decay; -1: no torus"}),
     "torus_nodes": (_BP + ("torus_node", "state"), {**_ORBIT_STATE, "long_name": "the torus's invariant circle at its nodes",
                                                    "comment": "values at the support forcing's phases 2 pi j / N (N: the "
-                                                              "branch's non-NaN nodes); the trigonometric interpolant of "
+                                                              "point's non-NaN nodes, 2 torus_modes + 1); the trigonometric interpolant of "
                                                               "them is the circle (rotorsweep.kernels.torus.Torus.at)"}),
     "event_periods": (("event",), {"units": "1", "long_name": "forcing periods per orbit at the event (k of period-k; "
                                                                "a torus branch's locked p/q row: q)"}),
@@ -154,8 +156,8 @@ CONTINUATION_VARIABLES = {
 # continuation.curves_in
 # (piece_*: written since the coexistence counts distinct orbits; a file without them is read by
 # counting stable runs, rotorsweep.pipeline.coexistence.coexistence)
-CONTINUATION_OPTIONAL = ("branch_kind", "torus_status", "torus_error", "torus_exponent", "torus_nodes", "event_note",
-                         "event_periods", "parameter_over_omega_l",
+CONTINUATION_OPTIONAL = ("branch_kind", "torus_status", "torus_error", "torus_exponent", "torus_modes", "torus_nodes",
+                         "event_note", "event_periods", "parameter_over_omega_l",
                          "event_parameter_over_omega_l", "curve_parameter", "curve_second", "curve_critical_real",
                          "curve_critical_imag", "curve_type", "curve_points", "curve_end", "curve_detail",
                          "piece_lo", "piece_hi", "piece_line", "piece_branches", "event_copy_of",

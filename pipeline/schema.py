@@ -108,11 +108,15 @@ ATTRACTOR_VARIABLES = {
 }
 # Tori at quasi-periodically forced grid points (models with torus_forcing; rotorsweep.pipeline.torus_points):
 # the invariant circle of the stroboscopic map, its normal stability and its Fourier resolution.
-TORUS_STATUS = ("converged", "not_converged", "fourier_decay_failed", "integration_failed")
+TORUS_STATUS = ("converged", "not_converged", "fourier_decay_failed", "integration_failed", "non_smooth_circle",
+                "contact_loss")
 TORUS_STABILITY = ("unstable", "stable", "undecided")
 TORUS_VARIABLES = {
     "torus_status": ((), "int8", {"long_name": "invariant torus (quasi-periodic shooting) status", **flag_attrs(TORUS_STATUS),
-                                  "comment": "integration_failed includes a transient (the torus's first guess) that could not be integrated"}),
+                                  "comment": "integration_failed includes a transient (the torus's first guess) that could not be integrated; "
+                                             "non_smooth_circle: the Fourier tail falls only algebraically as the nodes double "
+                                             "(a finitely smooth circle); contact_loss: the decay failed and a contact opens along "
+                                             "the circle (torus_contact_margin < 0), the contact force not smooth there"}),
     "torus_stability": ((), "int8", {"long_name": "normal stability of the torus (sign of its largest normal Lyapunov exponent)",
                                      **flag_attrs(TORUS_STABILITY)}),
     "torus_exponent": ((), "float64", {"long_name": "largest normal Lyapunov exponent of the torus", "units": "s-1"}),
@@ -120,6 +124,10 @@ TORUS_VARIABLES = {
     "torus_rotation_number": ((), "float64", {"long_name": "rotation number of the torus: second forcing's phase advance per forcing_period / 2 pi", "units": "1"}),
     "torus_modes": ((), "int16", {"long_name": "Fourier modes K of the invariant circle (2 K + 1 collocation nodes)", "units": "1"}),
     "torus_error": ((), "float64", {"long_name": "error estimate of the invariant circle, scaled state (lengths in units of length_scale)", "units": "1"}),
+    "torus_contact_margin": ((), "float64", {
+        "long_name": "smallest contact deflection over the torus relative to the static one (< 0: a contact opens)",
+        "units": "1", "comment": "sampled along trajectories from the circle (an upper bound of the true minimum); only where "
+                                 "the Fourier decay failed, for models with contacts (ModelSpec.contact_margin)"}),
     "torus_amplitude_error": ((), "float64", {
         "long_name": "estimated relative shortfall of the half peak-to-peak amplitudes over the torus (largest over the observables)",
         "units": "1", "comment": "the amplitudes are exact extrema along trajectories from equally spaced phases of the circle; "

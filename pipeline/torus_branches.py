@@ -2,14 +2,19 @@
 frequencies, the model's `torus_forcing`), the response is an invariant 2-torus, followed along
 the parameter by rotorsweep.kernels.continuation.tori instead of a periodic orbit.
 
-The first torus comes from a settled transient: the stroboscopic map (one first-forcing period
-T, the second forcing's phase advancing by rho) iterated SETTLE_PERIODS times from the model's
-cold guess, then FIT_PERIODS samples fitted by a trigonometric interpolant (torus.fitted_guess)
-and solved (torus.solve_torus, nodes grown until the Fourier tail is below DECAY_TOL). The
-branch keeps that node count; it ends `torus_breakdown` where the tail exceeds BREAKDOWN_TOL.
+The first torus comes from a settled transient: the stroboscopic map (one first-forcing period T,
+the second forcing's phase advancing by rho) iterated SETTLE_PERIODS times from the model's cold
+guess, then FIT_PERIODS samples fitted by a trigonometric interpolant (torus.fitted_guess) and
+solved (torus.solve_torus, nodes grown until the Fourier tail is below DECAY_TOL). Along the branch
+the node count adapts to the circle's spectral decay (tori.follow_tori): it grows (N -> 2N + 1, at
+most MAX_NODES) where a point's tail exceeds DECAY_TOL, as the first torus's, and shrinks (to no
+fewer than MIN_NODES) where a coarser count keeps it a thousandfold below; at MAX_NODES the tail
+may rise to BREAKDOWN_TOL, and the branch ends `torus_breakdown` where it exceeds that, its detail
+saying whether a contact opens along the last circle (contact_note: contact_loss, the usual cause).
+Each point records its count (torus_modes: K of its 2K + 1 nodes).
 
 Per point: the half-swing (half peak-to-peak) and max |o| of each observable over the torus,
-the torus error estimate, the normal stability and its largest exponent. The amplitudes are the
+the torus error estimate and Fourier modes, the normal stability and its largest exponent. The amplitudes are the
 exact extrema (rotorsweep.kernels.extrema) of the trajectories over one period T from AMPLITUDE_PHASES
 equally spaced phases of the circle: exact along each trajectory, sampled in the phase, so the
 sup over the phase of each trajectory's extremum is low by at most its curvature in the phase
@@ -19,12 +24,13 @@ relative for a swing varying over the phase by O(1) of itself, less for weak pha
 """
 import numpy as np
 
-from rotorsweep.pipeline import compute, torus_events
+from rotorsweep.pipeline import compute, torus_events, torus_points
 from rotorsweep.pipeline.torus_points import AMPLITUDE_PHASES, DECAY_TOL, FIRST_NODES, FIT_PERIODS, MAX_NODES, SETTLE_PERIODS
 from rotorsweep.kernels import torus as tr
 from rotorsweep.kernels.continuation import engine, events as ev, tori
 
-BREAKDOWN_TOL = 1e-7    # a branch point's tail above it: the circle is no longer resolved
+BREAKDOWN_TOL = 1e-7    # a tail above it at MAX_NODES ends the branch (below it: more nodes above DECAY_TOL)
+MIN_NODES = 7           # the fewest nodes a branch shrinks to (3 Fourier modes)
 POLISH_TOL = 1e-12      # each stored circle's residual, relative to max(1, max |U|) (tori.polish)
 TORUS_STATUS = {tr.UNSTABLE: 0, tr.STABLE: 1, tr.UNDECIDED: 2}
 
@@ -50,7 +56,8 @@ def torus_family(scene, pl, where, n_nodes):
     built = _builder(scene, where, pl.parameter)
     return tori.TorusFamily(spec.kernel, lambda lam: built(lam).p, lambda lam: float(built(lam).p[freq]), phase,
                             scene.integrator, n_nodes, scale=pl.range[1] - pl.range[0],
-                            decay_tol=BREAKDOWN_TOL), built
+                            decay_tol=DECAY_TOL, min_nodes=MIN_NODES, max_nodes=MAX_NODES,
+                            breakdown_tol=BREAKDOWN_TOL), built
 
 
 def first_torus(scene, pl, where):
@@ -84,9 +91,24 @@ def continue_torus_line(scene, pl, where):
     else:
         run = polished(family, tori.follow_tori(family, first, pl.range, pl.settings, counter,
                                                 torus_events.LOCK_DENOMINATOR))
+        run = run._replace(detail=run.detail + contact_note(spec, family, run))
     record = torus_record(spec, family, built, run, counter.n)
     record["coexistence"] = stable_pieces(record, pl.range)
     return [record]
+
+
+def contact_note(spec, family, run):
+    """Where the branch ends torus_breakdown on a model with contacts: whether a contact opens along
+    its last circle (torus_points.contact_margin), the usual cause (module docstring of
+    torus_points); "" otherwise."""
+    if run.end != engine.TORUS_BREAKDOWN or spec.contact_margin is None or not run.points:
+        return ""
+    last = run.points[-1]
+    margin = torus_points.contact_margin(spec, family.torus(last), family.params(last.lam), family.opts)
+    if not margin < 0:
+        return f"; every contact stays closed along the last circle (smallest deflection {margin:+.3g} of the static one)"
+    return (f"; contact_loss: a contact opens along the last circle (smallest deflection {margin:+.3g} of the "
+            f"static one), the contact force is not smooth there")
 
 
 def polished(family, run):
@@ -114,19 +136,19 @@ def stable_pieces(record, lam_range):
 
 def torus_record(model, family, built, run, n_rhs):
     """One torus branch as plain arrays: the orbit record's keys (multipliers NaN, orbit_state
-    the circle at phase 0, period T), torus_error, torus_exponent [1/s], torus_status, torus_nodes
-    (points, N, n: the circle's node values, scaled state, at phases 2 pi j / N), and the
-    branch's events (rotorsweep.pipeline.torus_events: flags and locked ratios, with event_note)."""
+    the circle at phase 0, period T), torus_error, torus_exponent [1/s], torus_status, torus_modes
+    (K of each point's 2K + 1 nodes), torus_nodes (points, N, n: the circle's node values, scaled
+    state, at phases 2 pi j / N_k, NaN beyond a point's own N_k), and the branch's events
+    (rotorsweep.pipeline.torus_events: flags and locked ratios, with event_note)."""
     n_state = family.kernel.n_state
     pts = run.points
     amp = np.array([torus_amplitudes(model, family, built, p) for p in pts]).reshape(
         len(pts), 2, len(model.observables))
-    X = np.array([p.X for p in pts]).reshape(len(pts), family.n_nodes * n_state + 1)
-    steps = np.linalg.norm(np.diff(X, axis=0), axis=1) if len(pts) > 1 else np.zeros(0)
+    counts = np.array([family.nodes(p.X).shape[0] for p in pts], int)
     periods = np.array([built(p.lam).period for p in pts])
     none = np.zeros(0)
     return {**torus_events.event_rows(model, family, built, run, amp),
-        "parameter": np.array([p.lam for p in pts]), "arclength": np.concatenate(([0.0], np.cumsum(steps)))[:len(pts)],
+        "parameter": np.array([p.lam for p in pts]), "arclength": arclength(family, pts),
         "state": np.array([family.nodes(p.X)[0] for p in pts]).reshape(len(pts), n_state),
         "multipliers": np.full((len(pts), n_state), np.nan + 0j),
         "amplitude_max": amp[:, 0], "amplitude_half_pp": amp[:, 1], "period": periods,
@@ -134,8 +156,26 @@ def torus_record(model, family, built, run, n_rhs):
         "torus_error": np.array([torus_error(family, p) for p in pts]),
         "torus_exponent": np.array([p.stability.exponents[0] for p in pts]) / periods if len(pts) else none,
         "torus_status": np.array([TORUS_STATUS[p.stability.status] for p in pts], int),
-        "torus_nodes": np.array([family.nodes(p.X) for p in pts]).reshape(len(pts), family.n_nodes, n_state),
+        "torus_modes": (counts - 1) // 2,
+        "torus_nodes": padded_nodes(family, pts, counts.max(initial=1)),
     }
+
+
+def arclength(family, points):
+    """Cumulative chord length along the points (normalized unknowns; where the node count
+    changes, the earlier point's circle re-interpolated at the later count)."""
+    steps = [np.linalg.norm(tori.resampled(family, b.X, family.nodes(a.X).shape[0]) - a.X)
+             for a, b in zip(points[:-1], points[1:])]
+    return np.concatenate(([0.0], np.cumsum(steps)))[:len(points)]
+
+
+def padded_nodes(family, points, n_nodes):
+    """(points, n_nodes, n) the points' node values, NaN beyond each point's own count."""
+    out = np.full((len(points), n_nodes, family.kernel.n_state), np.nan)
+    for k, p in enumerate(points):
+        nodes = family.nodes(p.X)
+        out[k, :len(nodes)] = nodes
+    return out
 
 
 def torus_error(family, point):
@@ -174,10 +214,22 @@ def torus_lines(ds, par, unit):
         out.append(f"  torus branch {b}: {par} {lam.min():.10g} to {lam.max():.10g} {unit}, points {counts}; "
                    f"half-swing {obs[j]} up to {np.nanmax(ds['amplitude_half_pp'].values[b, :n, j]):.6g} "
                    f"{ds['amplitude_half_pp'].attrs.get('units', '')}, error estimate up to "
-                   f"{np.nanmax(ds['torus_error'].values[b, :n]):.2g}")
+                   f"{np.nanmax(ds['torus_error'].values[b, :n]):.2g}{modes_text(ds, b, n)}")
         out += [f"    stability changes between {par} {lam[i]:.10g} and {lam[i + 1]:.10g} {unit}"
                 for i in np.flatnonzero((status[:-1] != status[1:]) & (status[:-1] < 2) & (status[1:] < 2))]
         out += [f"    {ev.EVENT_LABELS[int(ds['event_type'].values[k])]} at {par} {ds['event_parameter'].values[k]:.10g} "
                 f"{unit}: {ds['event_note'].values[k]}"
                 for k in np.flatnonzero(ds["event_branch"].values == b)] if "event_note" in ds else []
     return out
+
+
+def modes_text(ds, b, n):
+    """", Fourier modes K (2K + 1 nodes) from a to b, c changes" of branch b's first n points ("" in
+    a result written before torus_modes was)."""
+    if "torus_modes" not in ds:
+        return ""
+    modes = ds["torus_modes"].values[b, :n]
+    changes = int(np.count_nonzero(np.diff(modes)))
+    span = f"{modes.min()}" if modes.min() == modes.max() else f"{modes.min()} to {modes.max()}"
+    return f", Fourier modes {span} ({changes} change{'s' * (changes != 1)} along the branch)"
+

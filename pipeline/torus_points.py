@@ -6,8 +6,9 @@ response ([analysis] floquet), the response is an invariant 2-torus, solved here
 The circle comes from a settled transient (torus.torus_from_transient: SETTLE_PERIODS iterates of
 the stroboscopic map, FIT_PERIODS samples fitted by FIRST_NODES nodes, then Newton on all nodes
 with the node count grown until the Fourier tail is below DECAY_TOL, at most MAX_NODES); along a
-segment a point first tries the previous quasi-periodic point's circle as its guess (natural
-continuation, as the orbits are chained: it keeps following one torus where tori coexist, and
+segment a point first tries the previous quasi-periodic point's circle as its guess (on the fewest
+nodes, not below FIRST_NODES, that keep its tail a thousandfold below DECAY_TOL: torus.coarsened;
+natural continuation, as the orbits are chained: it keeps following one torus where tori coexist, and
 reaches tori a transient leaves; not cheaper: a few variational Newton steps cost about what the
 ~500 plain stroboscopic steps of the transient do), the transient only where that fails. The
 same settings serve the torus lines of `rotorsweep continue` (rotorsweep.pipeline.torus_branches).
@@ -18,7 +19,13 @@ observable over the torus, stored as the point's `amplitude_<observable>` so tha
 are filled: the exact extrema (rotorsweep.kernels.extrema) along the trajectories over one forcing
 period from AMPLITUDE_PHASES equal phases of the circle, their max / min over the phases (low by
 the phase sampling: torus_amplitude_error estimates it, ~1e-4 relative at 64 phases on Fig. 2b).
-Failure is data: a torus that fails has its status and NaN values.
+Failure is data: a torus that fails has its status and NaN values. Where the Fourier decay fails
+(fourier_decay_failed, or non_smooth_circle: the tail falls only algebraically, torus.power_law)
+on a model with contacts (ModelSpec.contact_margin), the trajectories from MARGIN_PHASES phases of
+the circle tell whether a contact opens along it: then the status is contact_loss (the contact
+force, e.g. a Hertz load [delta]_+^{3/2}, is not smooth where a ball lifts off, so neither is the
+circle: its spectrum decays by a power of the mode number and no node count within MAX_NODES
+resolves it), with the smallest deflection relative to the static one as torus_contact_margin.
 """
 import time
 
@@ -32,7 +39,9 @@ FIT_PERIODS = 120
 FIRST_NODES = 15
 MAX_NODES = 63
 DECAY_TOL = 1e-9        # the first torus's Fourier tail (node count grown to reach it)
+CONTACT_LOSS = "contact_loss"   # the decay failed and a contact opens along the circle
 AMPLITUDE_PHASES = 64
+MARGIN_PHASES = 32      # phases of the circle, and samples per period along each, for the contact margin
 
 
 def solve(model, built, opts, tol, guess=None):
@@ -43,7 +52,8 @@ def solve(model, built, opts, tol, guess=None):
     p = built.p
     settings = {"tol": tol, "decay_tol": DECAY_TOL, "max_nodes": MAX_NODES}
     if guess is not None:
-        circle = tr.solve_torus(model.kernel, guess, p, phase, p[freq], opts, **settings)
+        circle = tr.solve_torus(model.kernel, tr.coarsened(guess, DECAY_TOL, FIRST_NODES), p, phase, p[freq], opts,
+                                **settings)
         if circle.status == tr.CONVERGED:
             return circle
     return tr.torus_from_transient(model.kernel, model.cold_guess(p), p, phase, p[freq], opts, SETTLE_PERIODS,
@@ -65,6 +75,9 @@ def variables(model, circle, built, opts):
     """Cube variables of one torus point: schema.TORUS_VARIABLES and amplitude_<observable>."""
     status = tr.INTEGRATION_FAILED if circle is None else circle.status
     out = empty_variables()
+    if status in (tr.FOURIER_DECAY_FAILED, tr.NON_SMOOTH) and model.contact_margin is not None:
+        out["torus_contact_margin"] = contact_margin(model, circle, built.p, opts)
+        status = CONTACT_LOSS if out["torus_contact_margin"] < 0 else status
     out["torus_status"] = schema.TORUS_STATUS.index(status)
     if circle is None:
         return out
@@ -80,6 +93,15 @@ def variables(model, circle, built, opts):
     half, out["torus_amplitude_error"] = amplitudes(model, circle, built, opts)
     out.update({f"amplitude_{o.name}": half[k] for k, o in enumerate(model.observables)})
     return out
+
+
+def contact_margin(model, circle, p, opts):
+    """The model's contact margin (ModelSpec.contact_margin) over trajectories of one period from
+    MARGIN_PHASES phases of the circle, MARGIN_PHASES samples each (nan where it has none)."""
+    phase, _, _ = model.torus_forcing
+    states = tr.surface_samples(model.kernel, circle, p, phase, opts, MARGIN_PHASES, MARGIN_PHASES)
+    margin = model.contact_margin(states.reshape(-1, model.kernel.n_state), p)
+    return np.nan if margin is None else margin
 
 
 def empty_variables():
@@ -124,7 +146,8 @@ def summary(row):
             "stability": schema.TORUS_STABILITY[stab] if stab >= 0 else None,
             "exponent": num("torus_exponent"), "exponent_error": num("torus_exponent_error"),
             "rotation_number": num("torus_rotation_number"), "modes": int(row["torus_modes"]),
-            "error": num("torus_error"), "amplitude_error": num("torus_amplitude_error")}
+            "error": num("torus_error"), "amplitude_error": num("torus_amplitude_error"),
+            "contact_margin": num("torus_contact_margin") if "torus_contact_margin" in row else None}
 
 
 def summary_text(t):
@@ -135,4 +158,13 @@ def summary_text(t):
         f"torus             {t['status']}, {t['stability'] or '-'} (largest normal exponent {exponent})",
         f"torus rotation    {g(t['rotation_number'], '.12g')}, {t['modes']} Fourier modes, error estimate "
         f"{g(t['error'], '.2g')} (scaled state)",
-        f"amplitudes        over the torus, relative sampling error {g(t['amplitude_error'], '.2g')}"])
+        f"amplitudes        over the torus, relative sampling error {g(t['amplitude_error'], '.2g')}"]
+        + ([] if t.get("contact_margin") is None else [contact_text(t)]))
+
+
+def contact_text(t):
+    """The contact margin's line of `point` (a torus whose Fourier decay failed)."""
+    margin = t["contact_margin"]
+    what = ("a contact opens along the torus: the contact force is not smooth there, the circle's spectrum "
+            "decays algebraically" if margin < 0 else "every contact stays closed")
+    return f"torus contacts    smallest deflection {margin:+.3g} of the static one: {what}"

@@ -16,11 +16,13 @@ theta_j, and Newton solves all nodes at once on
 
 M_j the nodes' monodromies and S the interpolation matrix that evaluates the interpolant at the
 shifted nodes theta_j + rho. N grows until the interpolant's highest modes fall below the decay
-tolerance (else the torus ends `fourier_decay_failed`: a torus losing smoothness before it breaks
-down). Each torus carries an error estimate: the invariance defect between the nodes (at the
-midpoints, where collocation does not force it to zero) times the norm of the inverse Jacobian
-(the defect's amplification into a distance from the invariant circle), and not below the Fourier
-tail.
+tolerance, else the torus ends `fourier_decay_failed` (a torus losing smoothness before it breaks
+down), or `non_smooth_circle` where the tail falls only by a power of N as N doubles (a spectrum
+|c_m| ~ m^-s: the circle is finitely smooth, e.g. where a contact force that is not smooth in the
+state acts along it; `power_law`), the count it would take then projected beyond max_nodes. Each
+torus carries an error estimate: the invariance defect between the nodes (at the midpoints, where
+collocation does not force it to zero) times the norm of the inverse Jacobian (the defect's
+amplification into a distance from the invariant circle), and not below the Fourier tail.
 
 Stability (`stability`): the normal Lyapunov exponents of the linearized map over the rotation,
 v -> M(theta) v, theta -> theta + rho (the linearized invariance equation), by QR iteration with
@@ -33,19 +35,24 @@ import numpy as np
 
 from rotorsweep.kernels import extrema, integrators as ig, shooting
 
-CONVERGED, NOT_CONVERGED, FOURIER_DECAY_FAILED, INTEGRATION_FAILED = (
-    "converged", "not_converged", "fourier_decay_failed", "integration_failed")
+CONVERGED, NOT_CONVERGED, FOURIER_DECAY_FAILED, INTEGRATION_FAILED, NON_SMOOTH = (
+    "converged", "not_converged", "fourier_decay_failed", "integration_failed", "non_smooth_circle")
 STABLE, UNSTABLE, UNDECIDED = "stable", "unstable", "undecided"
 
 _MAX_HALVINGS = 8
 _FINE = 100.0      # tolerance ratio of the error estimate's reference flow
+# A doubling of N that cuts the tail by less than this power of 2 beyond the best earlier one does
+# not accelerate: geometric decay (an analytic circle) doubles the exponent at each doubling.
+_ACCELERATION = 1.5
+_ROUNDOFF = 1e-12  # a tail this small has reached the coefficients' rounding: no decay law read from it
+COARSEN = 1e-3     # fewer nodes only where their tail stays below this times the decay tolerance (hysteresis)
 
 
 class Torus(NamedTuple):
     nodes: np.ndarray        # U (N, n): the circle's values at theta_j = 2 pi j / N
     rho: float               # rotation of the forcing phase per period T [rad]
     period: float            # the stroboscopic period T (scaled time)
-    status: str              # CONVERGED, NOT_CONVERGED, FOURIER_DECAY_FAILED, INTEGRATION_FAILED
+    status: str              # CONVERGED, NOT_CONVERGED, FOURIER_DECAY_FAILED, INTEGRATION_FAILED, NON_SMOOTH
     iterations: int          # Newton iterations, all resolutions together
     residual: float          # max |R| at the nodes
     tail: float              # largest Fourier coefficient in the top quarter of the modes
@@ -166,6 +173,24 @@ def resample(nodes, n_nodes):
     return interpolation_matrix(nodes.shape[0], node_phases(n_nodes)) @ nodes
 
 
+def coarser(n_nodes):
+    """The next count down the ladder N -> 2N + 1 (odd)."""
+    m = (n_nodes - 1) // 2
+    return m if m % 2 else m + 1
+
+
+def coarsened(nodes, decay_tol, min_nodes):
+    """The circle at the fewest nodes down the ladder (not below min_nodes) that keep its tail
+    below COARSEN times decay_tol (nodes resampled; as given where none does): a guess that
+    does not carry more nodes than its circle needs."""
+    while coarser(nodes.shape[0]) >= min_nodes:
+        small = resample(nodes, coarser(nodes.shape[0]))
+        if fourier_tail(small) > COARSEN * decay_tol:
+            break
+        nodes = small
+    return nodes
+
+
 def error_estimate(kernel, nodes, jac, p, phase_index, rho, period, opts, tail):
     """(estimate, ok, n_rhs): the invariance defect at the midpoints between nodes times
     ||dR/dU^{-1}||_inf, not below the Fourier tail (scaled like the nodes). The midpoints are
@@ -183,32 +208,59 @@ def error_estimate(kernel, nodes, jac, p, phase_index, rho, period, opts, tail):
     return max(defect * amplification, tail * max(1.0, np.abs(nodes).max())), True, n_rhs
 
 
+def power_law(tails):
+    """The exponent s of an algebraic decay of the tails at node counts N, 2N + 1, 4N + 3, ...:
+    tail ~ N^-s, s = log2 of the tail's drop per doubling, the largest seen; None while fewer than
+    two doublings are known, the tail is at the rounding level, or the last doubling dropped it
+    faster than _ACCELERATION times any earlier one (geometric decay: log tail ~ -r N, the drop per
+    doubling doubles)."""
+    if len(tails) < 3 or tails[-1] < _ROUNDOFF:
+        return None
+    drops = -np.diff(np.log2(tails))
+    if drops[-1] > _ACCELERATION * max(drops[:-1].max(), 0.0):
+        return None
+    return float(max(drops.max(), 1e-3))
+
+
+def _too_rough(tails, n_nodes, decay_tol, max_nodes):
+    """Whether the tails decay algebraically (power_law) so slowly that reaching decay_tol would
+    take more than max_nodes nodes (N (tail / decay_tol)^(1/s), at the largest drop seen)."""
+    s = power_law(tails)
+    return s is not None and n_nodes * (tails[-1] / decay_tol) ** (1.0 / s) > max_nodes
+
+
 def solve_torus(kernel, guess, p, phase_index, rho, opts, period=1.0, tol=1e-10, decay_tol=1e-11,
                 max_nodes=257, max_iter=20):
     """The invariant circle near `guess` ((N, n) node values, N odd; a periodic state repeated
     over the nodes is a fine guess for weak second forcing) with the rotation rho [rad per period].
 
     N starts at guess's node count and grows (N -> 2N + 1) while the Fourier tail exceeds
-    decay_tol; beyond max_nodes the torus is FOURIER_DECAY_FAILED. tol: Newton's max |R| relative
-    to max(1, max |U|). Returns a `Torus` (failure is its status, never an exception)."""
+    decay_tol; beyond max_nodes the torus is FOURIER_DECAY_FAILED, or NON_SMOOTH where the tail
+    falls algebraically (power_law; then as soon as the count it would take exceeds max_nodes).
+    tol: Newton's max |R| relative to max(1, max |U|). Returns a `Torus` (failure is its status,
+    never an exception)."""
     nodes = np.array(guess, float)
     if nodes.ndim != 2 or nodes.shape[0] % 2 == 0 or nodes.shape[1] != kernel.n_state:
         raise ValueError(f"guess must be (N odd, {kernel.n_state}), got {nodes.shape}")
-    total_it, n_rhs = 0, 0
+    total_it, n_rhs, tails = 0, 0, []
     while True:
         nodes, jac, monos, status, it, res, nr = _newton(kernel, nodes, p, phase_index, rho, period, opts,
                                                          tol, max_iter)
         total_it += it
         n_rhs += nr
         tail = fourier_tail(nodes) if status != INTEGRATION_FAILED else np.inf
+        tails.append(tail)
         if status != CONVERGED or tail <= decay_tol:
+            break
+        if _too_rough(tails, nodes.shape[0], decay_tol, max_nodes):
+            status = NON_SMOOTH
             break
         if 2 * nodes.shape[0] + 1 > max_nodes:
             status = FOURIER_DECAY_FAILED
             break
         nodes = resample(nodes, 2 * nodes.shape[0] + 1)
     error = np.inf
-    if status in (CONVERGED, FOURIER_DECAY_FAILED):
+    if status in (CONVERGED, FOURIER_DECAY_FAILED, NON_SMOOTH):
         error, ok, nr = error_estimate(kernel, nodes, jac, p, phase_index, rho, period, opts, tail)
         n_rhs += nr
         status = status if ok else INTEGRATION_FAILED

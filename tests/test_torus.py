@@ -3,10 +3,10 @@ the closed-form response of the linear oscillator, a long scipy DOP853 run of th
 and the shooting solver's periodic orbit at a rational frequency ratio."""
 import numpy as np
 import pytest
-from scipy.integrate import ode
 
 from rotorsweep.kernels import integrators as ig, shooting, torus
 from rotorsweep.kernels.models import duffing2, get
+from tests.reference import duffing2_strobe
 
 MODEL = get("duffing2")
 OPTS = ig.settings(rtol=1e-11, atol=1e-13)
@@ -42,31 +42,6 @@ def test_linear_torus_is_the_sum_of_two_periodic_responses():
     assert tor.error < 1e-10
 
 
-def _strobe(p, u0, n_periods):
-    """The stroboscopic iterates u_n, n = 1..n_periods, of scipy's DOP853 (Hairer's code,
-    `scipy.integrate.ode`, rtol 1e-12) from u0 at phase p[theta]: the run is continued period by
-    period, each period from tau = 0 with the second forcing's phase theta + n w2 reduced mod
-    2 pi, the phase the circle is read at. One run in absolute time carries the rounding of
-    w2 t at t ~ 10^4 (eps w2 t ~ 1e-11 rad, growing with t) into the forcing, above the 1e-12
-    level tested here; solve_ivp's Python step loop took a minute for 10^4 periods."""
-    k, c, gamma, f1, f2, w2, theta = p
-    tw = 2.0 * np.pi
-    phase = [0.0]
-
-    def f(t, u):
-        x, v = u
-        return [v, f1 * np.cos(tw * t) + f2 * np.cos(w2 * t + phase[0]) - k * x - gamma * x ** 3 - c * v]
-    run = ode(f).set_integrator("dop853", rtol=1e-12, atol=1e-13, nsteps=10 ** 6)
-    out = np.empty((n_periods, 2))
-    u = np.array(u0, float)
-    for i in range(n_periods):
-        phase[0] = np.fmod(theta + i * w2, 2.0 * np.pi)
-        run.set_initial_value(u, 0.0)
-        u = out[i] = run.integrate(1.0)
-        assert run.successful()
-    return out
-
-
 def test_nonlinear_torus_holds_a_long_independent_run():
     """10^4 stroboscopic iterates of scipy's DOP853 (rtol 1e-12) from a point of the circle stay
     on the circle within the solver's error estimate, at the imposed rotation theta + n rho."""
@@ -74,7 +49,7 @@ def test_nonlinear_torus_holds_a_long_independent_run():
     tor = solve(p)
     assert tor.status == torus.CONVERGED and tor.error < 1e-8
     n = 10_000
-    states = _strobe(p, tor.nodes[0], n)
+    states = duffing2_strobe(p, tor.nodes[0], n)
     on_circle = tor.at(np.fmod(p[duffing2.P_W2] * np.arange(1, n + 1), 2.0 * np.pi))
     assert np.abs(states - on_circle).max() <= tor.error
 
@@ -108,7 +83,7 @@ def test_nonlinear_torus_attracts_and_is_stable():
     p = params(2.0 * np.pi * GOLDEN, gamma=0.5)
     tor = solve(p)
     assert torus.stability(tor).status == torus.STABLE
-    states = _strobe(p, tor.nodes[0] + np.array([0.3, -0.2]), 300)
+    states = duffing2_strobe(p, tor.nodes[0] + np.array([0.3, -0.2]), 300)
     assert np.abs(states[-1] - tor.at(300 * p[duffing2.P_W2])[0]).max() < 1e-4
 
 
@@ -144,7 +119,7 @@ def test_saddle_torus_of_a_resonant_duffing_is_unstable():
     assert st.status == torus.UNSTABLE
     assert np.abs(st.exponents - logs).max() < 2e-2
     assert abs(st.exponents.sum() + c) < 1e-8
-    gap = np.abs(_strobe(p, tor.nodes[0] + 1e-6, 60) - tor.at(np.fmod(p[duffing2.P_W2] * np.arange(1, 61), 2 * np.pi)))
+    gap = np.abs(duffing2_strobe(p, tor.nodes[0] + 1e-6, 60) - tor.at(np.fmod(p[duffing2.P_W2] * np.arange(1, 61), 2 * np.pi)))
     assert gap.max(axis=1)[-1] > 1e3 * 1e-6
 
 
@@ -162,3 +137,15 @@ def test_the_sampled_torus_has_the_linear_half_swing():
     exact = abs(f1 / (k - 4 * np.pi ** 2 + 2j * np.pi * c)) + abs(f2 / (k - w2 ** 2 + 1j * c * w2))
     half = (x.max() - x.min()) / 2.0
     assert exact * np.cos(np.pi / n) <= half <= exact + 1e-10
+
+
+def test_coarsened_keeps_the_fewest_nodes_that_resolve_the_circle():
+    """A trigonometric polynomial of degree 4 on 63 nodes: 15 nodes (K = 7) hold it exactly (tail
+    at rounding), 7 (K = 3) alias its fourth mode onto the third (tail 1e-3): it comes down to 15,
+    and there it is the same circle; with min_nodes 31 it stops at 31."""
+    theta = torus.node_phases(63)[:, None]
+    nodes = np.hstack([np.sin(theta) + 1e-3 * np.sin(4 * theta), np.cos(theta)])
+    small = torus.coarsened(nodes, 1e-9, 7)
+    assert small.shape == (15, 2)
+    assert np.abs(torus.resample(small, 63) - nodes).max() < 1e-13     # two resamplings: ~N eps each
+    assert torus.coarsened(nodes, 1e-9, 31).shape == (31, 2)

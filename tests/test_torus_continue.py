@@ -1,6 +1,7 @@
 """`rotorsweep continue` with quasi-periodic forcing (both forcings of rigid_preloaded on): the
 torus branch end to end, in-process, and one point checked against iterates of the stroboscopic
 map from its circle (a second method: the map iterated, not the collocation solved)."""
+import numpy as np
 import pytest
 
 from rotorsweep.pipeline import cli, config, continuation, result_kinds, torus_branches
@@ -62,3 +63,18 @@ def test_a_torus_line_that_does_not_start_is_an_empty_branch_with_a_reason(resul
     ds = continuation.to_dataset(data, pl, [(pl.lines[0], [rec])], {})
     assert ds["branch_points"].values.tolist() == [0] and ds["branch_end"].values.tolist() == [engine.START_FAILED]
     assert "no torus" in continuation.describe(ds)
+
+
+def test_each_torus_point_records_its_fourier_modes(result, capsys):
+    """torus_modes: K of each point's 2K + 1 nodes, matching its non-NaN torus_nodes, within the
+    adaptive bounds, with its CF attributes; `info` shows it beside the error estimate."""
+    d, _ = result
+    ds = continuation.open_result(d / "tori.nc")
+    n = int(ds["branch_points"].values[0])
+    modes = ds["torus_modes"].values[0, :n]
+    held = (~np.isnan(ds["torus_nodes"].values[0, :n, :, 0])).sum(axis=1)
+    assert (held == 2 * modes + 1).all()
+    assert ((torus_branches.MIN_NODES - 1) // 2 <= modes).all() and (modes <= (torus_branches.MAX_NODES - 1) // 2).all()
+    assert ds["torus_modes"].attrs["units"] == "1" and "Fourier modes" in ds["torus_modes"].attrs["long_name"]
+    assert cli.main(["info", str(d / "tori.nc")]) in (0, None)
+    assert f"Fourier modes {modes.min()}" in capsys.readouterr().out

@@ -1,22 +1,34 @@
 """Pseudo-arclength continuation of invariant tori under two-frequency forcing (a problem class of
 `engine.follow`) along one parameter lambda, e.g. the second forcing's frequency omega.
 
-Unknowns X = (U, mu): the torus's node values U (N x n, rotorsweep.kernels.torus, N fixed along the
-branch) and mu = lambda / scale. Equations: the collocation residual R(U, lambda) = 0 (the
-rotation rho(lambda) and the kernel vector p(lambda) both follow lambda) and one scalar condition
-c . X = target. Bordered Newton with dR/dU from the nodes' monodromies and the shift operator,
-dR/dmu by a central difference of two plain collocation residuals (as arclength.Family's
-dphi/dmu: it enters only the Newton matrix and the tangent, never the residual).
+Unknowns X = (U, mu): the torus's node values U (N x n, rotorsweep.kernels.torus) and mu = lambda /
+scale. Equations: the collocation residual R(U, lambda) = 0 (the rotation rho(lambda) and the
+kernel vector p(lambda) both follow lambda) and one scalar condition c . X = target. Bordered
+Newton with dR/dU from the nodes' monodromies and the shift operator, dR/dmu by a central
+difference of two plain collocation residuals (as arclength.Family's dphi/dmu: it enters only the
+Newton matrix and the tangent, never the residual).
 
 The imposed forcing phase is the torus coordinate, so a rational ratio omega / Omega = p / q is
 no special point: there the circle is the union of the q-periodic orbits' stroboscopic points
-over the forcing phases, and the branch passes through it. A branch ends with
-`torus_breakdown` where the circle's Fourier tail exceeds the decay tolerance at the branch's N
-(it is losing smoothness: N no longer resolves it), flags a change of normal stability
-(`TS`: the largest normal Lyapunov exponent changes sign) and a fold of tori (`TF`: the branch
-turns back in lambda), and solves the torus exactly where the rotation is 2 pi p / q with small q
-(`Locked`: there the circle consists of q-periodic points, which the caller links to the
-periodic-orbit solver's orbits).
+over the forcing phases, and the branch passes through it.
+
+The node count N adapts to the circle's spectral decay (`follow_tori`): N is fixed within a run of
+the engine (X keeps its size), and a run ends where an accepted point's N no longer fits its circle
+(`Resolution`): its Fourier tail exceeds the decay tolerance (N -> 2N + 1), or the tail the next
+coarser count would have (the circle resampled there) is below torus.COARSEN times it (N -> (N -
+1) / 2, odd): the gap of 1/COARSEN (1e3) between the two thresholds is the hysteresis that keeps N
+from oscillating. The point is then solved again at the new count at its lambda (its circle
+re-interpolated, i.e. its Fourier coefficients zero-padded or truncated, its tangent likewise) and
+the next run goes on from it. At the top count (2N + 1 beyond max_nodes) the tail may rise to the
+family's breakdown_tol (default: the decay tolerance) before the branch ends with
+`torus_breakdown` (as does a growth whose re-solve fails) (the circle is losing smoothness: no N within the
+bounds resolves it); a coarser count whose re-solve misses the tolerance is not tried again on that
+branch. Default bounds min_nodes = max_nodes = the family's n_nodes: a fixed count.
+
+The branch flags a change of normal stability (`TS`: the largest normal Lyapunov exponent changes
+sign) and a fold of tori (`TF`: the branch turns back in lambda), and solves the torus exactly
+where the rotation is 2 pi p / q with small q (`Locked`: there the circle consists of q-periodic
+points, which the caller links to the periodic-orbit solver's orbits).
 """
 from dataclasses import replace
 from typing import Callable, NamedTuple
@@ -56,10 +68,17 @@ class TorusFamily(NamedTuple):
     rotation: Callable
     phase_index: int
     opts: object
-    n_nodes: int
+    n_nodes: int            # the current node count (follow_tori's runs: each run's own)
     scale: float = 1.0
     period: float = 1.0
     decay_tol: float = 1e-8
+    min_nodes: int = 0      # bounds of the adaptive node count (0: n_nodes, a fixed count)
+    max_nodes: int = 0
+    breakdown_tol: float = 0.0  # the tail that ends the branch at max_nodes (0: decay_tol)
+
+    @property
+    def node_bounds(self):
+        return (self.min_nodes or self.n_nodes, self.max_nodes or self.n_nodes)
 
     @property
     def parameters(self):
@@ -69,7 +88,8 @@ class TorusFamily(NamedTuple):
         return float(X[-1] * self.scale)
 
     def nodes(self, X):
-        return X[:-1].reshape(self.n_nodes, self.kernel.n_state)
+        """U (N, n) of unknowns X, N from X's size (points of one branch may differ in N)."""
+        return X[:-1].reshape(-1, self.kernel.n_state)
 
     def torus(self, point):
         """The point's circle as a `torus.Torus` (its error estimate not computed: nan)."""
@@ -169,16 +189,41 @@ def _bordered(jac, col, c):
     return A
 
 
-class Breakdown(ev.BranchEvent):
-    """The circle's Fourier tail exceeds the family's decay tolerance: the branch ends there."""
+def acceptable_tail(family, n_nodes):
+    """The largest tail a circle on n_nodes nodes may keep: the decay tolerance while the count can
+    still grow within max_nodes, the breakdown tolerance at the top of the ladder."""
+    top = 2 * n_nodes + 1 > family.node_bounds[1]
+    return (family.breakdown_tol or family.decay_tol) if top else family.decay_tol
+
+
+def wanted_nodes(family, point):
+    """The node count the point's circle asks for: 2N + 1 where its tail exceeds the acceptable one
+    (even beyond max_nodes: the caller ends the branch there), the coarser count
+    where the circle resampled there keeps its tail below COARSEN times the tolerance (not below
+    min_nodes), else its own N."""
+    nodes = family.nodes(point.X)
+    n_nodes = nodes.shape[0]
+    if point.tail > acceptable_tail(family, n_nodes):
+        return 2 * n_nodes + 1
+    small = tr.coarser(n_nodes)
+    if small >= family.node_bounds[0] and tr.fourier_tail(tr.resample(nodes, small)) <= tr.COARSEN * family.decay_tol:
+        return small
+    return n_nodes
+
+
+class Resolution(ev.BranchEvent):
+    """The point's node count no longer fits its circle (wanted_nodes): the engine's run ends there;
+    follow_tori solves it again at the count it wants, or ends the branch (torus_breakdown) when
+    that count exceeds max_nodes."""
     label, code, locates, end = "TB", "torus_breakdown", False, TORUS_BREAKDOWN
 
     def detect(self, problem, a, b):
-        return b.tail > problem.decay_tol
+        return wanted_nodes(problem, b) != problem.nodes(b.X).shape[0]
 
     def end_detail(self, problem, point, a, b):
-        return (f"Fourier decay failed at {problem.where(b)}: tail {b.tail:.2g} > {problem.decay_tol:g} "
-                f"with {problem.n_nodes} nodes")
+        n_nodes = problem.nodes(b.X).shape[0]
+        return (f"Fourier decay failed at {problem.where(b)}: tail {b.tail:.2g} > "
+                f"{acceptable_tail(problem, n_nodes):g} with {n_nodes} nodes (at most {problem.node_bounds[1]})")
 
 
 class StabilityChange(ev.BranchEvent):
@@ -229,20 +274,90 @@ def locked_ratios(family, lam_range, max_q):
     return sorted(out, key=lambda e: e.level)
 
 
-def start(family, lam0, guess, direction=1, settings=engine.Settings(), counter=None):
-    """The first point at lambda = lam0 from node values `guess` (N x n, e.g. torus.solve_torus's),
-    tangent towards increasing lambda for direction = +1. A Point or None."""
-    counter = counter or engine.Counter()
-    X = np.append(np.asarray(guess, float).ravel(), lam0 / family.scale)
+def solve_at_lambda(family, X, seed, settings, counter):
+    """The point at X's lambda from unknowns X (Newton at fixed lambda, START_NEWTON steps), its
+    tangent oriented like seed.tangent: a Point or None."""
     c = np.zeros(X.size)
     c[-1] = 1.0
-    seed = engine.Seed(direction * c)
     sol, failure = family.correct(X, c, X[-1], seed, replace(settings, max_newton=START_NEWTON), counter)
     return None if failure is not None else family.point(sol, seed, settings, counter)
 
 
+def start(family, lam0, guess, direction=1, settings=engine.Settings(), counter=None):
+    """The first point at lambda = lam0 from node values `guess` (N x n, e.g. torus.solve_torus's),
+    tangent towards increasing lambda for direction = +1. A Point or None."""
+    X = np.append(np.asarray(guess, float).ravel(), lam0 / family.scale)
+    e_mu = np.zeros(X.size)
+    e_mu[-1] = direction
+    return solve_at_lambda(family, X, engine.Seed(e_mu), settings, counter or engine.Counter())
+
+
+def resampled(family, vector, n_nodes):
+    """Unknowns (or a tangent) (U, mu) with U re-interpolated at n_nodes nodes."""
+    return np.append(tr.resample(family.nodes(vector), n_nodes).ravel(), vector[-1])
+
+
+def resolved(family, point, n_nodes, settings, counter):
+    """The point solved again with n_nodes nodes at its lambda, from its circle and tangent
+    re-interpolated there: a Point, or None where Newton fails or the tail still exceeds the
+    acceptable one."""
+    t = resampled(family, point.tangent, n_nodes)
+    new = solve_at_lambda(family, resampled(family, point.X, n_nodes), engine.Seed(t / np.linalg.norm(t)),
+                          settings, counter)
+    return new if new is not None and new.tail <= acceptable_tail(family, n_nodes) else None
+
+
+def refined(family, point, settings, counter):
+    """(the point at the node count it wants, grown until its tail is within the decay tolerance,
+    or None where that takes more than max_nodes nodes or a re-solve fails; that count)."""
+    n_nodes = wanted_nodes(family, point)
+    while n_nodes <= family.node_bounds[1]:
+        new = resolved(family, point, n_nodes, settings, counter)
+        if new is not None or n_nodes < family.nodes(point.X).shape[0]:
+            return new, n_nodes
+        n_nodes = 2 * n_nodes + 1
+    return None, n_nodes
+
+
 def follow_tori(family, first, lam_range, settings=engine.Settings(), counter=None, max_q=0):
-    """engine.follow from `first` within lam_range with the torus events (Breakdown, StabilityChange,
-    Fold, and Locked at each ratio p / q with q <= max_q): a Run."""
-    events = (Breakdown(), StabilityChange(), Fold(), *locked_ratios(family, lam_range, max_q))
-    return engine.follow(family, first, [tuple(lam_range)], settings, events, counter)
+    """engine.follow from `first` within lam_range with the torus events (Resolution, StabilityChange,
+    Fold, and Locked at each ratio p / q with q <= max_q), the node count adapted between the
+    engine's runs within family.node_bounds (module docstring): a Run whose points may differ in N.
+    (A closed loop is recognized only within one run: its first point is that run's.)"""
+    counter = counter or engine.Counter()
+    events = (Resolution(), StabilityChange(), Fold(), *locked_ratios(family, lam_range, max_q))
+    family = family._replace(min_nodes=family.node_bounds[0], max_nodes=family.node_bounds[1])
+    points, found, ds = [], [], settings.ds
+    while True:
+        family = family._replace(n_nodes=family.nodes(first.X).shape[0])
+        if len(points) >= settings.max_steps:
+            return engine.Run(points + [first], found, engine.STEP_BUDGET, f"{settings.max_steps} steps")
+        budget = replace(settings, ds=ds, max_steps=settings.max_steps - len(points))
+        run = engine.follow(family, first, [tuple(lam_range)], budget, events, counter)
+        found += [f._replace(index=f.index + len(points)) for f in run.found if not isinstance(f.event, Resolution)]
+        if run.end != TORUS_BREAKDOWN:
+            last = run.points[-1]
+            if last.tail > acceptable_tail(family, family.n_nodes):   # an edge point (solved after the last step)
+                last = refined(family, last, settings, counter)[0] or last
+            detail = run.detail.replace(f"{budget.max_steps} steps", f"{settings.max_steps} steps", 1)
+            return engine.Run(points + run.points[:-1] + [last], found, run.end, detail)
+        b = run.points[-1]
+        new, n_nodes = refined(family, b, settings, counter)
+        if new is None and n_nodes > family.nodes(b.X).shape[0]:
+            return engine.Run(points + run.points, found, run.end, run.detail)
+        if new is None:     # a coarser count missed the tolerance: keep this one from here on
+            family = family._replace(min_nodes=family.nodes(b.X).shape[0])
+            new = b
+        points += run.points[:-1]
+        ds = _next_step(family, run.points, new, settings)
+        first = new
+
+
+def _next_step(family, points, new, settings):
+    """The step to go on with from `new` (a point re-solved at another count): the last chord's
+    length measured at the new count."""
+    if len(points) < 2:
+        return settings.ds
+    n_nodes = family.nodes(new.X).shape[0]
+    chord = resampled(family, points[-1].X, n_nodes) - resampled(family, points[-2].X, n_nodes)
+    return float(np.clip(np.linalg.norm(chord), settings.ds_min, settings.ds_max))

@@ -317,6 +317,22 @@ def forcing_of(speed, support_frequency, unbalance_on, support_on, max_denominat
     return Forcing(1.0 / speed, 1.0, support_frequency / speed, False, ratio)
 
 
+def contact_margin(states, p):
+    """The smallest ball deflection delta_k of both bearings over scaled states (m, n), relative to
+    the static one (P_OFFSET): < 0 where a ball loses contact, its load [delta]_+^{3/2} then not
+    smooth in the state (ModelSpec.contact_margin). The cubic series law has no contacts: None."""
+    if p[P_LAW] > 0.0:
+        return None
+    angles = 2.0 * np.pi * np.arange(int(p[P_NBALLS])) / p[P_NBALLS]
+    states = np.atleast_2d(states)
+    axial = (p[P_ARR] * states[:, 4] * p[P_SIN_A])[:, None]
+
+    def radial(x, y):
+        return (x[:, None] * np.cos(angles) + y[:, None] * np.sin(angles)) * p[P_COS_A]
+    delta = np.concatenate([radial(states[:, 0], states[:, 1]) + axial, radial(states[:, 2], states[:, 3]) - axial])
+    return float((delta.min() + p[P_OFFSET]) / p[P_OFFSET])
+
+
 # --- build -------------------------------------------------------------------------------------
 
 def kernel_params(rotor, state, n_balls, forcing, speed, eccentricity, support, law="ball_sum",
@@ -575,5 +591,6 @@ SPEC = ModelSpec(
     disk_position=disk_position,
     support_frequency="support_frequency",
     torus_forcing=(P_PHASE, P_WS, {"max_denominator": 0}),   # 0: no ratio shot as periodic, tau one shaft turn
+    contact_margin=contact_margin,
     derived_axes={"contact_angle": "derived from the preload solve per point, see contact_angle_used"},
 )

@@ -144,6 +144,9 @@ class ModelSpec:
     torus_forcing: tuple = ()       # (phase slot, frequency slot, values): a second forcing whose phase is
     #                                 p[phase slot] and frequency p[frequency slot] [rad per unit tau]; the build
     #                                 at {**values, ...} keeps tau one first-forcing period (tori: rotorsweep.pipeline.tori)
+    contact_margin: Callable = None  # contact_margin(states (m, n_state), p) -> the smallest contact deflection over
+    #                                 the states relative to its static value (< 0: a contact opens, the force is not
+    #                                 smooth in the state there); None: a model without unilateral contacts
     invariant_subspaces: dict = field(default_factory=dict)   # name -> basis (n_state x k) of an invariant
     #                                 subspace in which a repeated linear frequency is simple (backbones)
 
