@@ -121,3 +121,7 @@ def _register_plugins():
 for _module in BUILTIN:
     register(_module.SPEC)
 PLUGIN_ERRORS = _register_plugins()
+if set(REGISTRY) != set(BUILTIN_NAMES):
+    # the generated dispatch takes the committed one's module name: it must be there before a
+    # pickled kernel tag (a Dask task's) imports that name; a plugin's kernels import Numba anyway
+    _dispatch()
