@@ -7,9 +7,10 @@ has period 1 whatever the speed), displacements in units of L = 1 um.
 The state is u = (x/L, y/L, dx/dtau / L, dy/dtau / L).
 
 The right-hand side, its analytic Jacobian and both from one ball sum (`rhs`, `jac`,
-`rhs_jac`) are inlined (`inline="always"`) into the group's bodies in the generated
-`models.dispatch`, which LLVM inlines into the integrators (`rotorsweep.kernels.PICKED_BODY`): a
-compiled call with array arguments costs more than the 9-ball force sum it would wrap.
+`rhs_jac`, in `jeffcott_clearance_kernels`) are inlined (`inline="always"`) into the group's
+bodies in the generated `models.dispatch`, which LLVM inlines into the integrators
+(`rotorsweep.kernels.PICKED_BODY`): a compiled call with array arguments costs more than the
+9-ball force sum it would wrap.
 """
 from functools import lru_cache
 
