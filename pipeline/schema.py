@@ -10,7 +10,7 @@ orbits were continued along (`continued_axis`).
 """
 import numpy as np
 
-from rotorsweep.kernels import attractor, models
+from rotorsweep.kernels import attractor_classes, models
 
 SCHEMA_VERSION = 1
 DEFAULT_MODEL = "jeffcott_clearance"   # cubes written before models were named in attributes
@@ -52,7 +52,7 @@ ORBIT_REASON = (
     "unknown_model",         # the kernels were given a model id no model is registered under
 )
 BIFURCATION = ("none", "fold", "period_doubling", "neimark_sacker")
-ATTRACTOR = attractor.ATTRACTOR
+ATTRACTOR = attractor_classes.ATTRACTOR
 STABLE = ("unstable", "stable")
 
 # Fill values for points where a quantity does not apply.

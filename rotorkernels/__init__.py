@@ -13,9 +13,8 @@ recompile the kernels.
 import hashlib
 import importlib.util
 import os
+import sys
 from pathlib import Path
-
-import numba
 
 
 PLUGINS_VARIABLE = "ROTORSWEEP_MODELS"
@@ -50,10 +49,13 @@ def _cache_dir(src=Path(__file__).parent):
 # os.environ whenever the environment changes (a LocalCluster setting NUMBA_NUM_THREADS does), which
 # would silently reset a CACHE_DIR set in numba.config alone. The marker tells our own setting,
 # inherited by a child process that may have other models, from a user's NUMBA_CACHE_DIR.
+# Numba itself is not imported here: reading a result file (the model registry) needs none, and
+# Numba, once a kernel module imports it, reads the directory from the environment.
 _OWN = "ROTORSWEEP_NUMBA_CACHE_DIR"
 if os.environ.get("NUMBA_CACHE_DIR", "") in ("", os.environ.get(_OWN)):
     os.environ["NUMBA_CACHE_DIR"] = os.environ[_OWN] = _cache_dir()
-    numba.config.CACHE_DIR = os.environ[_OWN]
+    if "numba" in sys.modules:
+        sys.modules["numba"].config.CACHE_DIR = os.environ[_OWN]
 
 
 # Compile options of a body that an `overload` picks at typing time (a group's model equations

@@ -168,7 +168,7 @@ def torus_half_swing(scene, ds, k, observable="y_B", turns=150):
     result's first (torus) branch, at that point's parameter: the torus's half-swing measured
     without the torus solver (the run covers the torus densely at an irrational rotation; it
     samples the sup from below)."""
-    from rotorsweep.kernels.models import rigid_preloaded as rp
+    from rotorsweep.kernels.models import rigid_preloaded_kernels as rp
     from rotorsweep.pipeline import continuation, torus_branches
 
     pl = continuation.plan(scene)

@@ -24,15 +24,18 @@ DASK = ("dask", "distributed")
 SCIPY_SOLVERS = ("scipy.linalg", "scipy.interpolate", "scipy.integrate", "scipy.optimize", "numpy.f2py")
 HEAVY = PLOTTING + DASK + SCIPY_SOLVERS
 # what each command must not import (issue 35): nothing heavy where nothing is computed or read;
-# a result file needs xarray (with pandas) and numba (the model registry), a point only numba
+# a result file needs xarray (with pandas) but no numba (the model registry holds specs, not kernels),
+# a point only numba
 NOTHING_READ = HEAVY + ("numba", "xarray", "pandas", "netCDF4", "pint")
+RESULT_READ = HEAVY + ("numba", "llvmlite", "pint")
 COMMANDS = {
     "import rotorsweep": (["-c", "import rotorsweep"], NOTHING_READ),
     "argument parsing": (["-m", "rotorsweep.pipeline.cli", "--help"], NOTHING_READ),
-    "info": (["-m", "rotorsweep.pipeline.cli", "info", "{cube}"], HEAVY + ("pint",)),
-    "query --unstable": (["-m", "rotorsweep.pipeline.cli", "query", "{cube}", "--unstable"], HEAVY + ("pint",)),
+    "info": (["-m", "rotorsweep.pipeline.cli", "info", "{cube}"], RESULT_READ),
+    "query --unstable": (["-m", "rotorsweep.pipeline.cli", "query", "{cube}", "--unstable"], RESULT_READ),
+    "query --attractors": (["-m", "rotorsweep.pipeline.cli", "query", "{cube}", "--attractors"], RESULT_READ),
     "query --where --var": (["-m", "rotorsweep.pipeline.cli", "query", "{cube}", "--where", "speed=0:1e4", "--var",
-                             "max_abs_multiplier"], HEAVY + ("pint",)),
+                             "max_abs_multiplier"], RESULT_READ),
     "point": (["-m", "rotorsweep.pipeline.cli", "point", "--speed", "100", "--clearance", "7.6e-6"],
               HEAVY + ("xarray", "pandas", "netCDF4", "pint")),
     # a unit string loads pint, and pint alone (not the Dask it would import: units._pint_without_dask)
@@ -211,6 +214,36 @@ def heavy(modules, listed):
 def test_a_command_imports_only_what_it_uses(command, tiny_cube):
     args, listed = COMMANDS[command]
     assert heavy(imported_modules([a.replace("{cube}", str(tiny_cube)) for a in args]), listed) == []
+
+
+@pytest.fixture(scope="module")
+def continuation_result(tmp_path_factory):
+    return continuation.run(config.parse_config(DUFFING), tmp_path_factory.mktemp("read") / "fold.nc", workers=0,
+                            stream=None)
+
+
+READS = {
+    "cube": (["info"], ["query", "--unstable"], ["query", "--attractors"], ["query", "--attractors", "down"],
+             ["query", "--bistable"], ["query", "--where", "speed=60:65", "--var", "max_abs_multiplier", "--var",
+                                       "attractor", "--format", "csv"], ["query", "--format", "json"]),
+    "continuation": (["info"], ["query"], ["query", "--format", "json"], ["query", "--unstable"]),
+}
+
+
+@pytest.mark.parametrize("kind", READS)
+def test_a_result_read_without_numba_prints_what_it_prints_with_everything_loaded(kind, tiny_cube,
+                                                                                   continuation_result, capfd):
+    """info and query in a fresh process (which imports no Numba: above) print the same bytes and
+    exit with the same status as in this process, where the kernels, Numba and the whole pipeline are loaded."""
+    from rotorsweep.pipeline import cli
+    path = str(tiny_cube if kind == "cube" else continuation_result)
+    for command in READS[kind]:
+        args = [command[0], path, *command[1:]]
+        proc = subprocess.run([*CLI, *args], capture_output=True, text=True, env=env(), timeout=300, cwd=ROOT)
+        capfd.readouterr()
+        status = cli.main(args) or 0
+        here = capfd.readouterr()
+        assert (proc.returncode, proc.stdout, proc.stderr) == (status, here.out, here.err), args
 
 
 def test_the_accessor_registers_without_hvplot_and_draws_with_it(tiny_cube):

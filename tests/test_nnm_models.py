@@ -12,7 +12,8 @@ import sympy as sp
 from rotorsweep.pipeline import config
 from rotorsweep.kernels import models
 from rotorsweep.kernels.contact import ring_load
-from rotorsweep.kernels.cubic_law import cubic_coefficients, cubic_load, derivative_tensor, potential_monomials
+from rotorsweep.kernels.cubic_law import cubic_coefficients, derivative_tensor, potential_monomials
+from rotorsweep.kernels.cubic_law_kernels import cubic_load
 from rotorsweep.kernels.models import rigid_preloaded as rp, series_rotor as sr
 
 MODELS = ("symmetric4", "asymmetric5")

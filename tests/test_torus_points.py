@@ -80,7 +80,7 @@ def test_the_torus_amplitude_against_a_long_dop853_run(result):
     estimate plus 2e-5 relative."""
     from scipy.integrate import solve_ivp
 
-    from rotorsweep.kernels.models import rigid_preloaded as rp
+    from rotorsweep.kernels.models import rigid_preloaded_kernels as rp
 
     ds, data, built = result
     model = data.model

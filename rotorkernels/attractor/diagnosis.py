@@ -10,14 +10,8 @@ from rotorsweep.kernels import floquet, integrators as ig, shooting
 from rotorsweep.kernels.attractor import lyapunov
 from rotorsweep.kernels.attractor.period import default_period_rtol, detect_period
 from rotorsweep.kernels.attractor.poincare import _poincare
-
-# not_settled: the samples neither repeat nor form a torus and the exponent is negative -- the
-# transient budget ran out before the state settled (a period longer than max_period, or
-# critical slowing down next to a bifurcation); integration_failed: the integrator could not keep
-# its tolerance (step-size underflow), which is not a divergence of the rotor.
-ATTRACTOR = ("not_computed", "periodic", "quasi_periodic", "chaotic", "diverged", "not_settled",
-             "integration_failed")
-NOT_COMPUTED, PERIODIC, QUASI_PERIODIC, CHAOTIC, DIVERGED, NOT_SETTLED, INTEGRATION_FAILED = range(7)
+from rotorsweep.kernels.attractor_classes import (  # noqa: F401 (the package's API)
+    ATTRACTOR, CHAOTIC, DIVERGED, INTEGRATION_FAILED, NOT_COMPUTED, NOT_SETTLED, PERIODIC, QUASI_PERIODIC)
 
 
 def failure_class(status):

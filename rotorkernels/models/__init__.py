@@ -1,5 +1,8 @@
-"""The model registry: one module per model (njit `rhs`, `jac`, `rhs_jac` and a `SPEC`), one
-line each in BUILTIN below.
+"""The model registry: one module per model defining its `SPEC`, one line each in BUILTIN below.
+A built-in model's njit `rhs`, `jac`, `rhs_jac` live in its kernel module (`ModelSpec.module`,
+`models.duffing` -> `models.duffing_kernels`), which only the kernels' dispatch imports: the
+registry and the specs import no Numba, so reading a result does not either (issue 35). The
+dispatch (`models.dispatch`) is loaded on first use, when something integrates.
 
 Further models come from modules named in $ROTORSWEEP_MODELS (comma-separated, importable, each
 defining `SPEC`): a user's own model needs no edit of rotorsweep. Dask workers inherit the
@@ -58,18 +61,31 @@ def get(name):
 def kernel_tag(spec):
     """The tag of `spec` in the kernels' dispatch (`ModelSpec.kernel.tag`): its type names the
     model's kernel group, its id the model within the group."""
-    tag = dispatch.TAGS.get(spec.name)
+    tags = _dispatch().TAGS
+    tag = tags.get(spec.name)
     if tag is None or tag.id != spec.id:
         raise ModelError(f"model {spec.name!r} (id {spec.id}) is not in the kernels' dispatch; "
-                         f"it has: {', '.join(dispatch.TAGS)}")
+                         f"it has: {', '.join(tags)}")
     return tag
+
+
+def __getattr__(name):
+    """`models.dispatch`, loaded (with Numba and every model's kernels) on first use."""
+    if name != "dispatch":
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return _dispatch()
+
+
+def _dispatch():
+    if "dispatch" not in globals():
+        globals()["dispatch"] = _load_dispatch()      # once loaded, a plain module attribute
+    return globals()["dispatch"]
 
 
 def _load_dispatch():
     """The committed dispatch for the built-in models, else one generated for the registry."""
     if set(REGISTRY) == set(BUILTIN_NAMES):
-        from rotorsweep.kernels.models import dispatch
-        return dispatch
+        return importlib.import_module(f"{__name__}.dispatch")
     import numba
 
     from rotorsweep.kernels.models.generate import dispatch_source
@@ -105,4 +121,7 @@ def _register_plugins():
 for _module in BUILTIN:
     register(_module.SPEC)
 PLUGIN_ERRORS = _register_plugins()
-dispatch = _load_dispatch()
+if set(REGISTRY) != set(BUILTIN_NAMES):
+    # the generated dispatch takes the committed one's module name: it must be there before a
+    # pickled kernel tag (a Dask task's) imports that name; a plugin's kernels import Numba anyway
+    _dispatch()

@@ -8,31 +8,11 @@ The lowest mode is axial (the axial stiffness 2 c_a is below the radial one at t
 angles); `polynomial(values)` gives the PolynomialSystem for the invariant-manifold code.
 """
 import numpy as np
-from numba import njit
 
 from rotorsweep.kernels.models import series_rotor as sr
-from rotorsweep.kernels.models.spec import ModelSpec, Parameter
+from rotorsweep.kernels.models.spec import ModelSpec, Parameter, kernel_module
 
 N_POS = 5
-
-
-@njit(cache=True, nogil=True, forceinline=True, error_model="numpy")
-def rhs(tau, u, p, du):
-    a, b = sr.bearing_loads(u, p, N_POS)
-    sr.accelerations(u, p, N_POS, a, b, du)
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def jac(tau, u, p, out):
-    a, b = sr.bearing_loads(u, p, N_POS)
-    sr.jacobian(out, p, N_POS, a, b)
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def rhs_jac(tau, u, p, du, out):
-    a, b = sr.bearing_loads(u, p, N_POS)
-    sr.accelerations(u, p, N_POS, a, b, du)
-    sr.jacobian(out, p, N_POS, a, b)
 
 
 def disk_position(v):
@@ -45,8 +25,8 @@ def polynomial(v):
 
 
 SPEC = ModelSpec(
-    name="asymmetric5", id=6, module=__name__, version="2",   # 2: the 2010 papers' bearing (E = 2e11 Pa) by default
-    older_defaults=sr.OLDER_DEFAULTS,
+    name="asymmetric5", id=6, version="2",   # 2: the 2010 papers' bearing (E = 2e11 Pa) by default
+    module=kernel_module(__name__), older_defaults=sr.OLDER_DEFAULTS,
     n_position=N_POS, forced=False, continuation=("speed",),
     description="Filipkovsky 2010: asymmetric 5-DOF rotor (transverse-axial coupling) on preloaded ball "
                 "bearings, cubic series law, conservative",

@@ -8,14 +8,14 @@ from numba.core.errors import TypingError
 from numba.extending import overload
 
 from rotorsweep.kernels import PICKED_BODY, stages
-import rotorsweep.kernels.models.jeffcott_clearance as m0
-import rotorsweep.kernels.models.linear_oscillator as m1
-import rotorsweep.kernels.models.damped_mathieu as m2
-import rotorsweep.kernels.models.duffing as m3
-import rotorsweep.kernels.models.rigid_preloaded as m4
-import rotorsweep.kernels.models.symmetric4 as m5
-import rotorsweep.kernels.models.asymmetric5 as m6
-import rotorsweep.kernels.models.duffing2 as m7
+import rotorsweep.kernels.models.jeffcott_clearance_kernels as m0
+import rotorsweep.kernels.models.linear_oscillator_kernels as m1
+import rotorsweep.kernels.models.damped_mathieu_kernels as m2
+import rotorsweep.kernels.models.duffing_kernels as m3
+import rotorsweep.kernels.models.rigid_preloaded_kernels as m4
+import rotorsweep.kernels.models.symmetric4_kernels as m5
+import rotorsweep.kernels.models.asymmetric5_kernels as m6
+import rotorsweep.kernels.models.duffing2_kernels as m7
 
 
 @njit(cache=True, nogil=True, inline="always")

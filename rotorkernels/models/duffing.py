@@ -2,32 +2,10 @@
 tau = t / T with T = 2 pi / omega, state (x, dx/dtau). With F = 0 and zeta = 0 it is conservative
 and autonomous (free oscillation, backbone); hardening for gamma > 0, softening for gamma < 0."""
 import numpy as np
-from numba import njit
 
-from rotorsweep.kernels.models.spec import Built, LinearSystem, ModelSpec, Observable, Parameter
-from rotorsweep.kernels.models.velocity import upper_rows, velocity_rows
+from rotorsweep.kernels.models.spec import Built, LinearSystem, ModelSpec, Observable, Parameter, kernel_module
 
 P_T2, P_DAMP, P_GAMMA, P_FORCE = range(4)   # T^2, 2 zeta T, gamma, F
-
-
-@njit(cache=True, nogil=True, inline="always")
-def rhs(tau, u, p, du):
-    velocity_rows(u, du, 1)
-    x = u[0]
-    du[1] = p[P_T2] * (p[P_FORCE] * np.cos(2.0 * np.pi * tau) - x - p[P_GAMMA] * x * x * x) - p[P_DAMP] * u[1]
-
-
-@njit(cache=True, nogil=True, inline="always")
-def jac(tau, u, p, out):
-    upper_rows(out, 1)
-    out[1, 0] = -p[P_T2] * (1.0 + 3.0 * p[P_GAMMA] * u[0] * u[0])
-    out[1, 1] = -p[P_DAMP]
-
-
-@njit(cache=True, nogil=True, inline="always")
-def rhs_jac(tau, u, p, du, out):
-    rhs(tau, u, p, du)
-    jac(tau, u, p, out)
 
 
 def build(v):
@@ -42,7 +20,7 @@ def linearization(v, equilibrium):
 
 
 SPEC = ModelSpec(
-    name="duffing", id=3, module=__name__, n_position=1,
+    name="duffing", id=3, module=kernel_module(__name__), n_position=1,
     description="validation: forced Duffing oscillator (scaled time tau = omega t / 2 pi)",
     parameters=(
         Parameter(name="omega", unit="rad s-1", long_name="forcing frequency", axis=True, lo=0,

@@ -7,34 +7,11 @@ p = (k, c, gamma, f1, f2, w2, theta), state (x, x'). The second forcing's phase 
 a parameter: the torus solver (rotorsweep.kernels.torus) shoots one forcing period from each phase node.
 With gamma = 0 it is linear and its quasi-periodic response is the sum of two periodic ones."""
 import numpy as np
-from numba import njit
 
-from rotorsweep.kernels.models.spec import VALIDATION_GROUP, Built, ModelSpec, Observable, Parameter
-from rotorsweep.kernels.models.velocity import upper_rows, velocity_rows
+from rotorsweep.kernels.models.spec import VALIDATION_GROUP, Built, ModelSpec, Observable, Parameter, kernel_module
 
 P_K, P_C, P_GAMMA, P_F1, P_F2, P_W2, P_PHASE = range(7)
 NAMES = ("k", "c", "gamma", "f1", "f2", "w2", "theta")
-
-
-@njit(cache=True, nogil=True, inline="always")
-def rhs(tau, u, p, du):
-    velocity_rows(u, du, 1)
-    x = u[0]
-    du[1] = (p[P_F1] * np.cos(2.0 * np.pi * tau) + p[P_F2] * np.cos(p[P_W2] * tau + p[P_PHASE])
-             - p[P_K] * x - p[P_GAMMA] * x * x * x - p[P_C] * u[1])
-
-
-@njit(cache=True, nogil=True, inline="always")
-def jac(tau, u, p, out):
-    upper_rows(out, 1)
-    out[1, 0] = -p[P_K] - 3.0 * p[P_GAMMA] * u[0] * u[0]
-    out[1, 1] = -p[P_C]
-
-
-@njit(cache=True, nogil=True, inline="always")
-def rhs_jac(tau, u, p, du, out):
-    rhs(tau, u, p, du)
-    jac(tau, u, p, out)
 
 
 def build(v):
@@ -42,7 +19,7 @@ def build(v):
 
 
 SPEC = ModelSpec(
-    name="duffing2", id=7, module=__name__, n_position=1,
+    name="duffing2", id=7, module=kernel_module(__name__), n_position=1,
     description="validation: Duffing oscillator under two-frequency forcing (scaled time)",
     parameters=tuple(Parameter(name=k, default=0.0) for k in NAMES), build=build,
     cold_guess=lambda p: np.zeros(2), length_scale=1.0, kernel_group=VALIDATION_GROUP,

@@ -1,36 +1,6 @@
 """Validation model `linear_oscillator`: u'' + C u' + K u = 0 with K = [[p0, p1], [p1, p2]],
 C = diag(p3, p4) (scaled time); its flow is expm(A t), its spectra the eigenvalues of A."""
-from numba import njit
+from rotorsweep.kernels.models.spec import kernel_module, validation_spec
 
-from rotorsweep.kernels.models.spec import validation_spec
-from rotorsweep.kernels.models.velocity import upper_rows, velocity_rows
-
-
-@njit(cache=True, nogil=True, inline="always")
-def rhs(tau, u, p, du):
-    velocity_rows(u, du, 2)
-    du[2] = -p[0] * u[0] - p[1] * u[1] - p[3] * u[2]
-    du[3] = -p[1] * u[0] - p[2] * u[1] - p[4] * u[3]
-
-
-@njit(cache=True, nogil=True, inline="always")
-def jac(tau, u, p, out):
-    upper_rows(out, 2)
-    out[2, 0] = -p[0]
-    out[2, 1] = -p[1]
-    out[2, 2] = -p[3]
-    out[2, 3] = 0.0
-    out[3, 0] = -p[1]
-    out[3, 1] = -p[2]
-    out[3, 2] = 0.0
-    out[3, 3] = -p[4]
-
-
-@njit(cache=True, nogil=True, inline="always")
-def rhs_jac(tau, u, p, du, out):
-    rhs(tau, u, p, du)
-    jac(tau, u, p, out)
-
-
-SPEC = validation_spec("linear_oscillator", 1, __name__, ("k11", "k12", "k22", "c1", "c2"),
+SPEC = validation_spec("linear_oscillator", 1, kernel_module(__name__), ("k11", "k12", "k22", "c1", "c2"),
                        "validation: 2-DOF linear oscillator (scaled time)")

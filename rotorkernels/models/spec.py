@@ -101,7 +101,8 @@ class Built(NamedTuple):
 class ModelSpec:
     name: str
     id: int                         # kernel dispatch id (unique; the generated dispatch uses it)
-    module: str                     # module holding the njit rhs, jac, rhs_jac
+    module: str                     # module holding the njit rhs, jac, rhs_jac (imported only to integrate:
+    #                                 a built-in model's is `kernel_module` of its spec's module)
     n_position: int
     description: str
     version: str = "1"
@@ -209,6 +210,13 @@ class ModelSpec:
         """Observables of scaled state(s) (..., n_state): array (..., n_observables) in SI."""
         weights = np.array([o.weights for o in self.observables], float)
         return self.to_physical(u, period)[..., :weights.shape[1]] @ weights.T
+
+
+def kernel_module(spec_module):
+    """The module of a built-in model's njit kernels: `models.duffing` -> `models.duffing_kernels`.
+    A built-in model's spec module imports no Numba, so reading a result (the registry) does not
+    either (issue 35); a plugin may keep its SPEC and kernels in one module."""
+    return f"{spec_module}_kernels"
 
 
 VALIDATION_GROUP = "validation"

@@ -8,31 +8,11 @@ gyroscopic coupling leaves untouched); the conical modes split into backward and
 `polynomial(values)` gives the PolynomialSystem for the invariant-manifold code.
 """
 import numpy as np
-from numba import njit
 
 from rotorsweep.kernels.models import series_rotor as sr
-from rotorsweep.kernels.models.spec import ModelSpec
+from rotorsweep.kernels.models.spec import ModelSpec, kernel_module
 
 N_POS = 4
-
-
-@njit(cache=True, nogil=True, forceinline=True, error_model="numpy")
-def rhs(tau, u, p, du):
-    a, b = sr.bearing_loads(u, p, N_POS)
-    sr.accelerations(u, p, N_POS, a, b, du)
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def jac(tau, u, p, out):
-    a, b = sr.bearing_loads(u, p, N_POS)
-    sr.jacobian(out, p, N_POS, a, b)
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def rhs_jac(tau, u, p, du, out):
-    a, b = sr.bearing_loads(u, p, N_POS)
-    sr.accelerations(u, p, N_POS, a, b, du)
-    sr.jacobian(out, p, N_POS, a, b)
 
 
 def _planar(position):
@@ -59,8 +39,8 @@ def polynomial(v):
 
 
 SPEC = ModelSpec(
-    name="symmetric4", id=5, module=__name__, version="2",   # 2: the 2010 papers' bearing (E = 2e11 Pa) by default
-    older_defaults=sr.OLDER_DEFAULTS,
+    name="symmetric4", id=5, version="2",   # 2: the 2010 papers' bearing (E = 2e11 Pa) by default
+    module=kernel_module(__name__), older_defaults=sr.OLDER_DEFAULTS,
     n_position=N_POS, forced=False, continuation=("speed",),
     description="Filipkovsky 2010: symmetric 4-DOF rotor on preloaded ball bearings, cubic series law, conservative",
     parameters=sr.ROTOR_PARAMETERS + sr.BEARING_PARAMETERS,
