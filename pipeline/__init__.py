@@ -121,8 +121,9 @@ def _cffi_unavailable():
 def numba_without_cffi():
     """For the command line's own process: Numba's typing of cffi functions off. Numba sets it up
     where its typing starts (numba.core.typing.cffi_utils) by importing cffi and pycparser and
-    building an FFI: 30-40 ms of CPU in every command that loads a kernel (issue 35), for a
-    feature no rotorsweep kernel uses. Numba then treats cffi as not installed."""
+    building an FFI: 14 ms (quiet machine) to 33 ms (loaded) in every command that loads a kernel
+    (issue 35), for a feature no rotorsweep kernel uses. Numba then treats cffi as not installed:
+    a plugin model whose kernel calls cffi functions runs from Python, not from the command line."""
     _around_import("numba.core.typing.cffi_utils", _cffi_unavailable)
 
 
