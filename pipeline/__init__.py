@@ -13,8 +13,8 @@ The Python API mirrors the command line:
 
 Importing pipeline imports nothing heavy and installs import hooks for short commands (issue
 35): the `rotorsweep` accessor registers itself when xarray is imported
-(register_accessor_when_xarray_loads), and Numba's BLAS check does not import scipy.linalg
-(_quick_blas_check).
+(register_accessor_when_xarray_loads), Numba's BLAS check does not import scipy.linalg
+(_quick_blas_check), and the command line's process sets up no cffi typing (numba_without_cffi).
 """
 import contextlib
 import importlib.abc
@@ -102,6 +102,29 @@ def _quick_blas_check():
 
 
 _around_import("numba.np.arraymath", _quick_blas_check)
+
+
+@contextlib.contextmanager
+def _cffi_unavailable():
+    """`import cffi` fails inside (where cffi is not imported yet): sys.modules maps it to None."""
+    if "cffi" in sys.modules:
+        yield
+        return
+    sys.modules["cffi"] = None
+    try:
+        yield
+    finally:
+        if sys.modules.get("cffi", 0) is None:
+            del sys.modules["cffi"]
+
+
+def numba_without_cffi():
+    """For the command line's own process: Numba's typing of cffi functions off. Numba sets it up
+    where its typing starts (numba.core.typing.cffi_utils) by importing cffi and pycparser and
+    building an FFI: 14 ms (quiet machine) to 33 ms (loaded) in every command that loads a kernel
+    (issue 35), for a feature no rotorsweep kernel uses. Numba then treats cffi as not installed:
+    a plugin model whose kernel calls cffi functions runs from Python, not from the command line."""
+    _around_import("numba.core.typing.cffi_utils", _cffi_unavailable)
 
 
 def as_config(cfg, allow_large=False, whole_grid=True):

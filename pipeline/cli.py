@@ -423,6 +423,8 @@ def _recording_interrupts(seen):
 def main(argv=None):
     """The command line (argv None: sys.argv, and the process exits when this returns)."""
     args = build_parser().parse_args(argv)
+    if argv is None:
+        pipeline.numba_without_cffi()
     interrupts = []
     disabled = logging.root.manager.disable
     previous = _recording_interrupts(interrupts)

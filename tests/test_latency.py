@@ -291,3 +291,16 @@ def test_the_overwrite_hint_names_the_python_keyword(tmp_path):
     out.write_text("")
     with pytest.raises(cube.CubeError, match="overwrite=True"):
         continuation.run(cfg, out, workers=0, stream=None)
+
+
+# --- the command line's process sets up no cffi typing in Numba (issue 35) ------------------------
+
+def test_a_command_line_kernel_load_imports_no_cffi():
+    args = ["-m", "rotorsweep.pipeline.cli", "point", "--speed", "100", "--clearance", "7.6e-6"]
+    assert heavy(imported_modules(args), ("pycparser", "cffi.api")) == []
+
+
+def test_without_cffi_numba_treats_it_as_absent_and_cffi_still_imports():
+    code = ("import rotorsweep.pipeline as p; p.numba_without_cffi(); from numba.core.typing import cffi_utils; "
+            "assert not cffi_utils.SUPPORTED; import cffi; cffi.FFI()")
+    subprocess.run([sys.executable, "-c", code], check=True, env=env(), timeout=300, cwd=ROOT)
