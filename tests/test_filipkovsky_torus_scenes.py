@@ -60,3 +60,21 @@ def test_a_branch_ending_in_breakdown_gives_event_rows_without_the_end(tmp_path)
     assert run.end == engine.TORUS_BREAKDOWN and [f.event.code for f in run.found] == ["torus_breakdown"]
     rows = torus_events.event_rows(model, fam, None, run, np.zeros((len(run.points), 2, 1)))
     assert rows["event_type"].size == 0 and rows["event_state"].shape == (0, 2) and rows["event_note"] == []
+
+
+def test_a_sign_change_of_the_exponent_flags_even_between_undecided_points():
+    """Next to the fold of configs/filipkovsky2016_torus_fold.toml over 380-420 Hz the largest
+    normal exponent went -0.71 -> +0.31 1/s between two undecided points (within their error of 0):
+    TS must flag there (the sign is what the flag means), and never where an exponent is NaN."""
+    import numpy as np
+
+    from rotorsweep.kernels import torus as tr
+    from rotorsweep.kernels.continuation import tori
+
+    def point(exponent, status):
+        return tori.Point(None, 0.0, None, 0, 0.0, 0.0, tr.Stability(np.array([exponent, -5.0]), 1.0, status, ""), None)
+    flag = tori.StabilityChange().detect
+    assert flag(None, point(-0.71, tr.UNDECIDED), point(0.31, tr.UNDECIDED))
+    assert flag(None, point(-3.0, tr.STABLE), point(2.0, tr.UNSTABLE))
+    assert not flag(None, point(-3.0, tr.STABLE), point(-0.2, tr.UNDECIDED))
+    assert not flag(None, point(np.nan, tr.UNDECIDED), point(2.0, tr.UNSTABLE))
