@@ -13,7 +13,7 @@ from scipy.integrate import solve_ivp
 
 from rotorsweep.kernels import torus as tr
 from rotorsweep.kernels.continuation import engine, events as ev
-from rotorsweep.kernels.models import rigid_preloaded as rp
+from rotorsweep.kernels.models import rigid_preloaded_kernels as rp
 from rotorsweep.pipeline import cli, config, continuation, torus_branches
 
 SCENE = "configs/filipkovsky2016_torus_fold.toml"

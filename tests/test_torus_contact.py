@@ -11,6 +11,7 @@ from scipy.integrate import solve_ivp
 from rotorsweep.pipeline import compute, config, schema, torus_points
 from rotorsweep.kernels import torus as tr
 from rotorsweep.kernels.models import rigid_preloaded as rp
+from rotorsweep.kernels.models import rigid_preloaded_kernels as rpk
 
 MAP = Path(__file__).resolve().parents[1] / "configs" / "filipkovsky2016_map_tori.toml"
 COUNTS = np.array([15, 31, 63, 127])
@@ -63,7 +64,7 @@ def test_a_ball_lifts_off_on_an_independent_run_from_the_circle(point):
 
         def f(tau, u):
             du = np.empty_like(u)
-            rp.rhs(tau, u, p, du)
+            rpk.rhs(tau, u, p, du)
             return du
         sol = solve_ivp(f, (0.0, 1.0), circle.at(theta)[0], method="DOP853", rtol=1e-10, atol=1e-12,
                         t_eval=np.linspace(0.0, 1.0, 257))
