@@ -169,16 +169,21 @@ def test_bai_15um_period_2_peak_brackets_the_scipy_slope_zero(bai15):
     """The period-2 loop's response peak (half peak-to-peak x, the plotted observable) lies
     within 1e-7 relative of the zero of its slope along the orbits by scipy alone: the scipy
     slope changes sign between the peak's speed - 1e-7 and + 1e-7 relative. Its copies (the loop
-    met from both its period doublings, both halves) agree to 5e-8 relative (the amplitude's
+    met from both its period doublings, both halves) agree to 1e-7 relative (the amplitude's
     slope along the branch from the extremes at their times, on the tangent from parameter
     differences taken on the orbit's steps; the contact force's C^1 leaves ~1e-7 of the flat
     peak's curvature, A'' ~ 0.13 A per Hz^2)."""
     scene, ds = bai15
     spec = scene.model
-    peaks = [e for e in range(ds.sizes["event"]) if ds["event_type"].values[e] == continuation.al.PEAK and
-             ds["branch_periods"].values[ds["event_branch"].values[e]] == 2]
+    def peaks_of(k):
+        return [e for e in range(ds.sizes["event"]) if ds["event_type"].values[e] == continuation.al.PEAK and
+                ds["branch_periods"].values[ds["event_branch"].values[e]] == k]
+    peaks = peaks_of(2)
     lams = ds["event_parameter"].values[peaks]
     assert len(peaks) >= 2 and np.ptp(lams) <= 1e-7 * lams.mean()
+    # the period-4 peak, flatter still: its copies within 1e-6 (measured 5e-7; 4e-6 before)
+    lams4 = ds["event_parameter"].values[peaks_of(4)]
+    assert len(lams4) >= 2 and np.ptp(lams4) <= 1e-6 * lams4.mean()
     e = continuation.distinct_events(ds)[np.isin(continuation.distinct_events(ds), peaks)][0]
     lam = float(ds["event_parameter"].values[e])
     guess = ds["event_state"].values[e] * spec.to_physical(np.ones(spec.n_state), BaiPoint(lam, 15.2e-6).period)
