@@ -169,12 +169,12 @@ def orbit_extent(kernel, u0, p, span, weights, opts, mean):
     `mean` is set (g' from one right-hand side per step end: the cost of a mean that is wanted),
     else the cubic one (`_quadrature`); mean_error its estimate."""
     hi, lo, avg, error, _, _, _, status, n_rhs = _extent(kernel, u0, p, span, weights, opts, mean, np.zeros(u0.size),
-                                                         p, p, opts, False)
+                                                         p, p, opts, opts, False)
     return hi, lo, avg, error, status, n_rhs
 
 
 @njit(cache=True, nogil=True)
-def orbit_extent_slope(kernel, u0, p, span, weights, opts, du, p_plus, p_minus, loose):
+def orbit_extent_slope(kernel, u0, p, span, weights, opts, du, p_plus, p_minus, loose, single):
     """(highest, lowest, d_highest, d_lowest, d_end, status, n_rhs): `orbit_extent`'s extremes and
     their first-order change, and the perturbed orbits' difference at the end. d_highest is o on the orbit from u0 + du (parameters p_plus) minus o on
     the orbit from u0 - du (p_minus), both at the time of the highest value (d_lowest likewise).
@@ -182,19 +182,21 @@ def orbit_extent_slope(kernel, u0, p, span, weights, opts, du, p_plus, p_minus, 
     second order, and the second-order terms of the two sides cancel: d / 2 is the extremum's
     derivative along (du, dp) to O(|du|^3) (envelope theorem). The perturbed orbits are
     integrated alongside, each over every step of the orbit from u0 in one step of the same
-    method (`loose`: settings whose tolerance accepts any step, integrators.loosened; a step of
-    the orbit's rejected on the way is taken again, shorter, so that each is one accepted step:
-    a rejected step across a contact's onset is far less accurate), so d is the difference of
+    method (`loose`: settings whose tolerance accepts any step, integrators.loosened). The orbit
+    advances one accepted step at a time (`single`: opts with max_steps 1); where its error
+    control rejected a step, the shorter step it accepted is taken again alone, so that the
+    perturbed orbits take exactly the accepted steps (a rejected step across a contact's onset is
+    far less accurate). So d is the difference of
     one smooth map of (u0, p): no step-size noise; its error the round-off
     over |du| and the change of the method's truncation error, both ~1e-12 relative. Kinks of
     the extremes (two local maxima of o exchange which is the highest) are where d jumps."""
     hi, lo, _, _, d_hi, d_lo, d_end, status, n_rhs = _extent(kernel, u0, p, span, weights, opts, False, du, p_plus,
-                                                             p_minus, loose, True)
+                                                             p_minus, loose, single, True)
     return hi, lo, d_hi, d_lo, d_end, status, n_rhs
 
 
 @njit(cache=True, nogil=True)
-def _extent(kernel, u0, p, span, weights, opts, mean, du, p_plus, p_minus, loose, perturbed):
+def _extent(kernel, u0, p, span, weights, opts, mean, du, p_plus, p_minus, loose, single, perturbed):
     """orbit_extent's pass, and where `perturbed` orbit_extent_slope's: (highest, lowest, mean,
     mean_error, d_highest, d_lowest, d_end, status, n_rhs)."""
     n, n_obs = kernel.n_state, weights.shape[0]
@@ -223,12 +225,12 @@ def _extent(kernel, u0, p, span, weights, opts, mean, du, p_plus, p_minus, loose
             status = ig.STATUS_OK
             break
         t1 = min(t + h, span)
-        zb, status, spent, h_next = ig.flow(kernel, t, t1, z, p, False, opts, h)
+        zb, status, spent, h_next = ig.flow(kernel, t, t1, z, p, False, single, h)
         n_rhs += spent + rhs_per_end
+        if perturbed and status == ig.STATUS_STEP_UNDERFLOW and _rejected(opts, spent):
+            h, retried = min(h_next, 0.5 * (t1 - t)), True      # again, shorter, alone
+            continue
         if perturbed and status == ig.STATUS_OK:
-            if _rejected(opts, spent):      # again, shorter, so that each step is one accepted step
-                h, retried = 0.5 * (t1 - t), True
-                continue
             if retried:     # no longer than the step accepted (as the method does after a rejection)
                 h_next, retried = min(h_next, t1 - t), False
             zpb, zmb, status, spent = _lockstep(kernel, t, t1, zp, zm, p_plus, p_minus, loose)
@@ -400,6 +402,12 @@ def amplitudes(model, state, p, span, opts, period):
 LOOSE_RTOL = 1e30
 
 
+def _lockstep_settings(opts):
+    """(loose, single) of orbit_extent_slope: the perturbed orbits' settings and the orbit's, one
+    accepted step per flow."""
+    return ig.loosened(opts, LOOSE_RTOL), opts._replace(max_steps=2.0)
+
+
 def amplitudes_and_slope(kernel, X, tangent, params, scale, span, weights, row, opts, step):
     """(amplitudes, slope, n_rhs) at a branch point X = (s, mu) (lambda = mu scale, params(lambda)
     -> p) with unit tangent, in one pass: amplitudes = [max |o|, half peak-to-peak of o] per
@@ -410,7 +418,7 @@ def amplitudes_and_slope(kernel, X, tangent, params, scale, span, weights, row, 
     s, mu, h = np.ascontiguousarray(X[:-1], dtype=float), float(X[-1]), step
     hi, lo, d_hi, d_lo, _, _, n_rhs = orbit_extent_slope(
         kernel, s, params(mu * scale), span, weights, opts, h * np.ascontiguousarray(tangent[:-1], dtype=float),
-        params((mu + h * tangent[-1]) * scale), params((mu - h * tangent[-1]) * scale), ig.loosened(opts, LOOSE_RTOL))
+        params((mu + h * tangent[-1]) * scale), params((mu - h * tangent[-1]) * scale), *_lockstep_settings(opts))
     amplitudes = np.array([np.maximum(hi, -lo), 0.5 * (hi - lo)])
     return amplitudes, float((d_hi[row] - d_lo[row]) / (4.0 * h)), n_rhs
 
@@ -423,5 +431,5 @@ def parameter_derivative(kernel, s, params, lam, step, span, opts):
     n = s.size
     _, _, _, _, d_end, status, n_rhs = orbit_extent_slope(
         kernel, np.ascontiguousarray(s, dtype=float), params(lam), span, np.zeros((1, n)), opts, np.zeros(n),
-        params(lam + step), params(lam - step), ig.loosened(opts, LOOSE_RTOL))
+        params(lam + step), params(lam - step), *_lockstep_settings(opts))
     return d_end / (2.0 * step), status, n_rhs
