@@ -48,28 +48,53 @@ def same_orbit(copies, state, tol):
     return copies is not None and any(np.abs(c - state).max() <= SAME_ORBIT_FACTOR * tol * scale for c in copies)
 
 
+# A peak's parameter is as exact as the amplitude's slope along the branch over the amplitude's
+# curvature there: the Bai rotor's period-2 and -4 peaks at 15.2 um are so flat (the half
+# peak-to-peak falls by ~1e-7 of itself over 1e-3 Hz) that the contact's C^1 force leaves their
+# copies up to 9e-5 Hz (2.6e-6 relative) apart, while one orbit's other events agree to 1e-9 Hz.
+# Two peaks this close are compared as orbits at one parameter (`_same_peak`); distinct peaks of
+# one family of orbits lie far further apart.
+PEAK_RTOL = 3e-5
+
+
 def mark_copies(family, records, settings):
     """Set records[b]["event_copy_of"] (per event: the line's flat event index of the first
     record of the same located orbit) in place. Events match when of one kind and period, at the
-    same parameter (within the same tolerance in mu = lambda / scale) and one state is a phase
-    copy of the other."""
+    same parameter (within the same tolerance in mu = lambda / scale; peaks within PEAK_RTOL,
+    `_same_peak`) and one state is a phase copy of the other."""
     events = [(b, k) for b, r in enumerate(records) for k in range(len(r["event_type"]))]
     first = list(range(len(events)))
     for i, (b, k) in enumerate(events):
         r, copies = records[b], None
+        lam, peak = r["event_parameter"][k], r["event_type"][k] == al.PEAK
+        window = PEAK_RTOL * abs(lam) if peak else SAME_ORBIT_FACTOR * settings.tol * family.scale
         for j in range(i):
             r2, k2 = records[events[j][0]], events[j][1]
             if first[j] != j or r2["periods"] != r["periods"] or r2["event_type"][k2] != r["event_type"][k] or \
-                    abs(r2["event_parameter"][k2] - r["event_parameter"][k]) > SAME_ORBIT_FACTOR * settings.tol * family.scale:
+                    abs(r2["event_parameter"][k2] - lam) > window:
                 continue
-            copies = copies or phase_copies(family, r["event_state"][k], r["event_parameter"][k], r["periods"])
-            if same_orbit(copies, r2["event_state"][k2], settings.tol):
+            if peak:
+                found = _same_peak(family, r, k, r2, k2, settings)
+            else:
+                copies = copies or phase_copies(family, r["event_state"][k], lam, r["periods"])
+                found = same_orbit(copies, r2["event_state"][k2], settings.tol)
+            if found:
                 first[i] = j
                 break
     offsets = np.cumsum([0] + [len(r["event_type"]) for r in records])
     for b, r in enumerate(records):
         r["event_copy_of"] = np.array(first[offsets[b]:offsets[b + 1]], int)
     return mark_branch_copies(family, records, settings)
+
+
+def _same_peak(family, r, k, r2, k2, settings):
+    """Peak k of record r is a phase copy of peak k2 of r2, compared at one parameter: r's state
+    corrected by Newton to r2's parameter (an orbit a few 1e-4 Hz away: Newton's first guess
+    within its convergence), then `same_orbit`."""
+    lam2 = float(r2["event_parameter"][k2])
+    point = al.start(family.with_periods(r["periods"]), lam2, r["event_state"][k], 1, settings)
+    return point is not None and same_orbit(phase_copies(family, r2["event_state"][k2], lam2, r["periods"]),
+                                            point.state, settings.tol)
 
 
 def mark_branch_copies(family, records, settings):

@@ -20,6 +20,7 @@ import numpy as np
 from numba import njit
 
 from rotorsweep.kernels import integrators as ig
+from rotorsweep.kernels.dop853_tableau import N_STAGES
 
 XTOL = 1e-9                 # zero of g: relative to the step (o's error o'' (XTOL h)^2 / 2 ~ 1e-20 o)
 MAX_REFINE = 60             # iterations per bracket (Newton: 2-4, Illinois: ~6-10)
@@ -69,21 +70,21 @@ def _refine(kernel, t, span, c, z, p, weights, k, ga, gb, opts):
     g_k(t + span) = gb of opposite signs), from the estimate t + c, on a re-integration from t:
     Newton on g_k with g_k' where `_accelerated` (a step leaving the bracket replaced by regula
     falsi), else the Illinois variant of regula falsi; NaN when the re-integration fails. Returns
-    (value, right-hand sides evaluated)."""
+    (value, its time from t, right-hand sides evaluated)."""
     newton = _accelerated(kernel, weights)
     n, n_obs = kernel.n_state, weights.shape[0]
     f, jbuf, rates, slopes, values = np.empty(n), np.empty((n, n)), np.empty(n_obs), np.empty(n_obs), np.empty(n_obs)
     a, b, fa, fb = 0.0, span, ga, gb
-    best = np.nan
+    best, at = np.nan, c
     n_rhs = 0
     for _ in range(MAX_REFINE):
         zc, status, spent, _ = ig.flow(kernel, t, t + c, z, p, False, opts, c)
         n_rhs += spent + 1          # the rates below: one right-hand side
         if status != ig.STATUS_OK:
-            return np.nan, n_rhs
+            return np.nan, c, n_rhs
         _rates(kernel, t + c, zc, p, weights, f, jbuf, rates, slopes, newton)
         _values(weights, zc, values)
-        best = values[k]
+        best, at = values[k], c
         fc = rates[k]
         if fc == 0.0:
             break
@@ -106,7 +107,7 @@ def _refine(kernel, t, span, c, z, p, weights, k, ga, gb, opts):
         if abs(b - a) <= XTOL * span:
             break
         c = (a * fb - b * fa) / (fb - fa)
-    return best, n_rhs
+    return best, at, n_rhs
 
 
 @njit(cache=True, nogil=True)
@@ -167,21 +168,55 @@ def orbit_extent(kernel, u0, p, span, weights, opts, mean):
     integral of o by the quintic Hermite rule on the accepted steps where `_accelerated` and
     `mean` is set (g' from one right-hand side per step end: the cost of a mean that is wanted),
     else the cubic one (`_quadrature`); mean_error its estimate."""
+    hi, lo, avg, error, _, _, _, status, n_rhs = _extent(kernel, u0, p, span, weights, opts, mean, np.zeros(u0.size),
+                                                         p, p, opts, opts, False)
+    return hi, lo, avg, error, status, n_rhs
+
+
+@njit(cache=True, nogil=True)
+def orbit_extent_slope(kernel, u0, p, span, weights, opts, du, p_plus, p_minus, loose, single):
+    """(highest, lowest, d_highest, d_lowest, d_end, status, n_rhs): `orbit_extent`'s extremes and
+    their first-order change, and the perturbed orbits' difference at the end. d_highest is o on the orbit from u0 + du (parameters p_plus) minus o on
+    the orbit from u0 - du (p_minus), both at the time of the highest value (d_lowest likewise).
+    At an extremum o's time derivative vanishes, so the extremum moves with o at its time to
+    second order, and the second-order terms of the two sides cancel: d / 2 is the extremum's
+    derivative along (du, dp) to O(|du|^3) (envelope theorem). The perturbed orbits are
+    integrated alongside, each over every step of the orbit from u0 in one step of the same
+    method (`loose`: settings whose tolerance accepts any step, integrators.loosened). The orbit
+    advances one accepted step at a time (`single`: opts with max_steps 1); where its error
+    control rejected a step, the shorter step it accepted is taken again alone, so that the
+    perturbed orbits take exactly the accepted steps (a rejected step across a contact's onset is
+    far less accurate). So d is the difference of
+    one smooth map of (u0, p): no step-size noise; its error the round-off
+    over |du| and the change of the method's truncation error, both ~1e-12 relative. Kinks of
+    the extremes (two local maxima of o exchange which is the highest) are where d jumps."""
+    hi, lo, _, _, d_hi, d_lo, d_end, status, n_rhs = _extent(kernel, u0, p, span, weights, opts, False, du, p_plus,
+                                                             p_minus, loose, single, True)
+    return hi, lo, d_hi, d_lo, d_end, status, n_rhs
+
+
+@njit(cache=True, nogil=True)
+def _extent(kernel, u0, p, span, weights, opts, mean, du, p_plus, p_minus, loose, single, perturbed):
+    """orbit_extent's pass, and where `perturbed` orbit_extent_slope's: (highest, lowest, mean,
+    mean_error, d_highest, d_lowest, d_end, status, n_rhs)."""
     n, n_obs = kernel.n_state, weights.shape[0]
     hi, lo, ga, gb, oa, ob = (np.empty(n_obs), np.empty(n_obs), np.empty(n_obs), np.empty(n_obs),
                               np.empty(n_obs), np.empty(n_obs))
     sa, sb, f, jbuf = np.zeros(n_obs), np.zeros(n_obs), np.empty(n), np.empty((n, n))
-    integral, error = np.zeros(n_obs), np.zeros(n_obs)
+    integral, error, d_hi, d_lo, dv = np.zeros(n_obs), np.zeros(n_obs), np.zeros(n_obs), np.zeros(n_obs), np.zeros(n_obs)
     quintic = mean and _accelerated(kernel, weights)
     rhs_per_end = 1 if quintic or not _accelerated(kernel, weights) else 0     # `_rates`
     est_hi, est_lo = np.empty(n_obs), np.empty(n_obs)     # hi and lo with the brackets' estimates
     held = np.empty((CANDIDATES, 7))        # t, h, s, estimate, k, ga, gb of a bracket
-    held_z = np.empty((CANDIDATES, n))      # its starting state
-    count = 0
-    z = u0.copy()
+    held_z = np.empty((CANDIDATES, 3, n))   # its starting states (the orbit's, the perturbed ones)
+    count, retried = 0, False
+    z, zp, zm = u0.copy(), u0 + du, u0 - du
+    zpb, zmb = zp, zm
     _values(weights, z, oa)
+    _difference(weights, zp, zm, dv)
     for k in range(n_obs):
         hi[k] = lo[k] = est_hi[k] = est_lo[k] = oa[k]
+        d_hi[k] = d_lo[k] = dv[k]
     _rates(kernel, 0.0, z, p, weights, f, jbuf, ga, sa, quintic)
     t, h, n_rhs = 0.0, 0.01 * span, rhs_per_end
     status = ig.STATUS_STEP_UNDERFLOW       # unless the end is reached within max_steps
@@ -190,29 +225,37 @@ def orbit_extent(kernel, u0, p, span, weights, opts, mean):
             status = ig.STATUS_OK
             break
         t1 = min(t + h, span)
-        zb, status, spent, h_next = ig.flow(kernel, t, t1, z, p, False, opts, h)
+        zb, status, spent, h_next = ig.flow(kernel, t, t1, z, p, False, single, h)
         n_rhs += spent + rhs_per_end
+        if perturbed and status == ig.STATUS_STEP_UNDERFLOW and _rejected(opts, spent):
+            h, retried = min(h_next, 0.5 * (t1 - t)), True      # again, shorter, alone
+            continue
+        if perturbed and status == ig.STATUS_OK:
+            if retried:     # no longer than the step accepted (as the method does after a rejection)
+                h_next, retried = min(h_next, t1 - t), False
+            zpb, zmb, status, spent = _lockstep(kernel, t, t1, zp, zm, p_plus, p_minus, loose)
+            n_rhs += spent
+            _difference(weights, zpb, zmb, dv)
         if status != ig.STATUS_OK:
             break
         _rates(kernel, t1, zb, p, weights, f, jbuf, gb, sb, quintic)
         _values(weights, zb, ob)
         _quadrature(oa, ob, ga, gb, sa, sb, t1 - t, quintic, integral, error)
         for k in range(n_obs):
-            hi[k] = max(hi[k], ob[k])
-            lo[k] = min(lo[k], ob[k])
+            if ob[k] > hi[k]:
+                hi[k], d_hi[k] = ob[k], dv[k]
+            if ob[k] < lo[k]:
+                lo[k], d_lo[k] = ob[k], dv[k]
             est_hi[k] = max(est_hi[k], ob[k])
             est_lo[k] = min(est_lo[k], ob[k])
             if (ga[k] < 0.0) != (gb[k] < 0.0) and ga[k] != 0.0 and gb[k] != 0.0:
                 s, est = _hermite(oa[k], ob[k], ga[k], gb[k], t1 - t)
                 if count == CANDIDATES:     # no room: refined at once
-                    est, spent = _refine(kernel, t, t1 - t, s, z, p, weights, k, ga[k], gb[k], opts)
+                    status, spent = _settle(kernel, p, weights, opts, k, t, t1 - t, s, ga[k], gb[k], z, zp, zm,
+                                            p_plus, p_minus, loose, perturbed, hi, lo, d_hi, d_lo)
                     n_rhs += spent
-                    if not np.isfinite(est):
-                        status = ig.STATUS_NAN
-                    hi[k] = max(hi[k], est)
-                    lo[k] = min(lo[k], est)
                 else:
-                    _hold(held, held_z, count, (t, t1 - t, s, est, float(k), ga[k], gb[k]), z)
+                    _hold(held, held_z, count, (t, t1 - t, s, est, float(k), ga[k], gb[k]), z, zp, zm)
                     count += 1
                 est_hi[k] = max(est_hi[k], est)
                 est_lo[k] = min(est_lo[k], est)
@@ -220,14 +263,17 @@ def orbit_extent(kernel, u0, p, span, weights, opts, mean):
             break
         for k in range(n_obs):
             ga[k], oa[k], sa[k] = gb[k], ob[k], sb[k]
-        z, t, h = zb, t1, h_next
+        z, zp, zm, t, h = zb, zpb, zmb, t1, h_next
+    if status == ig.STATUS_OK and t < span:
+        status = ig.STATUS_STEP_UNDERFLOW       # max_steps spent before the end
     if status == ig.STATUS_OK:
-        status, spent = _refine_held(kernel, p, weights, opts, hi, lo, est_hi, est_lo, held[:count], held_z)
+        status, spent = _refine_held(kernel, p, weights, opts, (hi, lo, d_hi, d_lo), est_hi, est_lo, held[:count],
+                                     held_z, p_plus, p_minus, loose, perturbed)
         n_rhs += spent
     if status != ig.STATUS_OK:
-        for a in (hi, lo, integral, error):
+        for a in (hi, lo, integral, error, d_hi, d_lo):
             a[:] = np.nan
-    return hi, lo, integral / span, error / span, status, n_rhs
+    return hi, lo, integral / span, error / span, d_hi, d_lo, zp - zm, status, n_rhs
 
 
 def orbit_extrema(kernel, u0, p, span, weights, opts):
@@ -237,19 +283,75 @@ def orbit_extrema(kernel, u0, p, span, weights, opts):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _hold(held, held_z, i, row, z):
+def _difference(weights, a, b, out):
+    """out = o(a) - o(b) for each observable."""
+    for k in range(weights.shape[0]):
+        acc = 0.0
+        for i in range(weights.shape[1]):
+            acc += weights[k, i] * (a[i] - b[i])
+        out[k] = acc
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _rejected(opts, spent):
+    """A flow from a fresh start spent more than one attempt at a step of Dormand-Prince (RK4:
+    fixed steps, never rejected)."""
+    return opts[ig.S_METHOD] == ig.METHOD_DOP853 and spent > N_STAGES + 1
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _lockstep(kernel, t, t1, zp, zm, p_plus, p_minus, loose):
+    """The perturbed orbits from t to t1, one step each (`loose`; a first step proposed longer
+    than t1 - t is cut to end at t1 exactly): (z+, z-, status, n_rhs)."""
+    a, status_a, spent_a, _ = ig.flow(kernel, t, t1, zp, p_plus, False, loose, 2.0 * (t1 - t))
+    b, status_b, spent_b, _ = ig.flow(kernel, t, t1, zm, p_minus, False, loose, 2.0 * (t1 - t))
+    return a, b, status_a if status_a != ig.STATUS_OK else status_b, spent_a + spent_b
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _hold(held, held_z, i, row, z, zp, zm):
     """Row i of the held brackets (element loops: no slice assignment's shape check)."""
     for j in range(7):
         held[i, j] = row[j]
     for j in range(z.size):
-        held_z[i, j] = z[j]
+        held_z[i, 0, j] = z[j]
+        held_z[i, 1, j] = zp[j]
+        held_z[i, 2, j] = zm[j]
 
 
 @njit(cache=True, nogil=True)
-def _refine_held(kernel, p, weights, opts, hi, lo, est_hi, est_lo, held, held_z):
+def _settle(kernel, p, weights, opts, k, t, h, s, ga, gb, z, zp, zm, p_plus, p_minus, loose, perturbed,
+            hi, lo, d_hi, d_lo):
+    """Refine the bracket of o_k's extremum in the step [t, t + h] from z (estimate t + s); where
+    it beats hi[k] (a maximum: g from + to -) or lo[k], set it and, if perturbed, its d from the
+    perturbed orbits' states zp, zm at t (one step each to its time): (status, n_rhs)."""
+    v, c, n_rhs = _refine(kernel, t, h, s, z, p, weights, k, ga, gb, opts)
+    if not np.isfinite(v):
+        return ig.STATUS_NAN, n_rhs
+    maximum = ga > 0.0
+    if (v > hi[k]) if maximum else (v < lo[k]):
+        d = 0.0
+        if perturbed:
+            a, b, status, spent = _lockstep(kernel, t, t + c, zp, zm, p_plus, p_minus, loose)
+            n_rhs += spent
+            if status != ig.STATUS_OK:
+                return status, n_rhs
+            dv = np.empty(weights.shape[0])
+            _difference(weights, a, b, dv)
+            d = dv[k]
+        if maximum:
+            hi[k], d_hi[k] = v, d
+        else:
+            lo[k], d_lo[k] = v, d
+    return ig.STATUS_OK, n_rhs
+
+
+@njit(cache=True, nogil=True)
+def _refine_held(kernel, p, weights, opts, extremes, est_hi, est_lo, held, held_z, p_plus, p_minus, loose, perturbed):
     """Refine the held brackets whose estimate is within CANDIDATE_MARGIN of the estimated
-    highest (est_hi; a maximum: g from + to -) or lowest value (est_lo), updating hi and lo (the
-    values at the step ends and the refined ones): (status, right-hand sides evaluated)."""
+    highest (est_hi; a maximum: g from + to -) or lowest value (est_lo), updating extremes = (hi,
+    lo, d_hi, d_lo) (`_settle`): (status, right-hand sides evaluated)."""
+    hi, lo, d_hi, d_lo = extremes
     n_rhs = 0
     for i in range(held.shape[0]):
         t, h, s, est, k, ga, gb = held[i, 0], held[i, 1], held[i, 2], held[i, 3], int(held[i, 4]), held[i, 5], held[i, 6]
@@ -257,14 +359,11 @@ def _refine_held(kernel, p, weights, opts, hi, lo, est_hi, est_lo, held, held_z)
         maximum = ga > 0.0
         if (maximum and est < est_hi[k] - margin) or (not maximum and est > est_lo[k] + margin):
             continue
-        v, spent = _refine(kernel, t, h, s, held_z[i], p, weights, k, ga, gb, opts)
+        status, spent = _settle(kernel, p, weights, opts, k, t, h, s, ga, gb, held_z[i, 0], held_z[i, 1], held_z[i, 2],
+                                p_plus, p_minus, loose, perturbed, hi, lo, d_hi, d_lo)
         n_rhs += spent
-        if not np.isfinite(v):
-            return ig.STATUS_NAN, n_rhs
-        if maximum:
-            hi[k] = max(hi[k], v)
-        else:
-            lo[k] = min(lo[k], v)
+        if status != ig.STATUS_OK:
+            return status, n_rhs
     return ig.STATUS_OK, n_rhs
 
 
@@ -297,3 +396,40 @@ def amplitudes(model, state, p, span, opts, period):
     """(max |o|, half peak-to-peak of o) for each observable o over the orbit, SI."""
     hi, lo = extremes(model, state, p, span, opts, period)
     return np.maximum(hi, -lo), 0.5 * (hi - lo)
+
+
+# The perturbed orbits' tolerance (orbit_extent_slope): any step passes its error test at once.
+LOOSE_RTOL = 1e30
+
+
+def _lockstep_settings(opts):
+    """(loose, single) of orbit_extent_slope: the perturbed orbits' settings and the orbit's, one
+    accepted step per flow."""
+    return ig.loosened(opts, LOOSE_RTOL), opts._replace(max_steps=2.0)
+
+
+def amplitudes_and_slope(kernel, X, tangent, params, scale, span, weights, row, opts, step):
+    """(amplitudes, slope, n_rhs) at a branch point X = (s, mu) (lambda = mu scale, params(lambda)
+    -> p) with unit tangent, in one pass: amplitudes = [max |o|, half peak-to-peak of o] per
+    observable (the rows of weights), slope the derivative of row's half peak-to-peak along the
+    tangent, from orbit_extent_slope's extremes' changes over X +- step tangent (a central
+    difference at the extremes' times: truncation O(step^2), round-off 1e-16 / step relative).
+    NaN where the orbit cannot be integrated."""
+    s, mu, h = np.ascontiguousarray(X[:-1], dtype=float), float(X[-1]), step
+    hi, lo, d_hi, d_lo, _, _, n_rhs = orbit_extent_slope(
+        kernel, s, params(mu * scale), span, weights, opts, h * np.ascontiguousarray(tangent[:-1], dtype=float),
+        params((mu + h * tangent[-1]) * scale), params((mu - h * tangent[-1]) * scale), *_lockstep_settings(opts))
+    amplitudes = np.array([np.maximum(hi, -lo), 0.5 * (hi - lo)])
+    return amplitudes, float((d_hi[row] - d_lo[row]) / (4.0 * h)), n_rhs
+
+
+def parameter_derivative(kernel, s, params, lam, step, span, opts):
+    """(d phi / d lambda, status, n_rhs): the flow phi over span from s, differentiated in the
+    parameter by a central difference of step `step` whose two orbits take the steps of the orbit
+    at lam (orbit_extent_slope): no step-size noise (two independent adaptive integrations leave
+    rtol / step), so a branch's tangent is as exact as its orbits."""
+    n = s.size
+    _, _, _, _, d_end, status, n_rhs = orbit_extent_slope(
+        kernel, np.ascontiguousarray(s, dtype=float), params(lam), span, np.zeros((1, n)), opts, np.zeros(n),
+        params(lam + step), params(lam - step), *_lockstep_settings(opts))
+    return d_end / (2.0 * step), status, n_rhs

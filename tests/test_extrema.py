@@ -306,3 +306,31 @@ def test_branch_n_rhs_counts_the_extrema_and_peak_slopes():
     recount = sum(3 * extrema.orbit_extent(DUFFING.kernel, p.state, duffing(p.lam, 0.05, 1.0, 0.3).p, 1.0,
                                            np.array([[1.0]]), TIGHT, False)[5] for p in weighted.points)
     assert weighted.n_rhs - plain.n_rhs >= 0.9 * recount     # the +- steps' passes differ a little
+
+
+def test_extremes_change_and_parameter_derivative_match_scipy():
+    """orbit_extent_slope's d_highest, d_lowest / (2 h) (the extremes' derivative along a state
+    direction du and a frequency change, from two perturbed orbits on the orbit's own steps) and
+    parameter_derivative's d phi / d omega, on a hardening Duffing orbit, against scipy alone: the
+    extremes (scipy_extremes) and the end states of DOP853 at rtol 1e-13 from u0 +- eps du at
+    omega +- eps dw, central differences of step eps = 1e-4 (truncation eps^2 ~ 1e-8 relative,
+    noise 1e-13 / eps = 1e-9). Ours: round-off 1e-16 / h = 1e-11 and the method's truncation
+    error's change, ~1e-12; 1e-6."""
+    w, dw, h, eps = 1.3, 0.7, 1e-5, 1e-4
+    built = duffing(w, 0.05, 1.0, 0.3)
+    sol = solve_orbit(DUFFING, built.p, TIGHT, cold_guess=DUFFING.cold_guess, tol=1e-12)
+    du = np.array([0.3, -0.2])
+    loose, single = extrema._lockstep_settings(TIGHT)
+    hi, lo, d_hi, d_lo, _, status, _ = extrema.orbit_extent_slope(
+        DUFFING.kernel, sol.state, built.p, 1.0, np.array([[1.0]]), TIGHT, h * du,
+        duffing(w + h * dw, 0.05, 1.0, 0.3).p, duffing(w - h * dw, 0.05, 1.0, 0.3).p, loose, single)
+    assert status == ig.STATUS_OK
+    ref = [scipy_extremes(duffing_rhs(w + sign * eps * dw, 0.05, 1.0, 0.3), sol.state + sign * eps * du, 1.0,
+                          np.array([[1.0]])) for sign in (1.0, -1.0)]
+    for ours, j in ((d_hi, 0), (d_lo, 1)):
+        np.testing.assert_allclose(ours[0] / (2 * h), (ref[0][j][0] - ref[1][j][0]) / (2 * eps), rtol=1e-6)
+    dphi, status, _ = extrema.parameter_derivative(DUFFING.kernel, sol.state,
+                                                   lambda v: duffing(v, 0.05, 1.0, 0.3).p, w, h, 1.0, TIGHT)
+    ends = [solve_ivp(duffing_rhs(w + sign * eps, 0.05, 1.0, 0.3), (0.0, 1.0), sol.state, method="DOP853",
+                      rtol=1e-13, atol=1e-16).y[:, -1] for sign in (1.0, -1.0)]
+    np.testing.assert_allclose(dphi, (ends[0] - ends[1]) / (2 * eps), rtol=1e-6, atol=1e-6 * np.abs(dphi).max())

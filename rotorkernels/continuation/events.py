@@ -222,7 +222,10 @@ class Peak(Zero):
     """A local maximum of the plotted amplitude along the branch: points carry `.slope`, the
     amplitude's derivative along their unit tangent (oriented along the travel), which turns from
     positive to negative. Located by Brent's method on the arclength like a fold, each corrector's
-    solution made a point (its tangent and slope) by the problem."""
+    solution made a point (its tangent and slope) by the problem. Only smooth maxima: the
+    amplitude (half peak-to-peak) is the largest local maximum of the signal minus the smallest
+    local minimum, so where two local maxima exchange which is the largest (a kink, on period-k
+    orbits) it is the larger of two smooth curves, a corner opening upward, never a maximum."""
     label, code = EVENT_LABELS[PEAK], PEAK
 
     def value(self, point):
