@@ -402,7 +402,7 @@ def amplitudes(model, state, p, span, opts, period):
 LOOSE_RTOL = 1e30
 
 
-def _lockstep_settings(opts):
+def lockstep_settings(opts):
     """(loose, single) of orbit_extent_slope: the perturbed orbits' settings and the orbit's, one
     accepted step per flow."""
     return ig.loosened(opts, LOOSE_RTOL), opts._replace(max_steps=2.0)
@@ -418,7 +418,7 @@ def amplitudes_and_slope(kernel, X, tangent, params, scale, span, weights, row, 
     s, mu, h = np.ascontiguousarray(X[:-1], dtype=float), float(X[-1]), step
     hi, lo, d_hi, d_lo, _, _, n_rhs = orbit_extent_slope(
         kernel, s, params(mu * scale), span, weights, opts, h * np.ascontiguousarray(tangent[:-1], dtype=float),
-        params((mu + h * tangent[-1]) * scale), params((mu - h * tangent[-1]) * scale), *_lockstep_settings(opts))
+        params((mu + h * tangent[-1]) * scale), params((mu - h * tangent[-1]) * scale), *lockstep_settings(opts))
     amplitudes = np.array([np.maximum(hi, -lo), 0.5 * (hi - lo)])
     return amplitudes, float((d_hi[row] - d_lo[row]) / (4.0 * h)), n_rhs
 
@@ -431,5 +431,5 @@ def parameter_derivative(kernel, s, params, lam, step, span, opts):
     n = s.size
     _, _, _, _, d_end, status, n_rhs = orbit_extent_slope(
         kernel, np.ascontiguousarray(s, dtype=float), params(lam), span, np.zeros((1, n)), opts, np.zeros(n),
-        params(lam + step), params(lam - step), *_lockstep_settings(opts))
+        params(lam + step), params(lam - step), *lockstep_settings(opts))
     return d_end / (2.0 * step), status, n_rhs
