@@ -22,30 +22,27 @@ SHOOT_TOL = 1e-11       # the shooting's residual (scaled state: um and um per s
 # branch's Newton tolerance (1e-9 .. 1e-10) and shooting converges to SHOOT_TOL, so an orbit on the
 # torus lies within ~1e-8 of its circle; a different orbit (another solution) lies far off.
 LINK_TOL = 1e-6
-# The event codes a torus branch's result has rows for; an ending event (tori.Breakdown) is the
-# branch's end reason and detail instead.
-RECORDED = (ev.TORUS_STABILITY, ev.TORUS_FOLD, ev.LOCKED)
 
 
 def event_rows(model, family, built, run, amplitudes):
     """The record's event_* arrays of a torus Run (amplitudes: (points, 2, observables), the
     points' max |o| and half-swing), plus event_note (words per event) and event_periods (forcing
     periods of the event's orbit: a locked p/q row's linked orbit closes after q shaft turns; 1 on a
-    flag's row, the branch's); events not RECORDED are left out."""
-    found = [f for f in run.found if f.event.code in RECORDED]
+    flag's row, the branch's). A branch's end (breakdown) is its end reason, not an event
+    (tori.follow_tori leaves it out of run.found)."""
     rows = [_locked_row(model, family, built, f) if f.event.code == ev.LOCKED else _flag_row(family, run, f, amplitudes)
-            for f in found]
+            for f in run.found]
     n, n_obs = family.kernel.n_state, len(model.observables)
     return {
-        "event_type": np.array([f.event.code for f in found], int),
+        "event_type": np.array([f.event.code for f in run.found], int),
         "event_parameter": np.array([r[0] for r in rows], float),
-        "event_index": np.array([f.index for f in found], int),
+        "event_index": np.array([f.index for f in run.found], int),
         "event_state": np.array([r[1] for r in rows], float).reshape(len(rows), n),
         "event_multipliers": np.array([r[2] for r in rows], complex).reshape(len(rows), n),
         "event_amplitude_max": np.array([r[3] for r in rows], float).reshape(len(rows), n_obs),
         "event_amplitude_half_pp": np.array([r[4] for r in rows], float).reshape(len(rows), n_obs),
         "event_note": [r[5] for r in rows],
-        "event_periods": np.array([f.event.q if f.event.code == ev.LOCKED else 1 for f in found], int),
+        "event_periods": np.array([f.event.q if f.event.code == ev.LOCKED else 1 for f in run.found], int),
     }
 
 

@@ -320,7 +320,7 @@ def test_extremes_change_and_parameter_derivative_match_scipy():
     built = duffing(w, 0.05, 1.0, 0.3)
     sol = solve_orbit(DUFFING, built.p, TIGHT, cold_guess=DUFFING.cold_guess, tol=1e-12)
     du = np.array([0.3, -0.2])
-    loose, single = extrema._lockstep_settings(TIGHT)
+    loose, single = extrema.lockstep_settings(TIGHT)
     hi, lo, d_hi, d_lo, _, status, _ = extrema.orbit_extent_slope(
         DUFFING.kernel, sol.state, built.p, 1.0, np.array([[1.0]]), TIGHT, h * du,
         duffing(w + h * dw, 0.05, 1.0, 0.3).p, duffing(w - h * dw, 0.05, 1.0, 0.3).p, loose, single)

@@ -39,7 +39,7 @@ def test_fig4b_starts_a_stable_torus_confirmed_by_a_transient(tmp_path):
 def test_a_branch_ending_in_breakdown_gives_event_rows_without_the_end(tmp_path):
     """Fig. 3a's full range once stopped with a KeyError: the branch ended torus_breakdown, and the
     ending event reached the event rows, which know only flags and locked ratios. The end is the
-    branch's end reason and detail; the rows leave it out (duffing2, as tests/test_tori_continuation.py
+    branch's end reason and detail, never an event (duffing2, as tests/test_tori_continuation.py
     forces the breakdown: a decay tolerance no circle meets)."""
     import numpy as np
 
@@ -57,7 +57,7 @@ def test_a_branch_ending_in_breakdown_gives_event_rows_without_the_end(tmp_path)
     w2 = 2.0 * np.pi * 0.55
     circle = tr.solve_torus(model.kernel, np.zeros((7, 2)), params(w2), duffing2.P_PHASE, w2, opts, max_nodes=7)
     run = tori.follow_tori(fam, tori.start(fam, w2, circle.nodes), (w2, w2 + 0.5), engine.Settings(ds=0.2, max_steps=10))
-    assert run.end == engine.TORUS_BREAKDOWN and [f.event.code for f in run.found] == ["torus_breakdown"]
+    assert run.end == engine.TORUS_BREAKDOWN and run.found == []
     rows = torus_events.event_rows(model, fam, None, run, np.zeros((len(run.points), 2, 1)))
     assert rows["event_type"].size == 0 and rows["event_state"].shape == (0, 2) and rows["event_note"] == []
 
