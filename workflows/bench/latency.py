@@ -156,15 +156,18 @@ def floor_text(runs):
     if not all(p in cpu for p in parts):
         return ""
     return (f"Where the time goes (after, median CPU): the interpreter {cpu['python -c pass']:.2f} s; numba "
-            f"{cpu['import numba']:.2f} s, which every command but `import rotorsweep` and the argument parsing "
-            "imports (the model registry defines its kernels with it); scipy.linalg "
+            f"{cpu['import numba']:.2f} s, which the commands that integrate import (`point`, `continue`; `info` "
+            "and `query` read the model specs, which live apart from their njit kernels); scipy.linalg "
             f"{cpu['import numba + scipy.linalg'] - cpu['import numba']:.2f} s more, which numba's BLAS check imported "
             "at the first compiled call before: now only a kernel calling LAPACK imports it, at its first call "
             "(pipeline/__init__.py); xarray (with pandas) "
             f"{cpu['import xarray']:.2f} s, which `info`, `query` and every command writing a result import. "
+            "A command run as the process skips the interpreter's final garbage collection (`gc.freeze`) and "
+            "numba's cffi set-up. "
             "`import rotorsweep` loads its names on first use and registers the accessor when xarray is imported; "
             "each command's imports are checked in tests/test_latency.py (no plotting, Dask or scipy solvers in "
-            "info, query or point; no numba or xarray in `import rotorsweep` or the argument parsing).")
+            "info, query or point; no numba in info or query; no numba or xarray in `import rotorsweep` or the "
+            "argument parsing).")
 
 
 def main(argv=None):
