@@ -280,14 +280,14 @@ def test_sweep_report_maps_stability_over_contact_angle_and_preload(tmp_path):
     derived contact angle reads 'from the preload solve' (not the clearance model's text), and
     the report adds the Campbell diagram with the grid's speeds marked, and draws a --point of
     this model (no x, y observables)."""
-    from rotorsweep.pipeline import cube, sweep
+    from rotorsweep.pipeline import cube, query, sweep
     from rotorsweep.pipeline.report import axes_plan, make_report, map_rectangles
     from rotorsweep.pipeline.report.plan import fmt
     cfg = config.parse_config(SWEEP_GRID)
     ds = cube.open_cube(sweep.run(cfg, tmp_path / "grid.nc", workers=1, progress=False))
     plan = axes_plan(ds)
     assert (plan["x"], plan["y"], plan["facets"]) == ("speed", "nominal_angle", ["preload"])
-    rects, _ = map_rectangles(ds, plan, {"preload": 300.0})
+    rects, _ = map_rectangles(ds, plan, {"preload": 300.0}, query.bistable_intervals(ds))
     bands = sorted({round(r[1] + 0.45) for rows in rects.values() for r in rows})
     assert bands == [0, 1]
     assert fmt(ds, "contact_angle", float("nan")) == "from the preload solve"

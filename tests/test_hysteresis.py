@@ -148,12 +148,12 @@ def test_the_map_draws_a_narrow_bistable_band_at_least_its_minimum_width(jump_sw
     (iv,) = query.bistable_intervals(ds)
     assert float(stability.BISTABLE) in stability.class_keys(ds)
     plan = axes_plan(ds)
-    bands = [r for r in map_rectangles(ds, plan, {})[0][float(stability.BISTABLE)]
+    bands = [r for r in map_rectangles(ds, plan, {}, query.bistable_intervals(ds))[0][float(stability.BISTABLE)]
              if r[0] <= iv["start"] and iv["end"] <= r[2]]
     assert bands
     span = float(np.ptp(ds["speed"].values))
     monkeypatch.setattr(stability, "MIN_BAND_FRACTION", 2.0 * (iv["end"] - iv["start"]) / span)
-    (lo, hi), = stability.bistable_bands(ds, {})
+    (lo, hi), = stability.bistable_bands(ds, {}, query.bistable_intervals(ds))
     assert hi - lo == pytest.approx(2.0 * (iv["end"] - iv["start"]), rel=1e-12)
     assert 0.5 * (lo + hi) == pytest.approx(0.5 * (iv["start"] + iv["end"]), rel=1e-12)
 

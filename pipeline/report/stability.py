@@ -53,14 +53,14 @@ def class_keys(ds):
     return keys + ([np.nan] if np.isnan(cls).any() else [])
 
 
-def bistable_bands(ds, where):
-    """[(lo, hi)] drawn for the bistable intervals of the line `where` (query.bistable_intervals:
-    between the folds, else the jump's grid points), widened about their middle to at least
-    MIN_BAND_FRACTION of the continued axis."""
+def bistable_bands(ds, where, intervals):
+    """[(lo, hi)] drawn for the bistable intervals of the line `where` (intervals: the cube's
+    query.bistable_intervals, taken once per figure: between the folds, else the jump's grid
+    points), widened about their middle to at least MIN_BAND_FRACTION of the continued axis."""
     grid = ds[continued_axis(ds)].values.astype(float)
     least = 0.5 * MIN_BAND_FRACTION * float(np.ptp(grid) if grid.size > 1 else 1.0)
     out = []
-    for iv in query.bistable_intervals(ds):
+    for iv in intervals:
         if not all(np.isclose(iv[a], v, rtol=1e-9, atol=0.0) for a, v in where.items() if a in iv):
             continue
         lo, hi = (iv["start"], iv["end"]) if np.isfinite([iv["start"], iv["end"]]).all() else (iv["grid_low"], iv["grid_high"])
@@ -115,12 +115,21 @@ def refined_edges(ds, where):
     return [row[:3] for row in refined_boundaries(ds, where)]
 
 
+def classified(ds):
+    """ds with its point classes as a variable (point_class: stability_class). The classes are
+    taken over the whole cube, so a figure drawing line by line classifies once (per line, a map of
+    the 4-D atlas took time quadratic in its lines)."""
+    if "point_class" in ds:
+        return ds
+    return ds.assign(point_class=(ds["orbit_status"].dims, stability_class(ds)))
+
+
 def line_segments(ds, where):
     """Runs of one stability class along the line `where`: ([(lo, hi, class), ...], [refined
     edges]). class indexes CLASSES (NaN: unclassified). An edge between two runs is the refined
     boundary of the boundary table where it has one for that pair of grid values, else midway
     between them; the outer edges lie half a grid step beyond the grid."""
-    line = select(ds.assign(point_class=(ds["orbit_status"].dims, stability_class(ds))), where)
+    line = select(classified(ds), where)
     grid = line[continued_axis(ds)].values.astype(float)
     cls = line["point_class"].values
     code = np.where(np.isnan(cls), -1.0, cls)

@@ -13,7 +13,7 @@ from rotorsweep.pipeline.report.figures.panels import line_figure, panel_opts
 from rotorsweep.pipeline.report.plan import axis_label, line_plan
 from rotorsweep.pipeline.report.poincare import THIN_LEVELS, bif_range, sweep_dots
 from rotorsweep.pipeline.report.registry import Figure, register
-from rotorsweep.pipeline.report.stability import class_colour, class_name, line_segments
+from rotorsweep.pipeline.report.stability import class_colour, class_name, classified, line_segments
 
 HYSTERESIS_COLOUR = "#009E73"
 BIF_LABEL = "Poincaré x [µm]"
@@ -66,6 +66,7 @@ def fig_bifurcation(ds, backend="bokeh"):
     """Bifurcation diagram: the Poincare section's x (once per forcing period) along the
     continued axis, one panel per line; intervals where the period-1 orbit is unstable shaded
     behind the dots (refined edges), the down sweep in a second colour, hysteresis marked."""
+    ds = classified(ds)
     keys = sorted({c for where in line_plan(ds)["shown"] for _, _, c in _unstable_spans(ds, where)},
                   key=lambda c: (np.isnan(c), c))
 

@@ -5,21 +5,24 @@ Not hvplot: its rectangles have the refined boundaries as edges; hvplot's grid k
 heatmap) put edges midway between grid values (rotorsweep.pipeline.explore.stability_map draws that)."""
 import numpy as np
 
+from rotorsweep.pipeline import query
 from rotorsweep.pipeline.report import style
 from rotorsweep.pipeline.report.figures.panels import Sizes, facet_figure, panel_opts
 from rotorsweep.pipeline.report.plan import axes_plan, axis_display, axis_label, fmt, where_label
 from rotorsweep.pipeline.report.registry import Figure, register
 from rotorsweep.pipeline.report.stability import (BISTABLE, bistable_bands, class_colour, class_keys, class_name,
-                                       line_segments, refined_edges)
+                                                   classified, line_segments, refined_edges)
 
 RECT_HALF = 0.45        # half height of a band in the stability map (gaps between lines)
 
 
-def map_rectangles(ds, plan, where):
+def map_rectangles(ds, plan, where, bistable):
     """What one stability-map panel draws: ({class: [(x0, y0, x1, y1), ...]}, [(edge, band), ...]
-    of the refined edges). Band i is the i-th value of plan['y'] (0 without one)."""
+    of the refined edges). Band i is the i-th value of plan['y'] (0 without one); bistable: the
+    cube's query.bistable_intervals."""
     y = plan["y"]
     bands = [None] if y is None else [float(v) for v in ds[y].values]
+    ds = classified(ds)
     rects, edges = {}, []
     for i, v in enumerate(bands):
         line = dict(where) if v is None else {**where, y: v}
@@ -27,7 +30,7 @@ def map_rectangles(ds, plan, where):
         for lo, hi, c in segments:
             key = -1.0 if np.isnan(c) else c
             rects.setdefault(key, []).append((lo, i - RECT_HALF, hi, i + RECT_HALF))
-        for lo, hi in bistable_bands(ds, line):       # drawn last: over the class beneath
+        for lo, hi in bistable_bands(ds, line, bistable):       # drawn last: over the class beneath
             rects.setdefault(float(BISTABLE), []).append((lo, i - RECT_HALF, hi, i + RECT_HALF))
         edges += [(e, i) for e in refined]
     return rects, edges
@@ -47,10 +50,10 @@ def _class_rectangles(hv, rows, c, x0, bands, labels, backend):
     return el.opts(**style.fill_style(backend, class_colour(c)), backend=backend)
 
 
-def _map_panel(hv, ds, where, backend, slot, plan, keys):
+def _map_panel(hv, ds, where, backend, slot, plan, keys, bistable):
     """One stability-class map: each line's runs of one class as rectangles whose edges are the
     refined stability boundaries (boundary table), categorical colours, a legend."""
-    rects, edges = map_rectangles(ds, plan, where)
+    rects, edges = map_rectangles(ds, plan, where, bistable)
     x, y = plan["x"], plan["y"]
     grid = ds[x].values
     x0 = float(grid[0])
@@ -79,12 +82,14 @@ def fig_stability_map(ds, backend="bokeh"):
     combination of the remaining swept axes (at most MAX_PANELS). Runs of one class are
     rectangles whose edges are the refined boundaries of the cube's boundary table (midway
     between grid values where there is none); a legend names the classes."""
+    ds = classified(ds)
+    bistable = query.bistable_intervals(ds)     # the whole cube's, once (each panel keeps its line's)
     plan = axes_plan(ds)
     keys = class_keys(ds)
     strip = plan["y"] is None
 
     def panel(hv, ds, where, backend, slot):
-        return _map_panel(hv, ds, where, backend, slot, plan, keys)
+        return _map_panel(hv, ds, where, backend, slot, plan, keys, bistable)
     sizes = Sizes(bokeh_one=(1150, 230 if strip else 480), bokeh_grid=(600, 300),
                   aspect_one=7 if strip else 2.6, aspect_grid=1.5,
                   inches_one=(11, 2.4 if strip else 4.6), grid_width=10.3)
