@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from rotorsweep.pipeline import cluster, compute, result_kinds, results, schema, torus_branches
+from rotorsweep.pipeline import cluster, compute, result_kinds, results, schema, torus_branches, torus_events
 from rotorsweep.pipeline.coexistence import (  # noqa: F401 (the continuation result's readers use these names)
     bistable_intervals, branch_copy_of, coexistence, distinct_branches, distinct_events, event_copy_of, line_coexistence,
     mark_copies, stability_classes,
@@ -559,6 +559,7 @@ def events_table(ds):
     cols["stable"] = [-1 if np.isnan(m).all() else int(np.abs(m).max() < 1.0) for m in mult]   # -1: a torus flag
     if "event_note" in ds:      # torus branches' events (rotorsweep.pipeline.torus_events) in words
         cols["note"] = [str(v) for v in ds["event_note"].values]
+        cols["amplitudes_of"] = [torus_events.AMPLITUDES_OF.get(int(k), "orbit") for k in kinds]
     for j, name in enumerate(ds["observable"].values):
         cols[f"amplitude_max_{name}"] = ds["event_amplitude_max"].values[:, j].tolist()
         cols[f"amplitude_half_pp_{name}"] = ds["event_amplitude_half_pp"].values[:, j].tolist()

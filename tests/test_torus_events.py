@@ -143,3 +143,38 @@ def test_each_stored_circle_lies_within_its_error_estimate_of_a_finer_torus(resu
                                family.rotation(lam), fine, tol=1e-13, decay_tol=1.0)
         assert fresh.status == tr.CONVERGED
         assert np.abs(fresh.at(tr.node_phases(15)) - nodes).max() <= ds["torus_error"].values[0, k]
+
+
+def test_the_locked_marker_sits_on_the_torus_curve_and_its_hover_reads_the_linked_orbit(result):
+    """The response panel's locked 3/5 marker: its y is the torus curve's half-swing at the event
+    parameter, here np.interp over the branch's points (monotone in the parameter on this short
+    branch), the same piecewise-linear curve the panel draws, so they agree to rounding (1e-12
+    relative). Linear interpolation's own error against the torus at 150 Hz is h^2/8 max|y''|, below
+    the two neighbouring points' spread, so the marker lies between them. The linked orbit at theta = 0
+    is one of the torus's locked orbits: its half-swing (the hover's) is at most the torus's (the
+    maximum over all phases), to that spread plus the torus amplitude's phase-sampling shortfall
+    (64 phases: ~1e-4 relative, rotorsweep.pipeline.torus_points; 2e-4 allowed, 7e-5 seen)."""
+    from rotorsweep.pipeline.report import branch_result
+    from tests.figure_checks import plots_of
+
+    ds, _ = result
+    k = int(np.flatnonzero(ds["event_type"].values == ev.LOCKED)[0])
+    n = int(np.isfinite(ds["parameter"].values[0]).sum())
+    main = ds.attrs.get("report_observable") or str(ds["observable"].values[0])
+    x, j = ds["parameter"].values[0, :n], list(ds["observable"].values).index(main)
+    y = ds["amplitude_half_pp"].values[0, :n, j] * 1e6
+    at = ds["event_parameter"].values[k]
+    order = np.argsort(x)
+    expected = np.interp(at, x[order], y[order])
+    response = [f for f in branch_result.figures(ds, "bokeh") if f[1].startswith("response_")]
+    sources = [r.data_source.data for _, plot in plots_of(response) for r in plot.renderers
+               if "linked_orbit" in getattr(getattr(r, "data_source", None), "data", {})]
+    assert len(sources) == 1
+    marker_y, orbit_y = sources[0][main][0], sources[0]["linked_orbit"][0]
+    assert marker_y == pytest.approx(expected, rel=1e-12)
+    i = int(ds["event_point"].values[k])
+    lo, hi = sorted(y[i:i + 2])
+    assert lo <= marker_y <= hi
+    assert orbit_y == pytest.approx(ds["event_amplitude_half_pp"].values[k, j] * 1e6, rel=1e-12)
+    assert orbit_y <= marker_y * (1 + 2e-4) + (hi - lo)
+    assert continuation.events_table(ds)["amplitudes_of"] == ["linked orbit at theta = 0"]

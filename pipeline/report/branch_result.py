@@ -12,7 +12,7 @@ import numpy as np
 
 from rotorsweep.pipeline import continuation, query, schema
 from rotorsweep.pipeline.report import branches, harmonics, page, style
-from rotorsweep.pipeline.report.figures import bode, mode_campbell, mode_shapes, torus_detail
+from rotorsweep.pipeline.report.figures import bode, locked_marks, mode_campbell, mode_shapes, torus_detail
 from rotorsweep.kernels.continuation import arclength as al
 
 def _shown(value, units):
@@ -40,6 +40,9 @@ def parameter_axis(ds):
     return ds["parameter"].values, ds["event_parameter"].values, f"{par} [{ds['parameter'].attrs.get('units', '')}]"
 
 
+NOT_AMPLITUDES = ("max_abs_multiplier", "torus_exponent")     # the panels' quantities that are not an observable's
+
+
 def _panel(hv, ds, yname, ylabel, backend, ref_one=False, kind="amplitude_max"):
     """All distinct branches (a copy of another, continuation.branch_copy_of, drawn once): y (an
     observable's `kind` of amplitude, or max |multiplier|) against the parameter, solid where
@@ -48,7 +51,10 @@ def _panel(hv, ds, yname, ylabel, backend, ref_one=False, kind="amplitude_max"):
     par = ds.attrs["parameter"]
     xs, event_xs, xlabel = parameter_axis(ds)
     dims = (hv.Dimension(par, label=xlabel), hv.Dimension(yname, label=ylabel))
-    ys, event_ys = _values(ds, yname, kind), _event_values(ds, yname, kind)
+    ys, orbit_ys = _values(ds, yname, kind), _event_values(ds, yname, kind)
+    # a locked ratio's row holds one orbit of the torus's family: its marker sits on the torus curve
+    amplitude = yname not in NOT_AMPLITUDES
+    event_ys = locked_marks.on_curve(ds, xs, ys, event_xs, orbit_ys) if amplitude else orbit_ys
     elements = []
     for b in continuation.distinct_branches(ds):
         mine = ds["event_branch"].values == b
@@ -57,6 +63,9 @@ def _panel(hv, ds, yname, ylabel, backend, ref_one=False, kind="amplitude_max"):
         elements += branches.branch_elements(xs[b], ys[b], ds["stable"].values[b] == 1, special,
                                              backend, dims, (xlabel, ylabel), style.LINE_COLOURS[b % len(style.LINE_COLOURS)],
                                              _branch_label(ds, b), legend_unstable=False)
+        if amplitude:
+            elements += locked_marks.hover_marks(hv, ds, mine, event_xs, event_ys, orbit_ys, dims, (xlabel, ylabel),
+                                                 backend)
     if ref_one:
         ref = hv.Curve(([np.nanmin(xs), np.nanmax(xs)], [1.0, 1.0]), *dims, label="|λ| = 1")
         elements.append(ref.opts(color="#C00000", **style.line_style(backend, 1.2, dash=True), backend=backend))
@@ -70,7 +79,7 @@ def _values(ds, yname, kind):
     """(branch, point) values of a plotted quantity: max |multiplier| or an observable's
     amplitude (kind: amplitude_max, max |o| over the orbit, or amplitude_half_pp), in the units
     the report shows."""
-    if yname in ("max_abs_multiplier", "torus_exponent"):
+    if yname in NOT_AMPLITUDES:
         return ds[yname].values
     j = list(ds["observable"].values).index(yname)
     return _shown(ds[kind].values[:, :, j], ds[kind].attrs.get("units"))[0]
@@ -80,7 +89,7 @@ def _event_values(ds, yname, kind):
     """The events' values of the plotted quantity (NaN: not in the result, one written before
     event_amplitude_half_pp existed)."""
     n = ds.sizes.get("event", 0)
-    if yname in ("max_abs_multiplier", "torus_exponent"):
+    if yname in NOT_AMPLITUDES:
         return np.ones(n) if yname == "max_abs_multiplier" else np.full(n, np.nan)
     name = "event_" + kind
     if name not in ds:
