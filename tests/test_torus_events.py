@@ -155,7 +155,7 @@ def test_the_locked_marker_sits_on_the_torus_curve_and_its_hover_reads_the_linke
     maximum over all phases), to that spread plus the torus amplitude's phase-sampling shortfall
     (64 phases: ~1e-4 relative, rotorsweep.pipeline.torus_points; 2e-4 allowed, 7e-5 seen)."""
     from rotorsweep.pipeline.report import branch_result
-    from tests.figure_checks import plots_of
+    from tests.figure_checks import assert_legend_hover_and_width, plots_of
 
     ds, _ = result
     k = int(np.flatnonzero(ds["event_type"].values == ev.LOCKED)[0])
@@ -178,3 +178,18 @@ def test_the_locked_marker_sits_on_the_torus_curve_and_its_hover_reads_the_linke
     assert orbit_y == pytest.approx(ds["event_amplitude_half_pp"].values[k, j] * 1e6, rel=1e-12)
     assert orbit_y <= marker_y * (1 + 2e-4) + (hi - lo)
     assert continuation.events_table(ds)["amplitudes_of"] == ["linked orbit at theta = 0"]
+    hovers = [t for _, plot in plots_of(response) for tool in plot.tools if hasattr(tool, "tooltips")
+              for t in (tool.tooltips or [])]
+    assert any(str(label).startswith("linked orbit at θ = 0") for label, _ in hovers)
+    assert_legend_hover_and_width(response)
+
+
+def test_a_locked_marker_on_a_branch_that_turns_back_is_on_its_own_segment():
+    """Past a fold the parameter is not monotone: the value comes from the event's segment (points
+    2 and 3, y = 2 + 2 (2 - x) on the leg going back), not from the first leg at the same parameter
+    (closed form: 2 + 2 * 0.25 = 2.5; the first leg, y = x, would read 1.75)."""
+    from rotorsweep.pipeline.report.figures import locked_marks
+
+    x, y = [0.0, 1.0, 2.0, 1.5], [0.0, 1.0, 2.0, 3.0]
+    assert locked_marks.curve_value(x, y, 2, 1.75) == pytest.approx(2.5, rel=1e-15)
+    assert locked_marks.curve_value(x, y, 3, 1.5) == 3.0      # the branch's last point: its own value
