@@ -48,7 +48,7 @@ def hover_marks(hv, ds, mine, event_xs, marker_ys, orbit_ys, dims, labels, backe
     sel = mine & locked(ds)
     if backend != "bokeh" or not sel.any():
         return []
-    notes = [str(n).split(";")[0] for n in ds["event_note"].values[sel]] if "event_note" in ds else [""] * int(sel.sum())
+    notes = [str(n).split(";")[0] for n in ds["event_note"].values[sel]]    # "p/q: torus stable"
     marks = hv.Points((event_xs[sel], marker_ys[sel], orbit_ys[sel], notes), list(dims), ["linked_orbit", "ratio"])
     tooltips = [(labels[0], f"@{{{dims[0].name}}}"), (f"torus: {labels[1]}", f"@{{{dims[1].name}}}"),
                 (f"{LINKED_LABEL}: {labels[1]}", "@{linked_orbit}"), ("locked", "@{ratio}")]
