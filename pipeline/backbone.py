@@ -30,6 +30,8 @@ import xarray as xr
 from scipy.interpolate import CubicSpline
 
 from rotorsweep.pipeline import cluster, result_kinds, results
+from rotorsweep.pipeline.backbone_reader import (  # noqa: F401 (the readers, where they always were)
+    describe, open_result, table)
 from rotorsweep.pipeline.config import ConfigError, settings_problems
 from rotorsweep.kernels import nnm
 from rotorsweep.kernels.continuation import backbone as cb
@@ -392,11 +394,6 @@ def _surface_variables(lines, pl, shape, names, units):
     return values, {name: slave for name in ("surface_value", "orbit_slave", "orbit_on_surface")}
 
 
-def open_result(path):
-    """Open a backbone result into memory; CubeError if the file is not one."""
-    return result_kinds.open_kind(path, result_kinds.BACKBONE)
-
-
 # --- running -------------------------------------------------------------------------------------
 
 def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr, resume=False):
@@ -419,42 +416,3 @@ def _line_summary(line):
         part = f"{r['parting_amplitude'] * 1e6:.3g} um" if np.isfinite(r["parting_amplitude"]) else "no 1 % parting"
         parts.append(f"mode {k + 1} {r['label']} {r['linear_frequency']:.5g} Hz ({part}; {r['status']})")
     return "; ".join(parts)
-
-
-# --- what a result holds -------------------------------------------------------------------------
-
-def table(ds):
-    """One row per (line, mode): the columns `query` prints."""
-    cols = {a: [] for a in ds["axial_approach"].dims}
-    cols.update({k: [] for k in ("mode", "label", "whirl", "linear_frequency_hz", "kappa", "parting_amplitude_m",
-                                 "invariance_distance_m", "continuation_end")})
-    for idx in np.ndindex(ds["axial_approach"].shape):
-        sel = dict(zip(ds["axial_approach"].dims, idx))
-        line = ds.isel(sel)
-        for a, i in sel.items():
-            cols[a] += [float(ds[a].values[i])] * ds.sizes["mode"]
-        cols["mode"] += [int(m) for m in ds["mode"].values]
-        cols["label"] += [str(x) for x in line["mode_label"].values]
-        cols["whirl"] += [str(x) for x in line["mode_whirl"].values]
-        cols["linear_frequency_hz"] += line["linear_frequency"].values.tolist()
-        cols["kappa"] += line["kappa"].values.tolist()
-        cols["parting_amplitude_m"] += line["parting_amplitude"].values.tolist()
-        cols["invariance_distance_m"] += line["invariance_distance"].values.tolist()
-        cols["continuation_end"] += [str(x) for x in line["continuation_end"].values]
-    return cols
-
-
-def describe(ds):
-    """`rotorsweep info` of a backbone result."""
-    lines = [f"backbone result: scene {ds.attrs.get('scene', '?')}, model {ds.attrs.get('model', '?')}",
-             f"{ds.sizes['mode']} mode(s) x {ds.sizes['amplitude']} amplitudes"
-             + "".join(f" x {ds.sizes[a]} {a}" for a in ds["axial_approach"].dims)]
-    cols = table(ds)
-    for i in range(len(cols["mode"])):
-        where = ", ".join(f"{a}={cols[a][i]:g}" for a in ds["axial_approach"].dims)
-        part = cols["parting_amplitude_m"][i]
-        lines.append(f"  mode {cols['mode'][i]}{f' ({where})' if where else ''}: {cols['label'][i]} {cols['whirl'][i]}, "
-                     f"{cols['linear_frequency_hz'][i]:.6g} Hz, manifold and continuation part by 1 % at "
-                     f"{f'{part * 1e6:.3g} um' if np.isfinite(part) else 'no amplitude of the grid'}; "
-                     f"continuation {cols['continuation_end'][i]}")
-    return "\n".join(lines)

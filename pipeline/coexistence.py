@@ -16,7 +16,7 @@ import json
 
 import numpy as np
 
-from rotorsweep.kernels.continuation import arclength as al
+from rotorsweep.kernels import continuation_codes as codes
 
 # Two located points are the same orbit when, at the same parameter, one's state is within
 # SAME_ORBIT_FACTOR x newton_tol x max(1, |s|) of a phase copy of the other's (the Newton's own
@@ -66,7 +66,7 @@ def mark_copies(family, records, settings):
     first = list(range(len(events)))
     for i, (b, k) in enumerate(events):
         r, copies = records[b], None
-        lam, peak = r["event_parameter"][k], r["event_type"][k] == al.PEAK
+        lam, peak = r["event_parameter"][k], r["event_type"][k] == codes.PEAK
         window = PEAK_RTOL * abs(lam) if peak else SAME_ORBIT_FACTOR * settings.tol * family.scale
         for j in range(i):
             r2, k2 = records[events[j][0]], events[j][1]
@@ -92,9 +92,16 @@ def _same_peak(family, r, k, r2, k2, settings):
     corrected by Newton to r2's parameter (an orbit a few 1e-4 Hz away: Newton's first guess
     within its convergence), then `same_orbit`."""
     lam2 = float(r2["event_parameter"][k2])
-    point = al.start(family.with_periods(r["periods"]), lam2, r["event_state"][k], 1, settings)
+    point = _corrected(family.with_periods(r["periods"]), lam2, r["event_state"][k], settings)
     return point is not None and same_orbit(phase_copies(family, r2["event_state"][k2], lam2, r["periods"]),
                                             point.state, settings.tol)
+
+
+def _corrected(family, lam, guess, settings):
+    """The orbit at lam Newton-corrected from guess (None: no convergence). Its kernels are imported
+    here, not above: the readers below (info, query) load no Numba."""
+    from rotorsweep.kernels.continuation import arclength as al
+    return al.start(family, lam, guess, 1, settings)
 
 
 def mark_branch_copies(family, records, settings):
@@ -157,7 +164,7 @@ def _orbits_at(family, r, lam, settings, stable_only=True):
     for i in np.flatnonzero(((p[:-1] - lam) * (p[1:] - lam) <= 0) & (stable[:-1] | stable[1:])):
         s0, s1 = r["state"][i], r["state"][i + 1]
         guess = s0 + (lam - p[i]) / (p[i + 1] - p[i]) * (s1 - s0) if p[i + 1] != p[i] else s0
-        point = al.start(fam, lam, guess, 1, settings)
+        point = _corrected(fam, lam, guess, settings)
         if point is not None and _near(point.state, guess, s0, s1, settings) and (
                 not stable_only or np.abs(point.multipliers).max() < 1.0):
             out.append(point)
@@ -210,7 +217,7 @@ def stable_runs(ds, b):
     n = int(ds["branch_points"].values[b])
     located = {int(p): float(v) for br, p, v, k in zip(ds["event_branch"].values, ds["event_point"].values,
                                                        ds["event_parameter"].values, ds["event_type"].values)
-               if br == b and k != al.PEAK}     # a peak changes no stability
+               if br == b and k != codes.PEAK}     # a peak changes no stability
     return runs_of(ds["parameter"].values[b, :n], ds["stable"].values[b, :n] == 1, located)
 
 

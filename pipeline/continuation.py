@@ -20,12 +20,14 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from rotorsweep.pipeline import cluster, compute, result_kinds, results, schema, torus_branches, torus_events
+from rotorsweep.pipeline import cluster, compute, result_kinds, results, schema, torus_branches
 from rotorsweep.pipeline.coexistence import (  # noqa: F401 (the continuation result's readers use these names)
     bistable_intervals, branch_copy_of, coexistence, distinct_branches, distinct_events, event_copy_of, line_coexistence,
     mark_copies, stability_classes,
     stable_runs)
 from rotorsweep.pipeline.config import ConfigError, range_text, settings_problems
+from rotorsweep.pipeline.continuation_result import (  # noqa: F401 (the readers, where they always were)
+    describe, events_table, open_result)
 from rotorsweep.kernels import extrema
 from rotorsweep.kernels.continuation import arclength as al, solve_orbit, twoparam
 
@@ -457,11 +459,6 @@ def to_dataset(scene, pl, lines, provenance):
                       attrs=global_attrs)
 
 
-def open_result(path):
-    """Open a continuation result into memory; CubeError if the file is not one."""
-    return result_kinds.open_kind(path, result_kinds.CONTINUATION)
-
-
 # --- running -------------------------------------------------------------------------------------
 
 def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.stderr, resume=False):
@@ -489,78 +486,3 @@ def _line_summary(records):
     events = ", ".join(f"{n} {label}" for label, n in counts.items()) or "no events"
     ends = ", ".join(sorted({al.END_REASONS[r["end"]] for r in records}))
     return f"{len(records)} branch(es), {sum(len(r['parameter']) for r in records)} points, {events}; ended: {ends}"
-
-
-# --- what a result holds -------------------------------------------------------------------------
-
-def describe(ds):
-    """`rotorsweep info` of a continuation result."""
-    par = ds.attrs["parameter"]
-    unit = ds["parameter"].attrs.get("units", "")
-    lines = [f"continuation result: scene {ds.attrs.get('scene', '?')}, model {ds.attrs.get('model', '?')}",
-             f"parameter {par} [{unit}] over {json.loads(ds.attrs['range'])}",
-             f"{ds.sizes['branch']} branch(es) ({len(distinct_branches(ds))} distinct, copies of one family of orbits "
-             f"counted once), {len(distinct_events(ds))} distinct located event(s)"
-             f" ({ds.sizes.get('event', 0)} met, copies of one orbit counted once)"]
-    for b in distinct_branches(ds):
-        where = ", ".join(f"{c}={float(ds[c].values[b]):g}" for c in ds.coords if ds[c].dims == ("branch",))
-        what = "torus" if "branch_kind" in ds and ds["branch_kind"].values[b] == 1 else \
-            f"period-{int(ds['branch_periods'].values[b])}"
-        lines.append(f"  branch {b}: {what}"
-                     f"{f' from branch {int(ds.branch_parent.values[b])}' if ds.branch_parent.values[b] >= 0 else ''}"
-                     f"{f' ({where})' if where else ''}, {int(ds['branch_points'].values[b])} points, "
-                     f"ended {al.END_REASONS[int(ds['branch_end'].values[b])]}: {ds['branch_detail'].values[b]}"
-                     + "".join(f"; branch {c} is the same" for c in np.flatnonzero(branch_copy_of(ds) == b) if c != b))
-    lines += _peak_lines(ds, par, unit) + torus_branches.torus_lines(ds, par, unit)
-    for iv in bistable_intervals(ds):
-        where = ", ".join(f"{k}={v:g}" for k, v in iv.items() if k not in ("lo", "hi", "branches"))
-        lines.append(f"  two stable orbits coexist: {par} {iv['lo']:.10g} to {iv['hi']:.10g} {unit}"
-                     f"{f' ({where})' if where else ''}, branches {iv['branches']}")
-    return "\n".join(lines)
-
-
-def _peak_lines(ds, par, unit):
-    """`info`'s lines of the located peaks: where, the plotted observable's half peak-to-peak
-    there, stability."""
-    obs = list(ds["observable"].values)
-    j = obs.index(ds.attrs["report_observable"]) if ds.attrs.get("report_observable") in obs else 0
-    units = ds["event_amplitude_half_pp"].attrs.get("units", "")
-    mult = ds["event_multiplier_real"].values + 1j * ds["event_multiplier_imag"].values
-    return [f"  peak on branch {int(ds['event_branch'].values[k])}: {par} {ds['event_parameter'].values[k]:.10g} {unit}, "
-            f"half peak-to-peak {obs[j]} {ds['event_amplitude_half_pp'].values[k, j]:.10g} {units}, "
-            f"{'stable' if np.abs(mult[k]).max() < 1.0 else 'unstable'}"
-            for k in np.flatnonzero(ds["event_type"].values == al.PEAK)]
-
-
-def _event_periods(ds):
-    """Forcing periods of each event's orbit: event_periods where written (a torus branch's locked
-    p/q row: q), else its branch's."""
-    return ds["event_periods"].values if "event_periods" in ds else ds["branch_periods"].values[ds["event_branch"].values]
-
-
-def events_table(ds):
-    """The located events as columns (for query's renderer), each orbit once (its first record):
-    type, branch, parameter, period, the critical multiplier, max |observable|."""
-    par = ds.attrs["parameter"]
-    ds = ds.isel(event=distinct_events(ds))
-    mult = ds["event_multiplier_real"].values + 1j * ds["event_multiplier_imag"].values
-    kinds = ds["event_type"].values
-    targets = np.array([{0: 1.0, 1: -1.0}.get(int(k), np.nan) for k in kinds])
-    critical = [m[np.argmin(np.abs(m - t))] if np.isfinite(t) else m[np.argmin(np.abs(np.abs(m) - 1.0))]
-                for m, t in zip(mult, targets)] if len(kinds) else []
-    branch = ds["event_branch"].values
-    cols = {"type": [al.EVENT_LABELS[int(k)] for k in kinds], "branch": branch.tolist(),
-            "periods": _event_periods(ds).tolist(),
-            par: ds["event_parameter"].values.tolist(),
-            "multiplier_real": [float(c.real) for c in critical], "multiplier_imag": [float(c.imag) for c in critical]}
-    for c in ds.coords:
-        if ds[c].dims == ("branch",):
-            cols[c] = ds[c].values[branch].tolist() if len(branch) else []
-    cols["stable"] = [-1 if np.isnan(m).all() else int(np.abs(m).max() < 1.0) for m in mult]   # -1: a torus flag
-    if "event_note" in ds:      # torus branches' events (rotorsweep.pipeline.torus_events) in words
-        cols["note"] = [str(v) for v in ds["event_note"].values]
-        cols["amplitudes_of"] = [torus_events.AMPLITUDES_OF.get(int(k), "orbit") for k in kinds]
-    for j, name in enumerate(ds["observable"].values):
-        cols[f"amplitude_max_{name}"] = ds["event_amplitude_max"].values[:, j].tolist()
-        cols[f"amplitude_half_pp_{name}"] = ds["event_amplitude_half_pp"].values[:, j].tolist()
-    return cols

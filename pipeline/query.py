@@ -455,7 +455,7 @@ def branch_unstable_stretches(ds):
     quasi_periodic_unstable), the run's largest `max_abs_multiplier` (orbits) and
     `max_torus_exponent` [1/s] (tori)."""
     from rotorsweep.pipeline import coexistence
-    from rotorsweep.kernels.continuation import events as ev
+    from rotorsweep.kernels import continuation_codes as ev
 
     tori = ds["branch_kind"].values == 1 if "branch_kind" in ds else np.zeros(ds.sizes["branch"], bool)
     lines = [c for c in ds.coords if ds[c].dims == ("branch",)]

@@ -277,13 +277,13 @@ def _describe_cube(ds):
 
 
 def _describe_continuation(ds):
-    from rotorsweep.pipeline import continuation
-    return continuation.describe(ds)
+    from rotorsweep.pipeline import continuation_result
+    return continuation_result.describe(ds)
 
 
 def _describe_backbone(ds):
-    from rotorsweep.pipeline import backbone
-    return backbone.describe(ds)
+    from rotorsweep.pipeline import backbone_reader
+    return backbone_reader.describe(ds)
 
 
 def _query_cube(ds, fmt, where=None, var=None, unstable=False, attractors=None, bistable=False):
@@ -299,15 +299,15 @@ def _query_cube(ds, fmt, where=None, var=None, unstable=False, attractors=None, 
 
 
 def _query_continuation(ds, fmt, unstable=False):
-    from rotorsweep.pipeline import continuation, query
+    from rotorsweep.pipeline import continuation_result, query
     if unstable:
         return query.intervals_table(query.branch_unstable_stretches(ds), fmt=fmt)
-    return query.render(continuation.events_table(ds), fmt)
+    return query.render(continuation_result.events_table(ds), fmt)
 
 
 def _query_backbone(ds, fmt):
-    from rotorsweep.pipeline import backbone, query
-    return query.render(backbone.table(ds), fmt)
+    from rotorsweep.pipeline import backbone_reader, query
+    return query.render(backbone_reader.table(ds), fmt)
 
 
 def _report_cube(ds, out_dir, points=None, forced=None, say=None):

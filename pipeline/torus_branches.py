@@ -27,7 +27,7 @@ import numpy as np
 from rotorsweep.pipeline import compute, torus_events, torus_points
 from rotorsweep.pipeline.torus_points import AMPLITUDE_PHASES, DECAY_TOL, FIRST_NODES, FIT_PERIODS, MAX_NODES, SETTLE_PERIODS
 from rotorsweep.kernels import torus as tr
-from rotorsweep.kernels.continuation import engine, events as ev, tori
+from rotorsweep.kernels.continuation import engine, tori
 
 BREAKDOWN_TOL = 1e-7    # a tail above it at MAX_NODES ends the branch (below it: more nodes above DECAY_TOL)
 MIN_NODES = 7           # the fewest nodes a branch shrinks to (3 Fourier modes)
@@ -195,41 +195,3 @@ def torus_amplitudes(model, family, built, point):
                                built(lam).period, AMPLITUDE_PHASES)
     hi, lo = hi.max(axis=0), lo.min(axis=0)
     return np.maximum(hi, -lo), 0.5 * (hi - lo)
-
-
-def torus_lines(ds, par, unit):
-    """`info`'s lines of a continuation result's torus branches: where each is stable, its
-    largest half-swing of the report observable, its largest error estimate."""
-    if "branch_kind" not in ds:
-        return []
-    obs = list(ds["observable"].values)
-    j = obs.index(ds.attrs["report_observable"]) if ds.attrs.get("report_observable") in obs else 0
-    out = []
-    for b in np.flatnonzero(ds["branch_kind"].values == 1):
-        n = int(ds["branch_points"].values[b])
-        if not n:
-            continue
-        lam, status = ds["parameter"].values[b, :n], ds["torus_status"].values[b, :n]
-        counts = ", ".join(f"{(status == code).sum()} {name}" for name, code in TORUS_STATUS.items())
-        out.append(f"  torus branch {b}: {par} {lam.min():.10g} to {lam.max():.10g} {unit}, points {counts}; "
-                   f"half-swing {obs[j]} up to {np.nanmax(ds['amplitude_half_pp'].values[b, :n, j]):.6g} "
-                   f"{ds['amplitude_half_pp'].attrs.get('units', '')}, error estimate up to "
-                   f"{np.nanmax(ds['torus_error'].values[b, :n]):.2g}{modes_text(ds, b, n)}")
-        out += [f"    stability changes between {par} {lam[i]:.10g} and {lam[i + 1]:.10g} {unit}"
-                for i in np.flatnonzero((status[:-1] != status[1:]) & (status[:-1] < 2) & (status[1:] < 2))]
-        out += [f"    {ev.EVENT_LABELS[int(ds['event_type'].values[k])]} at {par} {ds['event_parameter'].values[k]:.10g} "
-                f"{unit}: {ds['event_note'].values[k]}"
-                for k in np.flatnonzero(ds["event_branch"].values == b)] if "event_note" in ds else []
-    return out
-
-
-def modes_text(ds, b, n):
-    """", Fourier modes K (2K + 1 nodes) from a to b, c changes" of branch b's first n points ("" in
-    a result written before torus_modes was)."""
-    if "torus_modes" not in ds:
-        return ""
-    modes = ds["torus_modes"].values[b, :n]
-    changes = int(np.count_nonzero(np.diff(modes)))
-    span = f"{modes.min()}" if modes.min() == modes.max() else f"{modes.min()} to {modes.max()}"
-    return f", Fourier modes {span} ({changes} change{'s' * (changes != 1)} along the branch)"
-

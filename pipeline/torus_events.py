@@ -22,10 +22,6 @@ SHOOT_TOL = 1e-11       # the shooting's residual (scaled state: um and um per s
 # branch's Newton tolerance (1e-9 .. 1e-10) and shooting converges to SHOOT_TOL, so an orbit on the
 # torus lies within ~1e-8 of its circle; a different orbit (another solution) lies far off.
 LINK_TOL = 1e-6
-# Whose amplitudes an event row's event_amplitude_* are, by event code (the events table's
-# `amplitudes_of`): a locked row's are ONE orbit of the torus's family of locked orbits, so they lie
-# at or below the torus's own (taken over all phases theta of its circle); other rows' are the branch's.
-AMPLITUDES_OF = {ev.LOCKED: "linked orbit at theta = 0", ev.TORUS_STABILITY: "torus", ev.TORUS_FOLD: "torus"}
 
 
 def event_rows(model, family, built, run, amplitudes):

@@ -13,7 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rotorsweep.pipeline import cluster, config, continuation, cube, sweep, workload
+from rotorsweep.pipeline import backbone, cluster, config, continuation, cube, sweep, torus_branches, workload
+from rotorsweep.pipeline.continuation_result import TORUS_STATUS
+from tests.test_backbone_command import scene as backbone_scene
 from tests.test_continue_command import DUFFING
 from tests.test_pipeline import SMALL
 
@@ -227,16 +229,16 @@ READS = {
              ["query", "--bistable"], ["query", "--where", "speed=60:65", "--var", "max_abs_multiplier", "--var",
                                        "attractor", "--format", "csv"], ["query", "--format", "json"]),
     "continuation": (["info"], ["query"], ["query", "--format", "json"], ["query", "--unstable"]),
+    "backbone": (["info"], ["query"], ["query", "--format", "csv"]),
 }
 
 
 @pytest.mark.parametrize("kind", READS)
-def test_a_result_read_without_numba_prints_what_it_prints_with_everything_loaded(kind, tiny_cube,
-                                                                                   continuation_result, capfd):
+def test_a_result_read_without_numba_prints_what_it_prints_with_everything_loaded(kind, request, capfd):
     """info and query in a fresh process (which imports no Numba: above) print the same bytes and
     exit with the same status as in this process, where the kernels, Numba and the whole pipeline are loaded."""
     from rotorsweep.pipeline import cli
-    path = str(tiny_cube if kind == "cube" else continuation_result)
+    path = str(request.getfixturevalue("tiny_cube" if kind == "cube" else f"{kind}_result"))
     for command in READS[kind]:
         args = [command[0], path, *command[1:]]
         proc = subprocess.run([*CLI, *args], capture_output=True, text=True, env=env(), timeout=300, cwd=ROOT)
@@ -304,3 +306,24 @@ def test_without_cffi_numba_treats_it_as_absent_and_cffi_still_imports():
     code = ("import rotorsweep.pipeline as p; p.numba_without_cffi(); from numba.core.typing import cffi_utils; "
             "assert not cffi_utils.SUPPORTED; import cffi; cffi.FFI()")
     subprocess.run([sys.executable, "-c", code], check=True, env=env(), timeout=300, cwd=ROOT)
+
+
+# --- info and query on a continuation or backbone result import no Numba (issue 35) ---------------
+
+@pytest.fixture(scope="module")
+def backbone_result(tmp_path_factory):
+    """The axial rotor's first backbone at 9 amplitudes, computed in this process (~10 s)."""
+    cfg = config.parse_config(backbone_scene(modes="1", amplitude_max=4e-6, amplitude_points=9))
+    return backbone.run(cfg, tmp_path_factory.mktemp("read") / "backbone.nc", workers=0, stream=None)
+
+
+@pytest.mark.parametrize("kind, command", [(kind, command) for kind in ("continuation", "backbone")
+                                           for command in READS[kind]])
+def test_info_and_query_on_a_continuation_or_backbone_result_import_no_numba(kind, command, request):
+    path = str(request.getfixturevalue(f"{kind}_result"))
+    args = ["-m", "rotorsweep.pipeline.cli", command[0], path, *command[1:]]
+    assert heavy(imported_modules(args), RESULT_READ) == []
+
+
+def test_the_reader_names_the_torus_stability_codes_the_writer_writes():
+    assert TORUS_STATUS == torus_branches.TORUS_STATUS

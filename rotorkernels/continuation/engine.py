@@ -45,18 +45,10 @@ import numpy as np
 
 from rotorsweep.kernels.roots import NotConverged, brent_root
 
-# How a branch ended (the result's `end` code), one vocabulary for every problem.
-END_REASONS = (
-    "left_range",          # reached an edge of the parameter range (success)
-    "step_budget",         # max_steps points computed
-    "newton_failed",       # the corrector did not converge even at the minimum step
-    "integration_failed",  # the flow diverged (NaN, amplitude limit) even at the minimum step
-    "start_failed",        # no solution at the starting point
-    "rejoined",            # a switched (period-2k) branch met its period-k parent again
-    "closed_loop",         # the branch came back to its first point (an isola, a period-doubling bubble)
-    "torus_breakdown",     # an invariant torus lost its smoothness (its Fourier decay failed: continuation.tori)
-)
-LEFT_RANGE, STEP_BUDGET, NEWTON_FAILED, INTEGRATION_FAILED, START_FAILED, REJOINED, CLOSED_LOOP, TORUS_BREAKDOWN = range(8)
+from rotorsweep.kernels.continuation_codes import (  # noqa: F401 (how a branch ended; the names engine has always offered)
+    CLOSED_LOOP, END_REASONS, INTEGRATION_FAILED, LEFT_RANGE, NEWTON_FAILED, REJOINED, START_FAILED, STEP_BUDGET,
+    TORUS_BREAKDOWN)
+
 # The first point is solved at a fixed parameter from a guess that may be rough (a settled transient).
 START_NEWTON = 30
 

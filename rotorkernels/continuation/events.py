@@ -26,13 +26,9 @@ from rotorsweep.kernels import floquet
 from rotorsweep.kernels.continuation import engine
 from rotorsweep.kernels.roots import NotConverged, brent_root
 
-# The bifurcations of orbits located on a branch (the codes a branch's events record).
-# The last three are events of torus branches (continuation.tori): a change of normal stability, a
-# fold of tori (flags between two points) and a locked ratio (a periodic orbit on the torus).
-EVENT_TYPES = ("fold", "period_doubling", "neimark_sacker", "branch_point", "peak",
-               "torus_stability", "torus_fold", "locked")
-FOLD, PERIOD_DOUBLING, NEIMARK_SACKER, BRANCH_POINT, PEAK, TORUS_STABILITY, TORUS_FOLD, LOCKED = range(8)
-EVENT_LABELS = ("LP", "PD", "NS", "BP", "PK", "TS", "TF", "locked")
+from rotorsweep.kernels.continuation_codes import (  # noqa: F401 (the event codes; the names events has always offered)
+    BRANCH_POINT, EVENT_LABELS, EVENT_TYPES, FOLD, LOCKED, NEIMARK_SACKER, PEAK, PERIOD_DOUBLING, TORUS_FOLD,
+    TORUS_STABILITY)
 
 Boundary = namedtuple("Boundary", "value solution evaluations")
 

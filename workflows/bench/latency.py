@@ -166,8 +166,8 @@ def floor_text(runs):
             "numba's cffi set-up. "
             "`import rotorsweep` loads its names on first use and registers the accessor when xarray is imported; "
             "each command's imports are checked in tests/test_latency.py (no plotting, Dask or scipy solvers in "
-            "info, query or point; no numba in info or query; no numba or xarray in `import rotorsweep` or the "
-            "argument parsing).")
+            "info, query or point; no numba in info or query, on a sweep cube, a continuation or a backbone "
+            "result; no numba or xarray in `import rotorsweep` or the argument parsing).")
 
 
 def main(argv=None):
