@@ -474,7 +474,8 @@ def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.s
 
 def _run_lines(cfg, pl, workers, scheduler, stream, parts):
     results.say(stream, f"continuing {pl.parameter} from {pl.start:g} to {pl.stop:g} on {len(pl.lines)} line(s)")
-    done = results.run_lines(cfg, continue_line, pl.lines, workers, scheduler, stream, _line_summary, parts)
+    with torus_branches.progress_on(stream):
+        done = results.run_lines(cfg, continue_line, pl.lines, workers, scheduler, stream, _line_summary, parts)
     return list(zip(pl.lines, done))
 
 

@@ -21,10 +21,18 @@ sup over the phase of each trajectory's extremum is low by at most its curvature
 times (pi / AMPLITUDE_PHASES)^2 / 2 (a parabola's drop at half the phase spacing): ~1.2e-3
 relative for a swing varying over the phase by O(1) of itself, less for weak phase dependence
 (tests/test_torus_continue.py: 1e-4 against a long DOP853 transient).
+
+A long branch reports its progress every PROGRESS_SECONDS (BranchProgress, through the family's
+on_point): the parameter reached, the points solved, the Fourier modes, the locked ratios passed.
+The lines are logged (the command's log file) and shown on the stream that `progress_on` names in
+this process (`continue` in-process: its stream; a Dask worker's lines stay in that worker).
 """
+import contextlib
+import time
+
 import numpy as np
 
-from rotorsweep.pipeline import compute, torus_events, torus_points
+from rotorsweep.pipeline import compute, runlog, torus_events, torus_points
 from rotorsweep.pipeline.torus_points import AMPLITUDE_PHASES, DECAY_TOL, FIRST_NODES, FIT_PERIODS, MAX_NODES, SETTLE_PERIODS
 from rotorsweep.kernels import torus as tr
 from rotorsweep.kernels.continuation import engine, tori
@@ -33,6 +41,51 @@ BREAKDOWN_TOL = 1e-7    # a tail above it at MAX_NODES ends the branch (below it
 MIN_NODES = 7           # the fewest nodes a branch shrinks to (3 Fourier modes)
 POLISH_TOL = 1e-12      # each stored circle's residual, relative to max(1, max |U|) (tori.polish)
 TORUS_STATUS = {tr.UNSTABLE: 0, tr.STABLE: 1, tr.UNDECIDED: 2}
+PROGRESS_SECONDS = 10.0  # between two progress lines of one branch
+
+
+class _Shown:
+    """Where this process shows the torus progress lines (progress_on; None: only logged)."""
+    stream = None
+
+
+@contextlib.contextmanager
+def progress_on(stream):
+    """Show the torus branches' progress lines computed in this process on `stream` (None: none)."""
+    old, _Shown.stream = _Shown.stream, stream
+    try:
+        yield
+    finally:
+        _Shown.stream = old
+
+
+class BranchProgress:
+    """The family's on_point: a line every PROGRESS_SECONDS (module docstring). Points solved
+    counts every corrector solution (steps, retried steps, located events, a step past the
+    range's edge), the branch's own points are fewer."""
+
+    def __init__(self, pl, family, max_q):
+        self.pl, self.family, self.seconds = pl, family, PROGRESS_SECONDS
+        self.locks = tori.locked_ratios(family, pl.range, max_q)
+        self.solved, self.t0 = 0, time.monotonic()
+        self.last = self.t0
+
+    def __call__(self, point):
+        self.solved += 1
+        now = time.monotonic()
+        inside = min(self.pl.range) <= point.lam <= max(self.pl.range)    # a step past the edge is not reached
+        if inside and now - self.last >= self.seconds:
+            self.last = now
+            runlog.phase_printer(_Shown.stream)(self.line(point, now - self.t0))
+
+    def line(self, point, elapsed):
+        pl = self.pl
+        done = (point.lam - pl.start) / (pl.stop - pl.start)
+        passed = [f"{e.p}/{e.q}" for e in self.locks if (e.level - pl.start) * (e.level - point.lam) <= 0]
+        modes = (self.family.nodes(point.X).shape[0] - 1) // 2
+        return (f"torus branch: {pl.parameter} {point.lam:.6g} ({done:.0%} of {pl.start:g} to {pl.stop:g}) after "
+                f"{runlog.fmt_seconds(elapsed)}, {self.solved} points solved, {modes} Fourier modes, locked ratios "
+                f"passed: {' '.join(passed) or 'none'}")
 
 
 def is_torus_line(scene, parameter, start, where):
@@ -84,6 +137,7 @@ def continue_torus_line(scene, pl, where):
         why = "the transient failed" if circle is None else f"the torus solve ended {circle.status}"
         return [torus_record(spec, family, built, engine.Run([], [], engine.START_FAILED,
                                                        f"no torus at {pl.parameter} = {pl.start!r}: {why}"), 0)]
+    family = family._replace(on_point=BranchProgress(pl, family, torus_events.LOCK_DENOMINATOR))
     counter = engine.Counter()
     first = tori.start(family, pl.start, circle.nodes, direction, pl.settings, counter)
     if first is None:

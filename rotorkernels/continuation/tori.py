@@ -75,6 +75,7 @@ class TorusFamily(NamedTuple):
     min_nodes: int = 0      # bounds of the adaptive node count (0: n_nodes, a fixed count)
     max_nodes: int = 0
     breakdown_tol: float = 0.0  # the tail that ends the branch at max_nodes (0: decay_tol)
+    on_point: Callable = None   # called with each point solved (a caller's progress; None: none)
 
     @property
     def node_bounds(self):
@@ -152,8 +153,11 @@ class TorusFamily(NamedTuple):
         nodes = self.nodes(sol.X)
         circle = tr.Torus(nodes, float(self.rotation(lam)), self.period, tr.CONVERGED, sol.iterations,
                           sol.residual, 0.0, np.nan, sol.monodromies, 0)
-        return Point(sol.X, lam, t, sol.iterations, sol.residual, tr.fourier_tail(nodes),
-                     tr.stability(circle), sol.monodromies)
+        point = Point(sol.X, lam, t, sol.iterations, sol.residual, tr.fourier_tail(nodes),
+                      tr.stability(circle), sol.monodromies)
+        if self.on_point is not None:
+            self.on_point(point)
+        return point
 
     def where(self, point):
         return f"lambda = {point.lam!r}"
