@@ -236,7 +236,7 @@ def torus_error(family, point):
     """The point's error estimate (torus.error_estimate; inf where its shots failed)."""
     lam = family.lam(point.X)
     nodes = family.nodes(point.X)
-    _, jac, _, _, _ = family.residual(point.X, True)
+    jac = family.circle_jacobian(point.X, family.residual(point.X, True)[1])
     err, ok, _ = tr.error_estimate(family.kernel, nodes, jac, family.params(lam), family.phase_index,
                                    family.rotation(lam), family.period, family.opts, point.tail)
     return err if ok else np.inf

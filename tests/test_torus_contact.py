@@ -87,7 +87,7 @@ def test_a_branch_ending_torus_breakdown_there_says_contact_loss(point):
     data, built, circle = point
     fam = tori.TorusFamily(data.model.kernel, lambda lam: built.p, lambda lam: built.p[rp.P_WS], rp.P_PHASE,
                            data.integrator, circle.nodes.shape[0])
-    last = tori.Point(np.append(circle.nodes.ravel(), 0.0), 0.0, None, 0, circle.residual, circle.tail,
+    last = tori.Point(fam.unknowns(circle.nodes, 0.0), 0.0, None, 0, circle.residual, circle.tail,
                       tr.stability(circle), circle.monodromies)
     note = torus_branches.contact_note(data.model, fam, engine.Run([last], [], engine.TORUS_BREAKDOWN, ""))
     assert note.startswith("; contact_loss: a contact opens along the last circle (smallest deflection -0.03")

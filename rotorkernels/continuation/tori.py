@@ -1,8 +1,11 @@
 """Pseudo-arclength continuation of invariant tori under two-frequency forcing (a problem class of
 `engine.follow`) along one parameter lambda, e.g. the second forcing's frequency omega.
 
-Unknowns X = (U, mu): the torus's node values U (N x n, rotorsweep.kernels.torus) and mu = lambda /
-scale. Equations: the collocation residual R(U, lambda) = 0 (the rotation rho(lambda) and the
+Unknowns X = (U / sqrt(N), mu): the torus's node values U (N x n, rotorsweep.kernels.torus) weighted
+by 1 / sqrt(N) (`node_weight`), and mu = lambda / scale. The weight makes the engine's Euclidean
+arclength count the circle like one orbit's state: |dX|^2 = the nodes' mean square change + dmu^2,
+the same at every node count (unweighted, a circle on 63 nodes counted sqrt(63) times one state, so a
+step's meaning changed with N and the steps followed the node count instead of the branch). Equations: the collocation residual R(U, lambda) = 0 (the rotation rho(lambda) and the
 kernel vector p(lambda) both follow lambda) and one scalar condition c . X = target. Bordered
 Newton with dR/dU from the nodes' monodromies and the shift operator, dR/dmu by a central
 difference of two plain collocation residuals (as arclength.Family's dphi/dmu: it enters only the
@@ -88,9 +91,22 @@ class TorusFamily(NamedTuple):
     def lam(self, X):
         return float(X[-1] * self.scale)
 
+    def weight(self, n_nodes):
+        """The node values' weight in the unknowns at n_nodes nodes: 1 / sqrt(N) (module docstring)."""
+        return 1.0 / np.sqrt(n_nodes)
+
+    def node_weight(self, X):
+        """The weight of X's node part (N from X's size)."""
+        return self.weight((X.size - 1) // self.kernel.n_state)
+
     def nodes(self, X):
         """U (N, n) of unknowns X, N from X's size (points of one branch may differ in N)."""
-        return X[:-1].reshape(-1, self.kernel.n_state)
+        return X[:-1].reshape(-1, self.kernel.n_state) / self.node_weight(X)
+
+    def unknowns(self, nodes, lam):
+        """X of node values U (N, n) at lambda (the inverse of nodes and lam)."""
+        nodes = np.asarray(nodes, float)
+        return np.append(nodes.ravel() * self.weight(nodes.shape[0]), lam / self.scale)
 
     def torus(self, point):
         """The point's circle as a `torus.Torus` (its error estimate not computed: nan)."""
@@ -99,9 +115,16 @@ class TorusFamily(NamedTuple):
                         point.iterations, point.residual, point.tail, np.nan, point.monodromies, 0)
 
     def residual(self, X, variational):
+        """torus.collocation's (R, Jacobian, monodromies, ok, n_rhs) at X, the Jacobian dR/dX
+        (in the unknowns: dR/dU / node_weight; `circle_jacobian` undoes it)."""
         lam = self.lam(X)
-        return tr.collocation(self.kernel, self.nodes(X), self.params(lam), self.phase_index,
-                              self.rotation(lam), self.period, self.opts, variational)
+        r, jac, monos, ok, n_rhs = tr.collocation(self.kernel, self.nodes(X), self.params(lam), self.phase_index,
+                                                  self.rotation(lam), self.period, self.opts, variational)
+        return r, (None if jac is None else jac / self.node_weight(X)), monos, ok, n_rhs
+
+    def circle_jacobian(self, X, jacobian):
+        """dR/dU (torus.error_estimate's) of residual's dR/dX at X."""
+        return jacobian * self.node_weight(X)
 
     def dr_dmu(self, X, fd_step):
         """Central difference of R in mu: (column or None, n_rhs)."""
@@ -175,7 +198,7 @@ def polish(family, point, tol, max_iter=3):
     X = point.X.copy()
     for _ in range(max_iter):
         r, jac, _, ok, _ = family.residual(X, True)
-        if not ok or np.abs(r).max() <= tol * max(1.0, np.abs(X[:-1]).max()):
+        if not ok or np.abs(r).max() <= tol * max(1.0, np.abs(family.nodes(X)).max()):
             break
         try:
             X[:-1] += np.linalg.solve(jac, -r.ravel())
@@ -292,15 +315,15 @@ def solve_at_lambda(family, X, seed, settings, counter):
 def start(family, lam0, guess, direction=1, settings=engine.Settings(), counter=None):
     """The first point at lambda = lam0 from node values `guess` (N x n, e.g. torus.solve_torus's),
     tangent towards increasing lambda for direction = +1. A Point or None."""
-    X = np.append(np.asarray(guess, float).ravel(), lam0 / family.scale)
+    X = family.unknowns(guess, lam0)
     e_mu = np.zeros(X.size)
     e_mu[-1] = direction
     return solve_at_lambda(family, X, engine.Seed(e_mu), settings, counter or engine.Counter())
 
 
 def resampled(family, vector, n_nodes):
-    """Unknowns (or a tangent) (U, mu) with U re-interpolated at n_nodes nodes."""
-    return np.append(tr.resample(family.nodes(vector), n_nodes).ravel(), vector[-1])
+    """Unknowns (or a tangent) with the circle re-interpolated at n_nodes nodes (weighted anew)."""
+    return np.append(tr.resample(family.nodes(vector), n_nodes).ravel() * family.weight(n_nodes), vector[-1])
 
 
 def resolved(family, point, n_nodes, settings, counter):
