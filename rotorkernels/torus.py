@@ -45,6 +45,7 @@ _FINE = 100.0      # tolerance ratio of the error estimate's reference flow
 # not accelerate: geometric decay (an analytic circle) doubles the exponent at each doubling.
 _ACCELERATION = 1.5
 _ROUNDOFF = 1e-12  # a tail this small has reached the coefficients' rounding: no decay law read from it
+_ROUNDING = 1e-15  # a relative mode amplitude this small is the DFT's rounding (a few ulps of N values)
 COARSEN = 1e-3     # fewer nodes only where their tail stays below this times the decay tolerance (hysteresis)
 
 
@@ -55,7 +56,7 @@ class Torus(NamedTuple):
     status: str              # CONVERGED, NOT_CONVERGED, FOURIER_DECAY_FAILED, INTEGRATION_FAILED, NON_SMOOTH
     iterations: int          # Newton iterations, all resolutions together
     residual: float          # max |R| at the nodes
-    tail: float              # largest Fourier coefficient in the top quarter of the modes
+    tail: float              # the node values' Fourier tail (fourier_tail)
     error: float             # the error estimate (see the module docstring)
     monodromies: np.ndarray  # (N, n, n) at the nodes
     n_rhs: int
@@ -89,14 +90,47 @@ def interpolation_matrix(n_nodes, thetas):
     return (1.0 + 2.0 * np.cos(d[..., None] * m).sum(axis=-1)) / n_nodes
 
 
-def fourier_tail(values):
-    """Largest Fourier coefficient of the top quarter of the modes (at least one mode) of the node
-    values (N, ...), relative to the largest of the values (floor 1): how far N resolves them."""
+def mode_amplitudes(values):
+    """|c_m| (m = 0..K) of the node values (N, ...): the largest over the components of each mode's
+    DFT coefficient / N, relative to the largest of the values (floor 1)."""
     n_nodes = values.shape[0]
     coef = np.abs(np.fft.rfft(values.reshape(n_nodes, -1), axis=0)) / n_nodes
-    k = (n_nodes - 1) // 2
+    return coef.max(axis=1) / max(1.0, np.abs(values).max())
+
+
+def fourier_tail(values):
+    """How far N nodes resolve the node values (N, ...), relative (mode_amplitudes): the larger of
+    the top quarter's largest mode and the modes K + 1 .. 2K + 1 that the next count would add,
+    extrapolated by the geometric decay fitted to the upper half of the modes (`decay_fit`).
+
+    The nodes cannot hold the modes beyond K: those alias, mode K + j onto mode K + 1 - j, down
+    to mode 1 for mode 2K, so their energy spreads over all modes and the top quarter alone shows
+    only the first few. Where the spectrum decays slowly (c_m ~ r^m, r near 1, or algebraically)
+    their sum is 1 / (1 - r) times the top's largest mode; the estimate counts it. A circle whose
+    node values mimic a resolved one (a mode near a multiple of N with nothing between) is beyond
+    any check on the node values: only the invariance defect between the nodes
+    (error_estimate) sees it."""
+    amps = mode_amplitudes(values)
+    k = amps.size - 1
     top = max(1, (k + 1) // 4)
-    return float(coef[k + 1 - top:k + 1].max() / max(1.0, np.abs(values).max()))
+    fit = decay_fit(amps)
+    beyond = 0.0 if fit is None else float(np.exp(fit[0] + fit[1] * np.arange(k + 1, 2 * k + 2)).sum())
+    return max(float(amps[k + 1 - top:].max()), beyond)
+
+
+def decay_fit(amps):
+    """(log c, log r) of the least-squares line log e_m = log c + m log r through the upper half of
+    the modes (K // 2 .. K, m >= 1), e_m = max_{m' >= m} |c_m'| the decaying envelope (so modes
+    that vanish by a symmetry do not pass for decay; r <= 1), modes at the rounding level left
+    out; None where fewer than two modes remain (the circle is resolved to its rounding)."""
+    k = amps.size - 1
+    envelope = np.maximum.accumulate(amps[::-1])[::-1]
+    m = np.arange(max(1, k // 2), k + 1)
+    m = m[envelope[m] > _ROUNDING]
+    if m.size < 2:
+        return None
+    slope, intercept = np.polyfit(m, np.log(envelope[m]), 1)
+    return intercept, slope
 
 
 def node_maps(kernel, nodes, thetas, p, phase_index, period, opts, variational):
@@ -179,15 +213,20 @@ def coarser(n_nodes):
     return m if m % 2 else m + 1
 
 
+def coarser_tail(nodes):
+    """The tail the circle would have at the next count down (coarser): the resampled circle's
+    fourier_tail, and not below the sum of the modes it drops (known here, only estimated there)."""
+    small = coarser(nodes.shape[0])
+    amps = mode_amplitudes(nodes)
+    return max(fourier_tail(resample(nodes, small)), float(amps[(small - 1) // 2 + 1:].sum()))
+
+
 def coarsened(nodes, decay_tol, min_nodes):
-    """The circle at the fewest nodes down the ladder (not below min_nodes) that keep its tail
-    below COARSEN times decay_tol (nodes resampled; as given where none does): a guess that
-    does not carry more nodes than its circle needs."""
-    while coarser(nodes.shape[0]) >= min_nodes:
-        small = resample(nodes, coarser(nodes.shape[0]))
-        if fourier_tail(small) > COARSEN * decay_tol:
-            break
-        nodes = small
+    """The circle at the fewest nodes down the ladder (not below min_nodes) whose tail
+    (coarser_tail) stays below COARSEN times decay_tol (nodes resampled; as given where none
+    does): a guess that does not carry more nodes than its circle needs."""
+    while coarser(nodes.shape[0]) >= min_nodes and coarser_tail(nodes) <= COARSEN * decay_tol:
+        nodes = resample(nodes, coarser(nodes.shape[0]))
     return nodes
 
 

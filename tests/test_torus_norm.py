@@ -84,3 +84,58 @@ def test_the_weighted_branch_is_the_unweighted_one_at_common_parameters():
         assert a.lam == pytest.approx(b.lam, rel=1e-12)
         bound = error(fam, a) + error(old_fam, b)
         assert np.abs(fam.nodes(a.X) - old_fam.nodes(b.X)).max() <= bound < 1e-8
+
+
+def slow_circle(thetas, amplitude, r):
+    """cos theta + amplitude sum_{m >= 1} r^m cos m theta (closed form): a geometric spectrum that
+    no finite N holds; its modes beyond K alias onto all lower ones."""
+    c = np.cos(thetas)
+    return (c + amplitude * (r * c - r * r) / (1.0 - 2.0 * r * c + r * r))[:, None]
+
+
+def interpolation_error(values_at, n_nodes):
+    """max |interpolant on n_nodes - the function| on 2N + 1 nodes (an independent measure of how
+    far n_nodes resolve the function: its values between the nodes)."""
+    fine = tr.node_phases(2 * n_nodes + 1)
+    return np.abs(tr.interpolation_matrix(n_nodes, fine) @ values_at(tr.node_phases(n_nodes)) - values_at(fine)).max()
+
+
+def top_quarter(values):
+    amps = tr.mode_amplitudes(values)
+    k = amps.size - 1
+    return amps[k + 1 - max(1, (k + 1) // 4):].max()
+
+
+def test_the_tail_sees_the_modes_that_alias_below_the_top_quarter():
+    """A slowly decaying spectrum (r = 0.95) on 31 nodes: the top quarter's largest mode (1.7e-8)
+    passes a tolerance of 1e-7, but the interpolant misses the function by 2.7e-7 between the
+    nodes; the tail (the modes beyond K extrapolated from the decay) fails it, and is the miss
+    to a factor 2 (the sum of the modes K + 1 .. 2K + 1 against the aliasing error, which counts
+    each about twice: once missing, once folded onto a lower mode)."""
+    tol = 1e-7
+    values_at = lambda th: slow_circle(th, 3e-8, 0.95)     # noqa: E731
+    values = values_at(tr.node_phases(31))
+    miss = interpolation_error(values_at, 31)
+    assert top_quarter(values) < tol < miss
+    assert tol < miss / 2.0 <= tr.fourier_tail(values) <= 2.0 * miss
+
+
+def test_a_resolved_circle_keeps_a_small_tail():
+    """A fast spectrum (r = 0.3) on 31 nodes is resolved to 7e-9 between the nodes: its tail stays
+    within 1e-6, as the top quarter's (the extrapolation adds nothing beyond it there)."""
+    values_at = lambda th: slow_circle(th, 1.0, 0.3)       # noqa: E731
+    values = values_at(tr.node_phases(31))
+    assert interpolation_error(values_at, 31) < 1e-8
+    assert tr.fourier_tail(values) == top_quarter(values) < 1e-6
+
+
+def test_the_coarser_tail_counts_the_modes_it_drops():
+    """A circle with a mode 12 bump on 31 nodes: resampled to 15 nodes (K = 7) it has no trace of
+    it, so its own tail is tiny, but coarsening would lose 1e-6: coarser_tail says so, and
+    coarsened keeps the 31 nodes."""
+    th = tr.node_phases(31)
+    values = np.stack([np.cos(th), np.sin(th) + 2e-6 * np.cos(12 * th)], axis=1)
+    assert tr.fourier_tail(tr.resample(values, 15)) < 1e-14
+    assert tr.coarser_tail(values) == pytest.approx(1e-6, rel=1e-9)
+    assert tr.coarsened(values, 1e-8, 7).shape[0] == 31
+    assert tr.coarsened(np.stack([np.cos(th), np.sin(th)], axis=1), 1e-8, 7).shape[0] == 7

@@ -227,13 +227,13 @@ def wanted_nodes(family, point):
     """The node count the point's circle asks for: 2N + 1 where its tail exceeds the acceptable one
     (even beyond max_nodes: the caller ends the branch there), the coarser count
     where the circle resampled there keeps its tail below COARSEN times the tolerance (not below
-    min_nodes), else its own N."""
+    min_nodes; torus.coarser_tail, as torus.coarsened's), else its own N."""
     nodes = family.nodes(point.X)
     n_nodes = nodes.shape[0]
     if point.tail > acceptable_tail(family, n_nodes):
         return 2 * n_nodes + 1
     small = tr.coarser(n_nodes)
-    if small >= family.node_bounds[0] and tr.fourier_tail(tr.resample(nodes, small)) <= tr.COARSEN * family.decay_tol:
+    if small >= family.node_bounds[0] and tr.coarser_tail(nodes) <= tr.COARSEN * family.decay_tol:
         return small
     return n_nodes
 
