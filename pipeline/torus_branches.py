@@ -39,6 +39,10 @@ from rotorsweep.kernels.continuation import engine, tori
 
 BREAKDOWN_TOL = 1e-7    # a tail above it at MAX_NODES ends the branch (below it: more nodes above DECAY_TOL)
 MIN_NODES = 7           # the fewest nodes a branch shrinks to (3 Fourier modes)
+# The torus branch's parameter counts in its own unit (Hz), not in range widths: the circle's rms
+# change is ~0.02 per Hz where the response is flat (Fig. 3a), so there a step of ds_max moves the
+# parameter by ~ds_max Hz whatever the range, and near a resonance the circle by ~ds_max (tori.py).
+PARAMETER_UNIT = 1.0
 POLISH_TOL = 1e-12      # each stored circle's residual, relative to max(1, max |U|) (tori.polish)
 TORUS_STATUS = {tr.UNSTABLE: 0, tr.STABLE: 1, tr.UNDECIDED: 2}
 PROGRESS_SECONDS = 10.0  # between two progress lines of one branch
@@ -108,7 +112,7 @@ def torus_family(scene, pl, where, n_nodes):
     phase, freq, _ = spec.torus_forcing
     built = _builder(scene, where, pl.parameter)
     return tori.TorusFamily(spec.kernel, lambda lam: built(lam).p, lambda lam: float(built(lam).p[freq]), phase,
-                            scene.integrator, n_nodes, scale=pl.range[1] - pl.range[0],
+                            scene.integrator, n_nodes, scale=PARAMETER_UNIT,
                             decay_tol=DECAY_TOL, min_nodes=MIN_NODES, max_nodes=MAX_NODES,
                             breakdown_tol=BREAKDOWN_TOL), built
 
