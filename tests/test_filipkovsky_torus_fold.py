@@ -66,6 +66,7 @@ def drift(scene, ds, k, turns, offset=1e-6):
     b = built(float(ds["parameter"].values[0, k]))
     phase, freq, _ = scene.model.torus_forcing
     nodes = ds["torus_nodes"].values[0, k]
+    nodes = nodes[~np.isnan(nodes[:, 0])]      # the point's own count (NaN beyond it)
     theta0, rho = 0.3, float(b.p[freq])
     p = b.p.copy()
     p[phase] = theta0
