@@ -2,12 +2,14 @@
 `engine.follow`) along one parameter lambda, e.g. the second forcing's frequency omega.
 
 Unknowns X = (U / sqrt(N), mu): the torus's node values U (N x n, rotorsweep.kernels.torus) weighted
-by 1 / sqrt(N) (`node_weight`), and mu = lambda / scale. The weight makes the engine's Euclidean
-arclength count the circle like one orbit's state: |dX|^2 = the nodes' mean square change + dmu^2,
-the same at every node count (unweighted, a circle on 63 nodes counted sqrt(63) times one state, so a
-step's meaning changed with N and the steps followed the node count instead of the branch). Equations: the collocation residual R(U, lambda) = 0 (the rotation rho(lambda) and the
-kernel vector p(lambda) both follow lambda) and one scalar condition c . X = target. Bordered
-Newton with dR/dU from the nodes' monodromies and the shift operator, dR/dmu by a central
+by 1 / sqrt(N) (`TorusFamily.weight`), and mu = lambda / scale. The weight makes the engine's
+Euclidean arclength count the circle like one orbit's state: |dX|^2 = the nodes' mean square change
++ dmu^2, the circle's mean square over its phase where N resolves it (Parseval), the same at every
+node count (unweighted, a circle on 63 nodes counted sqrt(63) times one state: a step's meaning
+changed with N). The scale then sets how a step splits between the parameter and the circle.
+Equations: the collocation residual R(U, lambda) = 0 (the rotation rho(lambda) and the kernel
+vector p(lambda) both follow lambda) and one scalar condition c . X = target. Bordered Newton with
+dR/dX from the nodes' monodromies and the shift operator (over the weight), dR/dmu by a central
 difference of two plain collocation residuals (as arclength.Family's dphi/dmu: it enters only the
 Newton matrix and the tangent, never the residual).
 
@@ -53,7 +55,7 @@ class Solution(NamedTuple):
 
 
 class Point(NamedTuple):
-    X: np.ndarray           # (U.ravel(), mu)
+    X: np.ndarray           # (U.ravel() / sqrt(N), mu): TorusFamily.unknowns
     lam: float
     tangent: np.ndarray
     iterations: int
