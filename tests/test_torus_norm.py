@@ -129,6 +129,15 @@ def test_a_resolved_circle_keeps_a_small_tail():
     assert tr.fourier_tail(values) == top_quarter(values) < 1e-6
 
 
+def test_a_band_limited_circle_keeps_a_rounding_level_tail():
+    """A trigonometric polynomial of degree 2 on 7 nodes (K = 3) is interpolated exactly: mode 3 is
+    the DFT's rounding, so the tail must be too, though modes 1 and 2 give a decay fit whose line,
+    extrapolated past K, would claim O(0.1) (the extrapolation starts from the top mode itself)."""
+    th = tr.node_phases(7)
+    values = np.stack([np.cos(th) + 0.5 * np.cos(2 * th), np.sin(2 * th)], axis=1)
+    assert tr.fourier_tail(values) < 1e-14
+
+
 def test_the_coarser_tail_counts_the_modes_it_drops():
     """A circle with a mode 12 bump on 31 nodes: resampled to 15 nodes (K = 7) it has no trace of
     it, so its own tail is tiny, but coarsening would lose 1e-6: coarser_tail says so, and

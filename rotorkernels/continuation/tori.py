@@ -8,10 +8,11 @@ Euclidean arclength count the circle like one orbit's state: |dX|^2 = the nodes'
 node count (unweighted, a circle on 63 nodes counted sqrt(63) times one state: a step's meaning
 changed with N). The scale then sets how a step splits between the parameter and the circle.
 Equations: the collocation residual R(U, lambda) = 0 (the rotation rho(lambda) and the kernel
-vector p(lambda) both follow lambda) and one scalar condition c . X = target. Bordered Newton with
-dR/dX from the nodes' monodromies and the shift operator (over the weight), dR/dmu by a central
-difference of two plain collocation residuals (as arclength.Family's dphi/dmu: it enters only the
-Newton matrix and the tangent, never the residual).
+vector p(lambda) both follow lambda) and one scalar condition c . X = target. Bordered chord Newton
+(TorusFamily.correct: the matrix kept while it converges fast) with dR/dX from the nodes'
+monodromies and the shift operator (over the weight), dR/dmu by a difference of plain collocation
+residuals (forward in the corrector, central for the tangent; as arclength.Family's dphi/dmu it
+enters only the Newton matrix and the tangent, never the residual).
 
 The imposed forcing phase is the torus coordinate, so a rational ratio omega / Omega = p / q is
 no special point: there the circle is the union of the q-periodic orbits' stroboscopic points
@@ -35,15 +36,20 @@ sign) and a fold of tori (`TF`: the branch turns back in lambda), and solves the
 where the rotation is 2 pi p / q with small q (`Locked`: there the circle consists of q-periodic
 points, which the caller links to the periodic-orbit solver's orbits).
 """
+import warnings
 from dataclasses import replace
 from typing import Callable, NamedTuple
 
 import numpy as np
+import scipy.linalg
 
 from rotorsweep.kernels import torus as tr
 from rotorsweep.kernels.continuation import engine, events as ev
 from rotorsweep.kernels.continuation.engine import INTEGRATION_FAILED, NEWTON_FAILED, START_NEWTON, TORUS_BREAKDOWN
 from rotorsweep.kernels.roots import brent_root
+
+
+CONTRACTION = 0.1   # a chord step must cut the residual this much to keep its matrix (TorusFamily.correct)
 
 
 class Solution(NamedTuple):
@@ -128,41 +134,73 @@ class TorusFamily(NamedTuple):
         """dR/dU (torus.error_estimate's) of residual's dR/dX at X."""
         return jacobian * self.node_weight(X)
 
-    def dr_dmu(self, X, fd_step):
-        """Central difference of R in mu: (column or None, n_rhs)."""
+    def dr_dmu(self, X, fd_step, r=None):
+        """dR/dmu by a difference of plain collocation residuals: central, or forward from r = R(X)
+        where given (one residual instead of two; its O(fd_step) error, ~1e-5 relative, only slows
+        the chord corrector, whose frozen matrix is O(ds) off anyway, and never moves its
+        solution, which is judged on R alone): (column or None, n_rhs)."""
         step = fd_step * max(1.0, abs(X[-1]))
         cols, n_rhs = [], 0
-        for sign in (1.0, -1.0):
+        for sign in (1.0,) if r is not None else (1.0, -1.0):
             Y = X.copy()
             Y[-1] += sign * step
-            r, _, _, ok, nr = self.residual(Y, False)
+            ry, _, _, ok, nr = self.residual(Y, False)
             n_rhs += nr
             if not ok:
                 return None, n_rhs
-            cols.append(r.ravel())
+            cols.append(ry.ravel())
+        if r is not None:
+            return (cols[0] - r.ravel()) / step, n_rhs
         return (cols[0] - cols[1]) / (2.0 * step), n_rhs
 
+    def shifted_jacobian(self, at, X):
+        """dR/dX (dR/dU over the node weight) at X from the monodromies of `at` (a point of X's node count; None for a Seed or
+        another count) and the shift operator at X's rotation: the chord's first matrix."""
+        monos = getattr(at, "monodromies", None)
+        n_nodes = self.nodes(X).shape[0]
+        if monos is None or monos.shape[0] != n_nodes or not np.isfinite(monos).all():
+            return None
+        phases = tr.node_phases(n_nodes) + self.rotation(self.lam(X))
+        return tr.collocation_jacobian(monos, tr.interpolation_matrix(n_nodes, phases)) / self.node_weight(X)
+
     def correct(self, X0, c, target, at, settings, counter):
-        """Newton on [R(U, lambda) = 0, c . X = target]: (Solution, None) or (None, failure)."""
-        X = X0.copy()
+        """Chord Newton on [R(U, lambda) = 0, c . X = target]: (Solution, None) or (None, failure).
+
+        The bordered matrix is factored once and kept while each step cuts the residual at least
+        1 / CONTRACTION-fold: first from the monodromies of `at` (the last point; shifted_jacobian),
+        else and wherever a step falls short from the variational equations where the corrector
+        stands. Its steps need only plain collocations (a variational one costs ~8 at n = 10);
+        convergence is judged on R, then confirmed by one variational collocation at the
+        solution, whose monodromies are the point's (stability, tangent): the solution meets the
+        same tolerance as a full Newton's, and differs from it by at most that residual times
+        ||dR/dX^-1|| (tests/test_tori_corrector.py)."""
+        X, res, lu = X0.copy(), np.inf, None
+        jac = self.shifted_jacobian(at, X0)
         for it in range(settings.max_newton + 1):
-            r, jac, monos, ok, n_rhs = self.residual(X, True)
+            r, _, _, ok, n_rhs = self.residual(X, False)
             counter.n += n_rhs
             if not ok:
                 return None, INTEGRATION_FAILED
-            res = np.abs(r).max() / max(1.0, np.abs(X[:-1]).max())
-            if res <= settings.tol:
-                return Solution(X, jac, monos, it, res), None
+            last, res, base = res, _relative(r, self.nodes(X)), r
+            stale = lu is None or res > CONTRACTION * last
+            if res <= settings.tol or (stale and jac is None):
+                r, jac, monos, ok, n_rhs = self.residual(X, True)
+                counter.n += n_rhs
+                if not ok:
+                    return None, INTEGRATION_FAILED
+                res = _relative(r, self.nodes(X))
+                if res <= settings.tol:
+                    return Solution(X, jac, monos, it, res), None
+                stale = True
             if it == settings.max_newton:
                 break
-            col, n_rhs = self.dr_dmu(X, settings.fd_step)
-            counter.n += n_rhs
-            if col is None:
-                return None, INTEGRATION_FAILED
-            try:
-                X = X + np.linalg.solve(_bordered(jac, col, c), np.append(-r.ravel(), target - c @ X))
-            except np.linalg.LinAlgError:
-                break
+            if stale:
+                col, n_rhs = self.dr_dmu(X, settings.fd_step, base)
+                counter.n += n_rhs
+                lu, jac = (None if col is None else _factored(_bordered(jac, col, c))), None
+                if lu is None:
+                    return (None, INTEGRATION_FAILED) if col is None else (None, NEWTON_FAILED)
+            X = X + scipy.linalg.lu_solve(lu, np.append(-r.ravel(), target - c @ X))
         return None, NEWTON_FAILED
 
     def point(self, sol, at, settings, counter):
@@ -207,6 +245,22 @@ def polish(family, point, tol, max_iter=3):
         except np.linalg.LinAlgError:
             break
     return point._replace(X=X, tail=tr.fourier_tail(family.nodes(X)))
+
+
+def _relative(r, nodes):
+    """max |R| relative to max(1, max |U|) (U the node values, unweighted): the corrector's measure."""
+    return np.abs(r).max() / max(1.0, np.abs(nodes).max())
+
+
+def _factored(matrix):
+    """The LU factors of a bordered matrix (scipy.linalg.lu_factor), None where it is singular or
+    not finite."""
+    if not np.isfinite(matrix).all():
+        return None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
+        lu = scipy.linalg.lu_factor(matrix)
+    return lu if np.all(np.diag(lu[0]) != 0.0) else None
 
 
 def _bordered(jac, col, c):
