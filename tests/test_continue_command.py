@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rotorsweep.pipeline import config, continuation
+from rotorsweep.pipeline import coexistence, config, continuation, continuation_result
 from tests import cfcheck
 from tests.runlog_check import check_log
 from tests.browser import assert_renders, needs_chromium
@@ -88,7 +88,7 @@ def test_continue_logs_the_phases_progress_and_time_of_run(duffing_result):
 def test_continue_writes_branches_and_folds(duffing_result):
     out, d, proc = duffing_result
     assert "[1/1]" in proc.stderr and "2 LP" in proc.stderr            # progress per line
-    ds = continuation.open_result(out)
+    ds = continuation_result.open_result(out)
     assert ds.attrs["parameter"] == "omega" and ds.sizes["branch"] == 1
     assert ds["branch_end"].values.tolist() == [al.LEFT_RANGE]
     kinds = ds["event_type"].values
@@ -112,7 +112,7 @@ def test_continue_writes_branches_and_folds(duffing_result):
     half = ds["amplitude_half_pp"].values[0, int(ds["event_point"].values[folds[0]])]
     assert 0.5 < amp < 2.0 and half == pytest.approx(ds["amplitude_max"].values[0, int(ds["event_point"].values[folds[0]]), 0], rel=2e-3)
     # the hardening resonance is bistable exactly between its folds (the outer branches stable)
-    (iv,) = continuation.bistable_intervals(ds)
+    (iv,) = coexistence.bistable_intervals(ds)
     assert (iv["lo"], iv["hi"]) == tuple(sorted(ds["event_parameter"].values[folds]))
     # plain xarray keeps the flags integer
     import xarray as xr
@@ -210,4 +210,4 @@ def test_events_csv_has_units_in_every_numeric_header(duffing_result):
 
 def test_every_plot_of_the_report_has_a_legend_and_a_hover(duffing_result):
     from rotorsweep.pipeline.report import branch_result
-    assert_legend_hover_and_width(branch_result.figures(continuation.open_result(duffing_result[0]), "bokeh"))
+    assert_legend_hover_and_width(branch_result.figures(continuation_result.open_result(duffing_result[0]), "bokeh"))

@@ -4,7 +4,7 @@ map from its circle (a second method: the map iterated, not the collocation solv
 import numpy as np
 import pytest
 
-from rotorsweep.pipeline import cli, config, continuation, result_kinds, torus_branches
+from rotorsweep.pipeline import cli, config, continuation, continuation_result, result_kinds, torus_branches
 from tests.reference import torus_half_swing
 
 SCENE = "configs/filipkovsky2016_fig2b_tori.toml"
@@ -21,7 +21,7 @@ def result(tmp_path_factory):
 
 def test_the_result_holds_a_torus_branch_with_stability_and_error(result, capsys):
     d, _ = result
-    ds = continuation.open_result(d / "tori.nc")
+    ds = continuation_result.open_result(d / "tori.nc")
     assert ds["branch_kind"].values.tolist() == [1]
     n = int(ds["branch_points"].values[0])
     assert n >= 2 and ds["parameter"].values[0, n - 1] == pytest.approx(308.0)
@@ -44,7 +44,7 @@ def test_a_torus_point_against_a_long_scipy_transient(result):
     transient in time and phase; a swing varying smoothly over the torus is missed by each by
     ~(pi / 64)^2 / 2 ~ 1e-3 relative at most, hence the tolerance."""
     d, data = result
-    ds = continuation.open_result(d / "tori.nc")
+    ds = continuation_result.open_result(d / "tori.nc")
     k = 1
     j = list(ds["observable"].values).index("y_B")
     half_swing = torus_half_swing(data, ds, k)
@@ -62,14 +62,14 @@ def test_a_torus_line_that_does_not_start_is_an_empty_branch_with_a_reason(resul
     rec = torus_branches.torus_record(data.model, fam, built, run, 0)
     ds = continuation.to_dataset(data, pl, [(pl.lines[0], [rec])], {})
     assert ds["branch_points"].values.tolist() == [0] and ds["branch_end"].values.tolist() == [engine.START_FAILED]
-    assert "no torus" in continuation.describe(ds)
+    assert "no torus" in continuation_result.describe(ds)
 
 
 def test_each_torus_point_records_its_fourier_modes(result, capsys):
     """torus_modes: K of each point's 2K + 1 nodes, matching its non-NaN torus_nodes, within the
     adaptive bounds, with its CF attributes; `info` shows it beside the error estimate."""
     d, _ = result
-    ds = continuation.open_result(d / "tori.nc")
+    ds = continuation_result.open_result(d / "tori.nc")
     n = int(ds["branch_points"].values[0])
     modes = ds["torus_modes"].values[0, :n]
     held = (~np.isnan(ds["torus_nodes"].values[0, :n, :, 0])).sum(axis=1)
