@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from rotorsweep.pipeline import coexistence, config, continuation, continuation_result
 from tests import cfcheck
@@ -211,3 +212,28 @@ def test_events_csv_has_units_in_every_numeric_header(duffing_result):
 def test_every_plot_of_the_report_has_a_legend_and_a_hover(duffing_result):
     from rotorsweep.pipeline.report import branch_result
     assert_legend_hover_and_width(branch_result.figures(continuation_result.open_result(duffing_result[0]), "bokeh"))
+
+
+def test_the_branch_diagrams_show_the_report_s_observable_first_titled_as_plotted(duffing_result):
+    """A result whose report observable is not the model's first (as y_B of rigid_preloaded's
+    Filipkovsky scenes): Duffing's x with an observable u = 3 x put before it. The first max |o|
+    panel is x's, as the response panel above it, then u's; each titled and labelled by the
+    observable whose values it draws (x's own maximum, three times it for u: exact, a scaling)."""
+    from rotorsweep.pipeline.report import branch_result
+
+    ds = continuation_result.open_result(duffing_result[0])
+    per_observable = [v for v in ds.data_vars if "observable" in ds[v].dims]
+    with xr.set_options(keep_attrs=True):
+        u = (ds[per_observable] * 3.0).assign_coords(observable=["u"])
+    two = xr.merge([ds.drop_vars(per_observable + ["observable"]), xr.concat([u, ds[per_observable]], "observable")],
+                   combine_attrs="override")
+    assert two["observable"].values.tolist() == ["u", "x"] and two.attrs["report_observable"] == "x"
+    panels = [(caption, fig) for caption, _, fig in branch_result.figures(two, "bokeh")
+              if caption.startswith("Branch diagram")]
+    assert [caption for caption, _ in panels] == ["Branch diagram: max |x| over the orbit",
+                                                  "Branch diagram: max |u| over the orbit"]
+    x_max = np.nanmax(ds["amplitude_max"].values)
+    for (_, fig), name, factor in zip(panels, "xu", (1.0, 3.0)):
+        curves = [el for el in fig if type(el).__name__ == "Curve"]
+        assert {el.dimensions()[1].label for el in curves} == {f"max |{name}| [1]"}
+        assert np.nanmax(np.concatenate([el.dimension_values(1) for el in curves])) == factor * x_max

@@ -167,16 +167,24 @@ def _curves_map(hv, ds, backend):
     return hv.Overlay(elements).opts(show_grid=True, legend_position="right", **size, backend=backend)
 
 
+def branch_observables(ds):
+    """The observables of the max |o| branch diagrams: the report's (the response panel's) first,
+    then the model's first other one."""
+    obs = list(ds["observable"].values)
+    main = ds.attrs.get("report_observable") or obs[0]
+    return [main] + [o for o in obs if o != main][:1]
+
+
 def figures(ds, backend):
     """(caption, filename, figure) of each figure."""
     hv = style.holoviews()
-    obs = list(ds["observable"].values)
     units = _shown(1.0, ds["amplitude_max"].attrs.get("units", ""))[1]
-    main = ds.attrs.get("report_observable") or obs[0]
+    shown = branch_observables(ds)
+    main = shown[0]
     out = [(f"Response: half peak-to-peak of {main} over the orbit", f"response_{main}.png",
             _panel(hv, ds, main, f"half peak-to-peak {main} [{units}]", backend, kind="amplitude_half_pp"))]
     out += [(f"Branch diagram: max |{o}| over the orbit", f"branch_{o}.png",
-             _panel(hv, ds, o, f"max |{o}| [{units}]", backend)) for o in obs[:2]]
+             _panel(hv, ds, o, f"max |{o}| [{units}]", backend)) for o in shown]
     out.insert(1, ("Stability along the parameter: stable, none stable, bistable", "branch_stability_map.png",
                    _stability_map(hv, ds, backend)))
     if "curve" in ds.dims and ds.sizes["curve"]:
