@@ -1,6 +1,10 @@
 """`rotorsweep continue` with quasi-periodic forcing (both forcings of rigid_preloaded on): the
 torus branch end to end, in-process, and one point checked against iterates of the stroboscopic
 map from its circle (a second method: the map iterated, not the collocation solved)."""
+import contextlib
+import io
+import re
+
 import numpy as np
 import pytest
 
@@ -12,11 +16,35 @@ SCENE = "configs/filipkovsky2016_fig2b_tori.toml"
 
 @pytest.fixture(scope="module")
 def result(tmp_path_factory):
+    """(directory, scene) of the branch from 305 to 308 Hz, its stderr kept in directory/stderr.txt,
+    with a progress line at every point solved."""
     d = tmp_path_factory.mktemp("tori")
     text = open(SCENE).read().replace("stop = 315.0", "stop = 308.0")
     (d / "tori.toml").write_text(text)
-    assert cli.main(["continue", str(d / "tori.toml"), "-o", str(d / "tori.nc"), "--workers", "0"]) in (0, None)
+    stderr = io.StringIO()
+    with pytest.MonkeyPatch.context() as mp, contextlib.redirect_stderr(stderr):
+        mp.setattr(torus_branches, "PROGRESS_SECONDS", 0.0)
+        assert cli.main(["continue", str(d / "tori.toml"), "-o", str(d / "tori.nc"), "--workers", "0"]) in (0, None)
+    (d / "stderr.txt").write_text(stderr.getvalue())
     return d, config.parse_config(text).scene
+
+
+def test_a_torus_branch_shows_its_progress(result):
+    """A long torus branch is not silent (issue 38): `continue` in-process shows progress lines for
+    the torus branch on its stream and logs them, each naming the parameter reached, the points
+    solved, the Fourier modes and the locked ratios passed."""
+    d, _ = result
+    shown = [line for line in (d / "stderr.txt").read_text().splitlines() if "torus branch:" in line]
+    assert len(shown) >= 2
+    pattern = (r"torus branch: support_frequency ([0-9.]+) \(\d+% of 305 to 308\) after \S+, (\d+) points solved, "
+               r"(\d+) Fourier modes, locked ratios passed: ")
+    matches = [re.search(pattern, line) for line in shown]
+    assert all(matches)
+    reached = [float(m.group(1)) for m in matches]
+    assert min(reached) >= 305.0 - 1e-9 and max(reached) <= 308.0 + 1e-9
+    solved = [int(m.group(2)) for m in matches]
+    assert solved[0] == 1 and solved == sorted(set(solved))
+    assert sum("torus branch:" in line for line in open(d / "tori.nc.log")) == len(shown)
 
 
 def test_the_result_holds_a_torus_branch_with_stability_and_error(result, capsys):
