@@ -30,8 +30,6 @@ import xarray as xr
 from scipy.interpolate import CubicSpline
 
 from rotorsweep.pipeline import cluster, result_kinds, results
-from rotorsweep.pipeline.backbone_reader import (  # noqa: F401 (the readers, where they always were)
-    describe, open_result, table)
 from rotorsweep.pipeline.config import ConfigError, settings_problems
 from rotorsweep.kernels import nnm
 from rotorsweep.kernels.continuation import backbone as cb

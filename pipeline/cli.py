@@ -149,7 +149,8 @@ def cmd_modes(args):
     cfg = pipeline.as_config(args.config, whole_grid=False)
     if args.output:
         preflight.check(args.output)
-    if args.report:
+    if args.report:     # refused now as modes_report would refuse it after the analysis: a foreign directory
+        fileio.check_report_dir(args.report, None, overwrite=True)
         preflight.check_report(args.report)
     print(modes.command(cfg, config_mod.flag_values(_at(args.at), cfg.model), args.campbell, args.output, args.json,
                         args.report))

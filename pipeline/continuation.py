@@ -21,13 +21,8 @@ import numpy as np
 import xarray as xr
 
 from rotorsweep.pipeline import cluster, compute, result_kinds, results, schema, torus_branches
-from rotorsweep.pipeline.coexistence import (  # noqa: F401 (the continuation result's readers use these names)
-    bistable_intervals, branch_copy_of, coexistence, distinct_branches, distinct_events, event_copy_of, line_coexistence,
-    mark_copies, stability_classes,
-    stable_runs)
+from rotorsweep.pipeline.coexistence import line_coexistence, mark_copies
 from rotorsweep.pipeline.config import ConfigError, range_text, settings_problems
-from rotorsweep.pipeline.continuation_result import (  # noqa: F401 (the readers, where they always were)
-    describe, events_table, open_result)
 from rotorsweep.kernels import extrema
 from rotorsweep.kernels.continuation import arclength as al, solve_orbit, twoparam
 

@@ -127,7 +127,8 @@ _ANGULAR_DEFAULT_DEG = 26
 # different ball/groove pair than the one printed. `table_geometry` takes the printed values as
 # printed (nominal angle = a label, free angle from R1, R2, R_K, d: groove_free_angle), and so does
 # `preset("angular_contact_medium", angle, free_angle="geometry")`; `preset`'s default keeps the
-# label as the free angle (FREE_ANGLE_SOURCES), the reading jeffcott_clearance's scenes use.
+# label as the free angle (FREE_ANGLE_SOURCES), jeffcott_clearance's `bearing.free_angle = "nominal"`
+# (its default before model version 2).
 PRESETS = {
     "209": "Bai 2006 deep-groove ball bearing 209: D_m = 65.0 mm, D_b = 12.7 mm, "
            "r_i = r_o = 6.6 mm, 9 balls, E = 2.08e11 Pa, nu = 0.3; contact angle from clearance",

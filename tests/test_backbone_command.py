@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 
-from rotorsweep.pipeline import backbone, cli, compute, config, result_kinds
+from rotorsweep.pipeline import backbone, backbone_reader, cli, compute, config, result_kinds
 from tests import browser, cfcheck
 from tests.runlog_check import check_log
 from tests.browser import assert_renders, needs_chromium
@@ -55,7 +55,7 @@ def test_manifold_and_continuation_agree_at_fourth_order(axial_result):
     (2.4e-14 there): the lowest decade's slope was 3.67-3.77. Tolerance +-0.1: the noise is <= 1 %
     of the difference in the fitted decade (slope error ~0.01 / ln 10) and the next order,
     O(A^6), is (A / z0)^2 <= 1e-3 relative to it."""
-    ds = backbone.open_result(axial_result[0]).isel(speed=0)
+    ds = backbone_reader.open_result(axial_result[0]).isel(speed=0)
     a = ds["amplitude_grid"].values
     signed = ds["relative_difference"].values[0]
     d = np.abs(signed)
@@ -88,7 +88,7 @@ def test_manifold_and_continuation_agree_at_fourth_order(axial_result):
 
 
 def test_result_holds_the_continued_orbits_conservative_and_cf_units(axial_result):
-    ds = backbone.open_result(axial_result[0]).isel(speed=0)
+    ds = backbone_reader.open_result(axial_result[0]).isel(speed=0)
     assert ds.attrs["result_kind"] == "backbone"
     for name in ("frequency_manifold", "frequency_continuation", "point_frequency"):
         assert ds[name].attrs["units"] == "Hz"
@@ -186,7 +186,7 @@ def test_cf_checkers_find_no_error_and_units_are_stated(axial_result, tmp_path):
     assert sorted(messages["WARN"]) == [f"{n}: (5): Possible incorrect declaration of a coordinate variable."
                                         for n in ("monomial", "state")]
     assert cfcheck.ioos_failures(nc, tmp_path) == []
-    ds = backbone.open_result(nc)
+    ds = backbone_reader.open_result(nc)
     assert list(ds["state_units"].values) == ["m"] * 5 + ["m s-1"] * 5
     slave = list(ds["state"].values).index(json.loads(str(ds["surface_info"].values))["slave"])
     for name in ("surface_value", "orbit_slave", "orbit_on_surface"):
@@ -221,4 +221,4 @@ def test_the_screenshot_comparison_passes_a_window_1_px_off_and_fails_a_missing_
 
 def test_every_plot_of_the_report_has_a_legend_and_a_hover(axial_result):
     from rotorsweep.pipeline.report import backbone_result
-    assert_legend_hover_and_width(backbone_result.figures(backbone.open_result(axial_result[0]), "bokeh"))
+    assert_legend_hover_and_width(backbone_result.figures(backbone_reader.open_result(axial_result[0]), "bokeh"))

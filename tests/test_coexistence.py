@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from rotorsweep.pipeline import coexistence, config, continuation
+from rotorsweep.pipeline import coexistence, config, continuation, continuation_result
 from tests.reference import BaiPoint
 
 
@@ -75,30 +75,30 @@ def independent_count(spec, ds, clearance):
 
 def test_bai_15um_lists_each_orbit_once_and_claims_no_coexistence_between_copies(bai15):
     scene, ds = bai15
-    distinct = continuation.distinct_events(ds)
+    distinct = coexistence.distinct_events(ds)
     assert len(distinct) < ds.sizes["event"]         # the period-2 and -4 loops meet their points several times
     assert len(distinct) == independent_count(scene.model, ds, 15.2e-6)
     # one response peak per period: the period-1 curve's (between its folds), the period-2 and -4 loops'
     peaks = [e for e in distinct if ds["event_type"].values[e] == continuation.al.PEAK]
     assert sorted(ds["branch_periods"].values[ds["event_branch"].values[peaks]]) == [1, 2, 4]
-    assert len(continuation.events_table(ds)["type"]) == len(distinct)
+    assert len(continuation_result.events_table(ds)["type"]) == len(distinct)
     # the only coexistence: the period-1 fold pair (31.05-31.15 Hz), both outer arms stable
     folds = sorted(ds["event_parameter"].values[ds["event_type"].values == continuation.al.FOLD])
-    (iv,) = continuation.bistable_intervals(ds)
+    (iv,) = coexistence.bistable_intervals(ds)
     assert iv["branches"] == [0] and (iv["lo"], iv["hi"]) == pytest.approx(tuple(folds), rel=1e-12)
 
 
 def test_bai_19um_band_map_info_and_table_agree(bai19):
     _, ds = bai19
-    _, lines = continuation.stability_classes(ds)
+    _, lines = coexistence.stability_classes(ds)
     (pieces,) = lines.values()
-    rows = continuation.bistable_intervals(ds)
+    rows = coexistence.bistable_intervals(ds)
     width = 30.0
     bands = [(lo, hi) for lo, hi, n in pieces if n >= 2 and hi - lo > 1e-9 * width]
     covered = lambda ivs, x: any(lo <= x <= hi for lo, hi in ivs)  # noqa: E731
     for x in np.linspace(20.0, 50.0, 3001):
         assert covered(bands, x) == covered([(r["lo"], r["hi"]) for r in rows], x)
-    info = continuation.describe(ds)
+    info = continuation_result.describe(ds)
     assert info.count("two stable orbits coexist") == len(rows)
     for r in rows:
         assert f"{r['lo']:.10g} to {r['hi']:.10g}" in info
@@ -114,7 +114,7 @@ def test_bai_15um_lists_each_branch_once(bai15):
     such an event is its own."""
     scene, ds = bai15
     spec = scene.model
-    copy_of = continuation.branch_copy_of(ds)
+    copy_of = coexistence.branch_copy_of(ds)
     family = list(range(ds.sizes["branch"]))
 
     def root(b):
@@ -132,10 +132,10 @@ def test_bai_15um_lists_each_branch_once(bai15):
             family[max(root(b1), root(b2))] = min(root(b1), root(b2))
     expected = [root(b) for b in range(ds.sizes["branch"])]
     assert copy_of.tolist() == expected
-    assert len(continuation.distinct_branches(ds)) < ds.sizes["branch"]     # the loop is met twice
-    info = continuation.describe(ds)
-    assert f"({len(continuation.distinct_branches(ds))} distinct" in info
-    assert sum(line.startswith("  branch ") for line in info.splitlines()) == len(continuation.distinct_branches(ds))
+    assert len(coexistence.distinct_branches(ds)) < ds.sizes["branch"]     # the loop is met twice
+    info = continuation_result.describe(ds)
+    assert f"({len(coexistence.distinct_branches(ds))} distinct" in info
+    assert sum(line.startswith("  branch ") for line in info.splitlines()) == len(coexistence.distinct_branches(ds))
 
 
 def scipy_half_swing_slope(lam, guess, k, clearance, width=1e-4):
@@ -185,7 +185,7 @@ def test_bai_15um_period_2_peak_brackets_the_scipy_slope_zero(bai15):
     # runs, an outlier of the contact's C^1 each; 1e-4 before)
     lams4 = ds["event_parameter"].values[peaks_of(4)]
     assert len(lams4) >= 2 and np.ptp(lams4) <= coexistence.PEAK_RTOL * lams4.mean()
-    e = continuation.distinct_events(ds)[np.isin(continuation.distinct_events(ds), peaks)][0]
+    e = coexistence.distinct_events(ds)[np.isin(coexistence.distinct_events(ds), peaks)][0]
     lam = float(ds["event_parameter"].values[e])
     guess = ds["event_state"].values[e] * spec.to_physical(np.ones(spec.n_state), BaiPoint(lam, 15.2e-6).period)
     below, above = (scipy_half_swing_slope(lam * (1 + sign * 1e-7), guess, 2, 15.2e-6) for sign in (-1.0, 1.0))

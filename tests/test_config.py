@@ -65,6 +65,26 @@ def test_dependent_defaults_and_path():
     assert config.load_config(Path("configs/demo.toml")).path == "configs/demo.toml"
 
 
+@pytest.mark.parametrize("free_angle, version", [("", "2"), ('free_angle = "nominal"', "2"), ("", "1")])
+def test_jeffcott_angular_free_angle_is_the_geometry_s_unless_nominal_or_an_older_result(free_angle, version):
+    """angular_contact_medium's 26 deg row without clearance: by default the free angle of its printed
+    radii (cos a0 = (R1 + 2 R_K - R2) / (2 R_K - d), R1 = 16.0, R2 = 27.5399, R_K = 5.930, d = 11.510 mm
+    typed from the 2016 table: 23.86 deg), with free_angle = "nominal" the label, and so for a result
+    file of model version 1 that gives none (scene.of_result). A few flops on numbers of 1e-2 and the
+    degrees round trip: 1e-12 relative."""
+    from rotorsweep.pipeline import compute, scene
+
+    text = edit('preset = "209"', f'preset = "angular_contact_medium"\nnominal_angle = 26\n{free_angle}')
+    sc = scene.of_result(text, version)
+    used = compute.point_params(sc, {"speed": 50.0, "clearance": 0.0, "contact_angle": None,
+                                     "preload": 0.0}).derived["contact_angle_used"]
+    if free_angle or version == "1":
+        assert used == pytest.approx(26.0, rel=1e-12)
+    else:
+        geometry = np.degrees(np.arccos((16.0 + 2 * 5.930 - 27.5399) / (2 * 5.930 - 11.510)))
+        assert used == pytest.approx(geometry, rel=1e-12) and round(used, 2) == 23.86
+
+
 def edit(old, new):
     assert old in BASE
     return BASE.replace(old, new)

@@ -7,8 +7,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import xarray as xr
 
-from rotorsweep.pipeline import config, continuation
+from rotorsweep.pipeline import coexistence, config, continuation, continuation_result
 from tests import cfcheck
 from tests.runlog_check import check_log
 from tests.browser import assert_renders, needs_chromium
@@ -88,7 +89,7 @@ def test_continue_logs_the_phases_progress_and_time_of_run(duffing_result):
 def test_continue_writes_branches_and_folds(duffing_result):
     out, d, proc = duffing_result
     assert "[1/1]" in proc.stderr and "2 LP" in proc.stderr            # progress per line
-    ds = continuation.open_result(out)
+    ds = continuation_result.open_result(out)
     assert ds.attrs["parameter"] == "omega" and ds.sizes["branch"] == 1
     assert ds["branch_end"].values.tolist() == [al.LEFT_RANGE]
     kinds = ds["event_type"].values
@@ -112,7 +113,7 @@ def test_continue_writes_branches_and_folds(duffing_result):
     half = ds["amplitude_half_pp"].values[0, int(ds["event_point"].values[folds[0]])]
     assert 0.5 < amp < 2.0 and half == pytest.approx(ds["amplitude_max"].values[0, int(ds["event_point"].values[folds[0]]), 0], rel=2e-3)
     # the hardening resonance is bistable exactly between its folds (the outer branches stable)
-    (iv,) = continuation.bistable_intervals(ds)
+    (iv,) = coexistence.bistable_intervals(ds)
     assert (iv["lo"], iv["hi"]) == tuple(sorted(ds["event_parameter"].values[folds]))
     # plain xarray keeps the flags integer
     import xarray as xr
@@ -210,4 +211,29 @@ def test_events_csv_has_units_in_every_numeric_header(duffing_result):
 
 def test_every_plot_of_the_report_has_a_legend_and_a_hover(duffing_result):
     from rotorsweep.pipeline.report import branch_result
-    assert_legend_hover_and_width(branch_result.figures(continuation.open_result(duffing_result[0]), "bokeh"))
+    assert_legend_hover_and_width(branch_result.figures(continuation_result.open_result(duffing_result[0]), "bokeh"))
+
+
+def test_the_branch_diagrams_show_the_report_s_observable_first_titled_as_plotted(duffing_result):
+    """A result whose report observable is not the model's first (as y_B of rigid_preloaded's
+    Filipkovsky scenes): Duffing's x with an observable u = 3 x put before it. The first max |o|
+    panel is x's, as the response panel above it, then u's; each titled and labelled by the
+    observable whose values it draws (x's own maximum, three times it for u: exact, a scaling)."""
+    from rotorsweep.pipeline.report import branch_result
+
+    ds = continuation_result.open_result(duffing_result[0])
+    per_observable = [v for v in ds.data_vars if "observable" in ds[v].dims]
+    with xr.set_options(keep_attrs=True):
+        u = (ds[per_observable] * 3.0).assign_coords(observable=["u"])
+    two = xr.merge([ds.drop_vars(per_observable + ["observable"]), xr.concat([u, ds[per_observable]], "observable")],
+                   combine_attrs="override")
+    assert two["observable"].values.tolist() == ["u", "x"] and two.attrs["report_observable"] == "x"
+    panels = [(caption, fig) for caption, _, fig in branch_result.figures(two, "bokeh")
+              if caption.startswith("Branch diagram")]
+    assert [caption for caption, _ in panels] == ["Branch diagram: max |x| over the orbit",
+                                                  "Branch diagram: max |u| over the orbit"]
+    x_max = np.nanmax(ds["amplitude_max"].values)
+    for (_, fig), name, factor in zip(panels, "xu", (1.0, 3.0)):
+        curves = [el for el in fig if type(el).__name__ == "Curve"]
+        assert {el.dimensions()[1].label for el in curves} == {f"max |{name}| [1]"}
+        assert np.nanmax(np.concatenate([el.dimension_values(1) for el in curves])) == factor * x_max

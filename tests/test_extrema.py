@@ -8,7 +8,7 @@ import pytest
 from scipy.integrate import quad, solve_ivp
 from scipy.optimize import minimize_scalar
 
-from rotorsweep.pipeline import compute, config, continuation, scene
+from rotorsweep.pipeline import compute, config, continuation, continuation_result, scene
 from rotorsweep.kernels import extrema, integrators as ig, models
 from rotorsweep.kernels.continuation import arclength as al, solve_orbit
 
@@ -232,10 +232,10 @@ def test_peak_in_info_events_table_and_csv():
     pl = continuation.plan(cfg.scene)
     lines = [(where, continuation.continue_line(cfg.scene, where)) for where in pl.lines]
     ds = continuation.to_dataset(cfg.scene, pl, lines, {})
-    info = continuation.describe(ds)
+    info = continuation_result.describe(ds)
     w = float(ds["event_parameter"].values[0])
     assert f"peak on branch 0: omega {w:.10g}" in info and "half peak-to-peak x 3.00375" in info and "stable" in info
-    cols = continuation.events_table(ds)
+    cols = continuation_result.events_table(ds)
     assert cols["type"] == ["PK"] and cols["stable"] == [1] and cols["omega"] == [w]
     assert cols["amplitude_max_x"] == ds["event_amplitude_max"].values[:, 0].tolist()
     assert cols["amplitude_half_pp_x"] == ds["event_amplitude_half_pp"].values[:, 0].tolist()

@@ -14,7 +14,7 @@ from scipy.integrate import solve_ivp
 from rotorsweep.kernels import torus as tr
 from rotorsweep.kernels.continuation import engine, events as ev
 from rotorsweep.kernels.models import rigid_preloaded_kernels as rp
-from rotorsweep.pipeline import cli, config, continuation, torus_branches
+from rotorsweep.pipeline import cli, config, continuation, continuation_result, torus_branches
 
 SCENE = "configs/filipkovsky2016_torus_fold.toml"
 STABLE, UNSTABLE, UNDECIDED = (torus_branches.TORUS_STATUS[k] for k in (tr.STABLE, tr.UNSTABLE, tr.UNDECIDED))
@@ -30,7 +30,7 @@ pytestmark = pytest.mark.slow
 def result(tmp_path_factory):
     d = tmp_path_factory.mktemp("torus_fold")
     assert cli.main(["continue", SCENE, "-o", str(d / "fold.nc"), "--workers", "0"]) in (0, None)
-    ds = continuation.open_result(d / "fold.nc")
+    ds = continuation_result.open_result(d / "fold.nc")
     return ds, config.parse_config(open(SCENE).read()).scene
 
 

@@ -3,7 +3,7 @@ printed): each validates with the law as printed and its bearing row, and one of
 short range follows a torus whose half-swing a long scipy DOP853 run from its circle confirms."""
 import pytest
 
-from rotorsweep.pipeline import cli, config, continuation, torus_branches
+from rotorsweep.pipeline import cli, config, continuation, continuation_result, torus_branches
 from rotorsweep.pipeline import scene as scene_mod
 from tests.reference import torus_half_swing
 
@@ -28,7 +28,7 @@ def test_fig4b_starts_a_stable_torus_confirmed_by_a_transient(tmp_path):
     text = open("configs/filipkovsky2016_fig4b.toml").read().replace("stop = 1300.0", "stop = 100.4")
     (tmp_path / "fig4b.toml").write_text(text)
     assert cli.main(["continue", str(tmp_path / "fig4b.toml"), "-o", str(tmp_path / "fig4b.nc"), "--workers", "0"]) in (0, None)
-    ds = continuation.open_result(tmp_path / "fig4b.nc")
+    ds = continuation_result.open_result(tmp_path / "fig4b.nc")
     n = int(ds["branch_points"].values[0])
     assert ds["branch_kind"].values.tolist() == [1] and (ds["torus_status"].values[0, :n] == 1).all()
     j = list(ds["observable"].values).index("y_B")

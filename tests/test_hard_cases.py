@@ -116,6 +116,7 @@ model = "jeffcott_clearance"
 [bearing]
 preset = "angular_contact_medium"
 nominal_angle = 26
+free_angle = "nominal"
 stiffness = 1.0e10
 preload = 300.0
 [rotor]

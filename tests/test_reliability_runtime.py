@@ -261,7 +261,7 @@ def test_an_output_under_a_file_is_refused_before_any_work(command, small_config
     assert rc == 2 and "afile is not a directory" in err and ".tmp" not in err, err
 
 
-@pytest.mark.parametrize("command", ["run", "continue", "backbone"])
+@pytest.mark.parametrize("command", COMMANDS)
 def test_a_conflicting_report_directory_is_refused_before_any_work(command, small_config, tmp_path, capsys, no_work):
     mine = tmp_path / "mine"
     mine.mkdir()

@@ -236,7 +236,7 @@ def test_jeffcott_preload_constant_filipkovsky_is_the_law_as_printed_without_cle
     """jeffcott_clearance's `preload_constant = "filipkovsky"` is bearing.as_printed_state (its
     thrust 1.5 P0), and a clearance with it is a config error (the printed law has none)."""
     text = ('[scene]\nname = "j"\nmodel = "jeffcott_clearance"\n[bearing]\npreset = "angular_contact_medium"\n'
-            'nominal_angle = 15\npreload = 300.0\npreload_constant = "filipkovsky"\n{extra}[sweep]\nspeed = [100.0]\n')
+            'nominal_angle = 15\nfree_angle = "nominal"\npreload = 300.0\npreload_constant = "filipkovsky"\n{extra}[sweep]\nspeed = [100.0]\n')
     with pytest.raises(config.ConfigError, match="has no clearance"):
         config.parse_config(text.format(extra="clearance = 1e-6\n"))
     cfg = config.parse_config(text.format(extra=""))

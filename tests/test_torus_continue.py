@@ -1,10 +1,14 @@
 """`rotorsweep continue` with quasi-periodic forcing (both forcings of rigid_preloaded on): the
 torus branch end to end, in-process, and one point checked against iterates of the stroboscopic
 map from its circle (a second method: the map iterated, not the collocation solved)."""
+import contextlib
+import io
+import re
+
 import numpy as np
 import pytest
 
-from rotorsweep.pipeline import cli, config, continuation, result_kinds, torus_branches
+from rotorsweep.pipeline import cli, config, continuation, continuation_result, result_kinds, torus_branches
 from tests.reference import torus_half_swing
 
 SCENE = "configs/filipkovsky2016_fig2b_tori.toml"
@@ -12,16 +16,40 @@ SCENE = "configs/filipkovsky2016_fig2b_tori.toml"
 
 @pytest.fixture(scope="module")
 def result(tmp_path_factory):
+    """(directory, scene) of the branch from 305 to 308 Hz, its stderr kept in directory/stderr.txt,
+    with a progress line at every point solved."""
     d = tmp_path_factory.mktemp("tori")
     text = open(SCENE).read().replace("stop = 315.0", "stop = 308.0")
     (d / "tori.toml").write_text(text)
-    assert cli.main(["continue", str(d / "tori.toml"), "-o", str(d / "tori.nc"), "--workers", "0"]) in (0, None)
+    stderr = io.StringIO()
+    with pytest.MonkeyPatch.context() as mp, contextlib.redirect_stderr(stderr):
+        mp.setattr(torus_branches, "PROGRESS_SECONDS", 0.0)
+        assert cli.main(["continue", str(d / "tori.toml"), "-o", str(d / "tori.nc"), "--workers", "0"]) in (0, None)
+    (d / "stderr.txt").write_text(stderr.getvalue())
     return d, config.parse_config(text).scene
+
+
+def test_a_torus_branch_shows_its_progress(result):
+    """A long torus branch is not silent (issue 38): `continue` in-process shows progress lines for
+    the torus branch on its stream and logs them, each naming the parameter reached, the points
+    solved, the Fourier modes and the locked ratios passed."""
+    d, _ = result
+    shown = [line for line in (d / "stderr.txt").read_text().splitlines() if "torus branch:" in line]
+    assert len(shown) >= 2
+    pattern = (r"torus branch: support_frequency ([0-9.]+) \(\d+% of 305 to 308\) after \S+, (\d+) points solved, "
+               r"(\d+) Fourier modes, locked ratios passed: ")
+    matches = [re.search(pattern, line) for line in shown]
+    assert all(matches)
+    reached = [float(m.group(1)) for m in matches]
+    assert min(reached) >= 305.0 - 1e-9 and max(reached) <= 308.0 + 1e-9
+    solved = [int(m.group(2)) for m in matches]
+    assert solved[0] == 1 and solved == sorted(set(solved))
+    assert sum("torus branch:" in line for line in open(d / "tori.nc.log")) == len(shown)
 
 
 def test_the_result_holds_a_torus_branch_with_stability_and_error(result, capsys):
     d, _ = result
-    ds = continuation.open_result(d / "tori.nc")
+    ds = continuation_result.open_result(d / "tori.nc")
     assert ds["branch_kind"].values.tolist() == [1]
     n = int(ds["branch_points"].values[0])
     assert n >= 2 and ds["parameter"].values[0, n - 1] == pytest.approx(308.0)
@@ -44,7 +72,7 @@ def test_a_torus_point_against_a_long_scipy_transient(result):
     transient in time and phase; a swing varying smoothly over the torus is missed by each by
     ~(pi / 64)^2 / 2 ~ 1e-3 relative at most, hence the tolerance."""
     d, data = result
-    ds = continuation.open_result(d / "tori.nc")
+    ds = continuation_result.open_result(d / "tori.nc")
     k = 1
     j = list(ds["observable"].values).index("y_B")
     half_swing = torus_half_swing(data, ds, k)
@@ -62,14 +90,14 @@ def test_a_torus_line_that_does_not_start_is_an_empty_branch_with_a_reason(resul
     rec = torus_branches.torus_record(data.model, fam, built, run, 0)
     ds = continuation.to_dataset(data, pl, [(pl.lines[0], [rec])], {})
     assert ds["branch_points"].values.tolist() == [0] and ds["branch_end"].values.tolist() == [engine.START_FAILED]
-    assert "no torus" in continuation.describe(ds)
+    assert "no torus" in continuation_result.describe(ds)
 
 
 def test_each_torus_point_records_its_fourier_modes(result, capsys):
     """torus_modes: K of each point's 2K + 1 nodes, matching its non-NaN torus_nodes, within the
     adaptive bounds, with its CF attributes; `info` shows it beside the error estimate."""
     d, _ = result
-    ds = continuation.open_result(d / "tori.nc")
+    ds = continuation_result.open_result(d / "tori.nc")
     n = int(ds["branch_points"].values[0])
     modes = ds["torus_modes"].values[0, :n]
     held = (~np.isnan(ds["torus_nodes"].values[0, :n, :, 0])).sum(axis=1)

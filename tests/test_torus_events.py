@@ -8,7 +8,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from rotorsweep.pipeline import cli, compute, config, continuation, torus_branches
+from rotorsweep.pipeline import cli, compute, config, continuation, continuation_result, torus_branches
 from rotorsweep.kernels import integrators as ig, torus as tr
 from rotorsweep.kernels.continuation import events as ev, tori
 
@@ -23,7 +23,7 @@ def result(tmp_path_factory):
         "support_frequency = [305.0]", "support_frequency = [145.0]")
     (d / "locked.toml").write_text(text)
     assert cli.main(["continue", str(d / "locked.toml"), "-o", str(d / "locked.nc"), "--workers", "0"]) in (0, None)
-    return continuation.open_result(d / "locked.nc"), config.parse_config(text).scene
+    return continuation_result.open_result(d / "locked.nc"), config.parse_config(text).scene
 
 
 def test_the_branch_lists_the_locked_ratio_in_the_events_and_info(result, capsys, tmp_path):
@@ -34,7 +34,7 @@ def test_the_branch_lists_the_locked_ratio_in_the_events_and_info(result, capsys
     assert ds["event_parameter"].values[k[0]] == pytest.approx(0.6 * OMEGA, rel=1e-12)
     note = str(ds["event_note"].values[k[0]])
     assert note.startswith("3/5: torus stable") and "5 shaft turns linked" in note
-    table = continuation.events_table(ds)
+    table = continuation_result.events_table(ds)
     assert table["type"] == ["locked"] and table["note"] == [note] and table["stable"] == [1]
     assert table["periods"] == [5] and ds["branch_periods"].values.tolist() == [1]    # the linked orbit's q
     assert ds["event_amplitude_half_pp"].values[k[0]].max() > 0
@@ -177,7 +177,7 @@ def test_the_locked_marker_sits_on_the_torus_curve_and_its_hover_reads_the_linke
     assert lo <= marker_y <= hi
     assert orbit_y == pytest.approx(ds["event_amplitude_half_pp"].values[k, j] * 1e6, rel=1e-12)
     assert orbit_y <= marker_y * (1 + 2e-4) + (hi - lo)
-    assert continuation.events_table(ds)["amplitudes_of"] == ["linked orbit at theta = 0"]
+    assert continuation_result.events_table(ds)["amplitudes_of"] == ["linked orbit at theta = 0"]
     hovers = [t for _, plot in plots_of(response) for tool in plot.tools if hasattr(tool, "tooltips")
               for t in (tool.tooltips or [])]
     assert any(str(label).startswith("linked orbit at θ = 0") for label, _ in hovers)

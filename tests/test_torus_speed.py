@@ -5,7 +5,7 @@ a long scipy DOP853 run from its circle (a second method: the flow, not the coll
 import numpy as np
 import pytest
 
-from rotorsweep.pipeline import cli, config, continuation
+from rotorsweep.pipeline import cli, config, continuation_result
 from rotorsweep.kernels.continuation import events as ev
 from tests.reference import torus_half_swing
 
@@ -21,7 +21,7 @@ def result(tmp_path_factory):
         "support_frequency = [305.0]", f"support_frequency = [{SUPPORT}]")
     (d / "speed.toml").write_text(text)
     assert cli.main(["continue", str(d / "speed.toml"), "-o", str(d / "speed.nc"), "--workers", "0"]) in (0, None)
-    return continuation.open_result(d / "speed.nc"), config.parse_config(text).scene
+    return continuation_result.open_result(d / "speed.nc"), config.parse_config(text).scene
 
 
 def test_tori_are_followed_in_the_shaft_speed_through_a_locked_ratio(result):

@@ -9,7 +9,7 @@ import json
 
 import numpy as np
 
-from rotorsweep.pipeline import backbone, query
+from rotorsweep.pipeline import backbone, backbone_reader, query
 from rotorsweep.pipeline.report import branches, page, style
 
 UM = 1e6
@@ -186,7 +186,7 @@ def figures(ds, backend, forced=None):
 
 
 def _header_html(ds, title):
-    lines = backbone.describe(ds).splitlines()
+    lines = backbone_reader.describe(ds).splitlines()
     return (f"<h1>{html.escape(title)}</h1><p>{html.escape(lines[0])}<br>{html.escape(lines[1])}</p>"
             "<p>Amplitude: the first harmonic of the master coordinate's displacement (the largest in the "
             "mode). Manifold: Shaw-Pierre invariant manifold to cubic order, backbone to second order "
@@ -198,7 +198,7 @@ def make_report(ds, out_dir, title=None, forced=None):
     rotorsweep.pipeline.report.make_report does. forced: a continuation result of a forced response along a
     frequency (the backbones are drawn over it; `check_forced` first)."""
     title = title or f"Backbone report: {ds.attrs.get('scene', '')}"
-    cols = backbone.table(ds)
+    cols = backbone_reader.table(ds)
     return page.write_result_report(out_dir, title, _header_html(ds, title),
                                     lambda backend: figures(ds, backend, forced), page.columns_html("Modes", cols, 6),
                                     ds.attrs.get("config_toml", ""), "modes.csv", query.render(cols, "csv"))

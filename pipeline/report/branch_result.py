@@ -10,7 +10,7 @@ import html
 
 import numpy as np
 
-from rotorsweep.pipeline import continuation, query, schema
+from rotorsweep.pipeline import coexistence, continuation_result, query, schema
 from rotorsweep.pipeline.report import branches, harmonics, page, style
 from rotorsweep.pipeline.report.figures import bode, locked_marks, mode_campbell, mode_shapes, torus_detail
 from rotorsweep.kernels.continuation import arclength as al
@@ -44,7 +44,7 @@ NOT_AMPLITUDES = ("max_abs_multiplier", "torus_exponent")     # the panels' quan
 
 
 def _panel(hv, ds, yname, ylabel, backend, ref_one=False, kind="amplitude_max"):
-    """All distinct branches (a copy of another, continuation.branch_copy_of, drawn once): y (an
+    """All distinct branches (a copy of another, coexistence.branch_copy_of, drawn once): y (an
     observable's `kind` of amplitude, or max |multiplier|) against the parameter, solid where
     stable, dashed where not, each with its located events (branches.branch_elements, shared
     with the sweep report's branch diagrams)."""
@@ -56,7 +56,7 @@ def _panel(hv, ds, yname, ylabel, backend, ref_one=False, kind="amplitude_max"):
     amplitude = yname not in NOT_AMPLITUDES
     event_ys = locked_marks.on_curve(ds, xs, ys, event_xs, orbit_ys) if amplitude else orbit_ys
     elements = []
-    for b in continuation.distinct_branches(ds):
+    for b in coexistence.distinct_branches(ds):
         mine = ds["event_branch"].values == b
         special = [(x, y, al.EVENT_LABELS[int(k)]) for x, y, k in
                    zip(event_xs[mine], event_ys[mine], ds["event_type"].values[mine])]
@@ -110,7 +110,7 @@ CLASS_COLOURS = {0: ("no stable orbit on the branches", "#D55E00"), 1: ("stable"
 def _stability_map(hv, ds, backend):
     """One band per line: the parameter range split where the number of stable orbits on the
     line's branches changes (none / one / two or more: bistable)."""
-    keys, lines = continuation.stability_classes(ds)
+    keys, lines = coexistence.stability_classes(ds)
     par = ds.attrs["parameter"]
     x, _, xlabel = parameter_axis(ds)
     scale = _parameter_scale(ds)
@@ -144,7 +144,7 @@ def _curves_map(hv, ds, backend):
     factor, unit = _shown(1.0, ds["curve_second"].attrs.get("units", ""))
     xdim = hv.Dimension(par, label=f"{par} [{ds['parameter'].attrs.get('units', '')}]")
     ydim = hv.Dimension(second, label=f"{second} [{unit}]")
-    keys, lines = continuation.stability_classes(ds)
+    keys, lines = coexistence.stability_classes(ds)
     elements = []
     if keys == [second]:
         values = np.array(sorted(w[0] for w in lines)) * factor
@@ -167,16 +167,24 @@ def _curves_map(hv, ds, backend):
     return hv.Overlay(elements).opts(show_grid=True, legend_position="right", **size, backend=backend)
 
 
+def branch_observables(ds):
+    """The observables of the max |o| branch diagrams: the report's (the response panel's) first,
+    then the model's first other one."""
+    obs = list(ds["observable"].values)
+    main = ds.attrs.get("report_observable") or obs[0]
+    return [main] + [o for o in obs if o != main][:1]
+
+
 def figures(ds, backend):
     """(caption, filename, figure) of each figure."""
     hv = style.holoviews()
-    obs = list(ds["observable"].values)
     units = _shown(1.0, ds["amplitude_max"].attrs.get("units", ""))[1]
-    main = ds.attrs.get("report_observable") or obs[0]
+    shown = branch_observables(ds)
+    main = shown[0]
     out = [(f"Response: half peak-to-peak of {main} over the orbit", f"response_{main}.png",
             _panel(hv, ds, main, f"half peak-to-peak {main} [{units}]", backend, kind="amplitude_half_pp"))]
     out += [(f"Branch diagram: max |{o}| over the orbit", f"branch_{o}.png",
-             _panel(hv, ds, o, f"max |{o}| [{units}]", backend)) for o in obs[:2]]
+             _panel(hv, ds, o, f"max |{o}| [{units}]", backend)) for o in shown]
     out.insert(1, ("Stability along the parameter: stable, none stable, bistable", "branch_stability_map.png",
                    _stability_map(hv, ds, backend)))
     if "curve" in ds.dims and ds.sizes["curve"]:
@@ -232,21 +240,21 @@ def with_units(ds, cols):
 
 
 def _bistable_html(ds):
-    rows = continuation.bistable_intervals(ds)
+    rows = coexistence.bistable_intervals(ds)
     if not rows:
         return "<h2>Coexisting stable orbits</h2><p>none on the computed branches</p>"
     return page.columns_html("Coexisting stable orbits", with_units(ds, {k: [r[k] for r in rows] for k in rows[0]}))
 
 
 def _events_html(ds):
-    cols = with_units(ds, continuation.events_table(ds))
+    cols = with_units(ds, continuation_result.events_table(ds))
     if not cols["type"]:
         return "<h2>Located points</h2><p>no fold, period doubling, Neimark-Sacker point or peak on the branches</p>"
     return page.columns_html("Located points", cols)
 
 
 def _header_html(ds, title):
-    lines = continuation.describe(ds).splitlines()
+    lines = continuation_result.describe(ds).splitlines()
     items = "".join(f"<li>{html.escape(s.strip())}</li>" for s in lines[2:])
     return (f"<h1>{html.escape(title)}</h1><p>{html.escape(lines[0])}<br>{html.escape(lines[1])}</p><ul>{items}</ul>"
             "<p>Stable branches solid, unstable dashed; LP: fold (limit point), PD: period doubling, "
@@ -260,4 +268,4 @@ def make_report(ds, out_dir, title=None):
     title = title or f"Continuation report: {ds.attrs.get('scene', '')}"
     return page.write_result_report(out_dir, title, _header_html(ds, title), lambda backend: figures(ds, backend),
                                     _events_html(ds) + _bistable_html(ds), ds.attrs.get("config_toml", ""),
-                                    "events.csv", query.render(with_units(ds, continuation.events_table(ds)), "csv"))
+                                    "events.csv", query.render(with_units(ds, continuation_result.events_table(ds)), "csv"))

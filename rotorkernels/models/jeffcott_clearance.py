@@ -77,12 +77,13 @@ def static_guess(p):
 
 
 @lru_cache(maxsize=8)
-def _geometry(preset, nominal_angle):
-    return bearing.preset(preset, nominal_angle)
+def _geometry(preset, nominal_angle, free_angle):
+    return bearing.preset(preset, nominal_angle, free_angle=free_angle)
 
 
 def _free_angle(geom, clearance, contact_angle_deg):
-    """The unloaded contact angle: the user's, else from the clearance (Bai eq. 6), else nominal."""
+    """The unloaded contact angle: the user's, else from the clearance (Bai eq. 6), else the
+    preset's (bearing.free_angle: its groove geometry or its row's label)."""
     if contact_angle_deg is not None and np.isfinite(contact_angle_deg):
         return np.radians(contact_angle_deg)
     if clearance > 0:
@@ -101,7 +102,7 @@ def _stiffness(option, geom, alpha):
 def build(v):
     """Kernel parameters at one point from the scene's values (SI; contact_angle in degrees,
     None/NaN when not given: then from the clearance)."""
-    geom = _geometry(v["preset"], v.get("nominal_angle"))
+    geom = _geometry(v["preset"], v.get("nominal_angle"), v["free_angle"])
     clearance = v.get("clearance") or 0.0
     preload = v.get("preload") or 0.0
     alpha0 = _free_angle(geom, clearance, v.get("contact_angle"))
@@ -148,7 +149,7 @@ def _clearance_problem(clearance, b):
     """Error text when a clearance exceeds what the preset's geometry allows, else None: the
     groove-centre distance A = r_i + r_o - D_b, where Bai's eq. 6 free contact angle reaches
     90 deg (209: 0.5 mm). Rounded to 6 digits, as A carries the float noise of its sum."""
-    limit = _geometry(b["preset"], b["nominal_angle"]).groove_center_distance
+    limit = _geometry(b["preset"], b["nominal_angle"], b["free_angle"]).groove_center_distance
     if clearance <= limit:
         return None
     return (f"must be <= {limit:.6g} m for bearing.preset \"{b['preset']}\" "
@@ -166,6 +167,8 @@ SPEC = ModelSpec(
     name="jeffcott_clearance",
     id=0,
     module=kernel_module(__name__),
+    version="2",    # 2: angular_contact_medium's free angle from its groove geometry (bearing.free_angle)
+    older_defaults=(("2", "bearing", "free_angle", "nominal"),),
     n_position=2,
     description="Bai 2006: 2-DOF rigid rotor on one ball bearing with clearance or preload",
     parameters=(
@@ -181,6 +184,9 @@ SPEC = ModelSpec(
                   help="bearing geometry"),
         Parameter("choice", None, name="nominal_angle", section="bearing", choices=(12, 15, 26, 36, 40),
                   unit="degree", help="nominal contact angle of angular_contact_medium"),
+        Parameter("choice", "geometry", name="free_angle", section="bearing", choices=bearing.FREE_ANGLE_SOURCES,
+                  help="free contact angle of angular_contact_medium without clearance: geometry (from the "
+                       "printed R1, R2, R_K, d; 23.86 deg for the 26 deg row) or nominal (the row's label)"),
         Parameter("float_or", "hertz", name="stiffness", section="bearing", choices=("hertz", "bai2006"),
                   lo=0, lo_open=True, unit="N m-1.5", help="ball contact constant K"),
         Parameter("choice", "consistent", name="preload_constant", section="bearing",
