@@ -7,7 +7,7 @@ The file is the one xarray's `to_netcdf(engine="netcdf4")` writes with the resul
 The CF rules xarray applies on the way are the ones reproduced here:
 - text as UTF-8 character arrays: a trailing dimension `string<N>` (N: the longest value in bytes,
   at least 1) and the attribute `_Encoding = "utf-8"`; an empty object array is written as float64;
-- numbers of a data variable compressed (zlib level 1 with shuffle), floats with `_FillValue` NaN,
+- numbers of a data variable compressed (cube.COMPRESSION), floats with `_FillValue` NaN,
   integers without a fill value (a plain xarray.open_dataset keeps the flags integer); coordinates
   neither compressed nor filled;
 - a coordinate that is not a dimension named in the `coordinates` attribute of every data variable
@@ -18,7 +18,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-COMPRESSION = {"compression": "zlib", "complevel": 1, "shuffle": True}
+from rotorsweep.pipeline import cube
+
 # xarray's netCDF4 backend passes these to createVariable before a variable's own encoding
 _DEFAULTS = {"zlib": False, "complevel": 4, "shuffle": True, "fletcher32": False, "contiguous": False,
              "chunksizes": None, "endian": "native", "least_significant_digit": None}
@@ -94,7 +95,7 @@ def _encode_variable(dims, data, attrs, is_coord):
     if is_coord:
         return _Encoded(dims, data, attrs, None, {})
     fill = data.dtype.type(np.nan) if data.dtype.kind == "f" else None
-    return _Encoded(dims, data, attrs, fill, COMPRESSION)
+    return _Encoded(dims, data, attrs, fill, cube.COMPRESSION)
 
 
 def _dims_of(dims):
