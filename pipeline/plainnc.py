@@ -16,6 +16,7 @@ Sweep cubes, whose Dask-backed assembly needs xarray anyway, keep xarray's write
 """
 from typing import NamedTuple
 
+import netCDF4
 import numpy as np
 
 from rotorsweep.pipeline import cube
@@ -55,13 +56,12 @@ class _Encoded(NamedTuple):
 
 def write(plain, path):
     """Write `plain` as a netCDF-4 file at `path` (replaced if there)."""
-    import netCDF4
     encoded = _encode(plain)
     with netCDF4.Dataset(path, mode="w", format="NETCDF4") as nc:
         for dim, size in _dimensions(encoded).items():
             nc.createDimension(dim, size)
-        for name, attrs in _global_attrs(plain).items():
-            _set_attribute(nc, name, attrs)
+        for name, value in _global_attrs(plain).items():
+            _set_attribute(nc, name, value)
         for name, var in encoded.items():
             out = nc.createVariable(name, var.data.dtype, var.dims,
                                     **{**_DEFAULTS, **var.filters, "fill_value": var.fill})
