@@ -26,10 +26,9 @@ import sys
 from dataclasses import dataclass
 
 import numpy as np
-import xarray as xr
 from scipy.interpolate import CubicSpline
 
-from rotorsweep.pipeline import cluster, result_kinds, results
+from rotorsweep.pipeline import cluster, plainnc, result_kinds, results
 from rotorsweep.pipeline.config import ConfigError, settings_problems
 from rotorsweep.kernels import nnm
 from rotorsweep.kernels.continuation import backbone as cb
@@ -300,7 +299,12 @@ def surface_record(system, man, amplitude):
 # --- the result ----------------------------------------------------------------------------------
 
 def to_dataset(scene, pl, lines, provenance):
-    """The backbone result (schema: result_kinds.BACKBONE_VARIABLES) of a scene: lines = [line
+    """The backbone result as an xarray.Dataset (to_result's variables; imports xarray)."""
+    return to_result(scene, pl, lines, provenance).to_xarray()
+
+
+def to_result(scene, pl, lines, provenance):
+    """The backbone result's plain variables (plainnc.Plain; schema: result_kinds.BACKBONE_VARIABLES) of a scene: lines = [line
     dicts] in plan order, dims (swept axes..., mode, ...)."""
     spec = scene.model
     system = spec.polynomial(line_values(scene, pl.lines[0]))
@@ -356,8 +360,7 @@ def to_dataset(scene, pl, lines, provenance):
     coords["state_units"] = ("state", list(units), {"long_name": "units of each state component"})
     global_attrs = {**provenance, "result_kind": result_kinds.BACKBONE, "Conventions": "CF-1.10",
                     "coordinates_units": json.dumps(list(system.units))}
-    return xr.Dataset(result_kinds.variables(result_kinds.BACKBONE, values, attrs, pl.axes), coords=coords,
-                      attrs=global_attrs)
+    return plainnc.Plain(result_kinds.variables(result_kinds.BACKBONE, values, attrs, pl.axes), coords, global_attrs)
 
 
 def _axis_attrs(spec, axis):
@@ -404,7 +407,7 @@ def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.s
                             f"{'' if pl.continuation else ' (manifold only)'}")
         lines = results.run_lines(cfg, backbone_line, pl.lines, workers, scheduler, stream, _line_summary, parts,
                                   unit="backbone_line")
-        return to_dataset(cfg.scene, pl, lines, cluster.provenance(cfg, result_kinds.BACKBONE))
+        return to_result(cfg.scene, pl, lines, cluster.provenance(cfg, result_kinds.BACKBONE))
     return results.run_result(cfg, result_kinds.BACKBONE, output, dataset, stream, overwrite, scheduler, resume)
 
 

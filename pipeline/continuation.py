@@ -18,9 +18,8 @@ import sys
 from dataclasses import dataclass
 
 import numpy as np
-import xarray as xr
 
-from rotorsweep.pipeline import cluster, compute, result_kinds, results, schema, torus_branches
+from rotorsweep.pipeline import cluster, compute, plainnc, result_kinds, results, schema, torus_branches
 from rotorsweep.pipeline.coexistence import line_coexistence, mark_copies
 from rotorsweep.pipeline.config import ConfigError, range_text, settings_problems
 from rotorsweep.kernels import extrema
@@ -385,8 +384,13 @@ def _global_records(lines, pl):
 
 
 def to_dataset(scene, pl, lines, provenance):
-    """The continuation result (schema: result_kinds.CONTINUATION_VARIABLES) of a scene: lines =
-    [(where, [branch records])] in plan order."""
+    """The continuation result as an xarray.Dataset (to_result's variables; imports xarray)."""
+    return to_result(scene, pl, lines, provenance).to_xarray()
+
+
+def to_result(scene, pl, lines, provenance):
+    """The continuation result's plain variables (plainnc.Plain; schema:
+    result_kinds.CONTINUATION_VARIABLES) of a scene: lines = [(where, [branch records])] in plan order."""
     spec = scene.model
     records = [(where, r) for where, recs in lines for r in recs]
     n_branch, n_pt = len(records), max([len(r["parameter"]) for _, r in records] + [1])
@@ -450,8 +454,7 @@ def to_dataset(scene, pl, lines, provenance):
     global_attrs = {**provenance, "result_kind": result_kinds.CONTINUATION, "parameter": pl.parameter,
                     "curves_in": pl.second, "report_observable": rep.observable or spec.observables[0].name,
                     "range": json.dumps(list(pl.range)), "Conventions": "CF-1.10"}
-    return xr.Dataset(result_kinds.variables(result_kinds.CONTINUATION, values, attrs), coords=coords,
-                      attrs=global_attrs)
+    return plainnc.Plain(result_kinds.variables(result_kinds.CONTINUATION, values, attrs), coords, global_attrs)
 
 
 # --- running -------------------------------------------------------------------------------------
@@ -463,7 +466,7 @@ def run(cfg, output, workers=None, scheduler=None, overwrite=False, stream=sys.s
 
     def dataset(parts):
         lines = _run_lines(cfg, pl, workers, scheduler, stream, parts)
-        return to_dataset(cfg.scene, pl, lines, cluster.provenance(cfg, result_kinds.CONTINUATION))
+        return to_result(cfg.scene, pl, lines, cluster.provenance(cfg, result_kinds.CONTINUATION))
     return results.run_result(cfg, result_kinds.CONTINUATION, output, dataset, stream, overwrite, scheduler, resume)
 
 

@@ -13,10 +13,8 @@ import zlib
 from pathlib import Path
 
 import numpy as np
-import xarray as xr
 
-from rotorsweep.pipeline import duckarrays  # noqa: F401  (xarray without importing Dask for every array)
-from rotorsweep.pipeline import fileio, query, schema
+from rotorsweep.pipeline import fileio, schema
 
 CONVENTIONS = "CF-1.10"
 # zlib level 1 after the byte shuffle: on an atlas cube as small as level 4 without shuffle (the
@@ -37,6 +35,14 @@ CHUNK_BYTES = 4 << 20
 # from X ..."; plan.fmt shows "from X").
 DERIVED_ATTR = "derived_parameters"
 _NETCDF_MAGIC = (b"CDF\x01", b"CDF\x02", b"CDF\x05", b"\x89HDF\r\n\x1a\n")
+
+
+def _xarray():
+    """xarray, imported on first use (`continue` and `backbone` use this module's part files without
+    it, issue 35), after rotorsweep.pipeline.duckarrays (xarray without importing Dask for every array)."""
+    from rotorsweep.pipeline import duckarrays  # noqa: F401
+    import xarray
+    return xarray
 
 
 class CubeError(Exception):
@@ -70,7 +76,7 @@ def build_dataset(axes, fixed, results, attrs, extra_attrs=None):
             coords.setdefault(dim, (dim, np.arange(n), {"long_name": f"{dim} index", "units": "1"}))
     # one Dataset of all variables: assigning them one by one aligns and merges the whole
     # dataset each time (Fig. 13's 17 variables: 14 ms instead of 2, serial after the sweep)
-    ds = xr.Dataset(data_vars, coords)
+    ds = _xarray().Dataset(data_vars, coords)
     ds.attrs = {"Conventions": CONVENTIONS, "title": "rotorsweep result cube", **attrs,
                 "rotorsweep_schema_version": schema.SCHEMA_VERSION}
     if derived:
@@ -190,7 +196,7 @@ def read_netcdf(path):
     path = Path(path)
     _check_is_netcdf(path)
     try:
-        with xr.open_dataset(path, engine="netcdf4", mask_and_scale=False) as ds:
+        with _xarray().open_dataset(path, engine="netcdf4", mask_and_scale=False) as ds:
             return ds.load()
     except (OSError, ValueError) as exc:
         raise CubeError(f"{path}: cannot be read as netCDF ({exc})") from None
@@ -276,6 +282,7 @@ def describe(ds):
 def _describe_classes(ds):
     """The stability classes of the grid points and their intervals, in the one vocabulary of the
     map, the report and `query` (query.point_classes)."""
+    from rotorsweep.pipeline import query
 
     if "stable" not in ds or "bifurcation" not in ds:
         return []

@@ -15,30 +15,23 @@ import os
 
 import numpy as np
 
-from rotorsweep.pipeline import cluster, cube, fileio, result_kinds, runlog, warmup, workload
+from rotorsweep.pipeline import cluster, cube, fileio, plainnc, result_kinds, runlog, warmup, workload
 
 
-def write(ds, path):
-    """Atomic netCDF write: compressed numbers, integers without a fill value (so a plain
+def write(result, path):
+    """Atomic netCDF write of a result (plainnc.Plain, or an xarray.Dataset taken as its plain
+    variables): compressed numbers, integers without a fill value (so a plain
     xarray.open_dataset keeps the flags integer; padding has its own flag value), text as UTF-8
     character arrays, which every netCDF reader and the CF checker know (netCDF-4 variable-length
-    strings are valid CF-1.8 but cfchecker 4.1 rejects them, and HDF5 filters skip them)."""
-    enc = {name: {"_FillValue": None, **_text(var)} for name, var in ds.coords.items()}
-    for name, var in ds.data_vars.items():
-        if var.dtype.kind in "OU":
-            enc[name] = _text(var)
-        else:
-            enc[name] = {**cube.COMPRESSION, **({"_FillValue": None} if var.dtype.kind in "iu" else {})}
+    strings are valid CF-1.8 but cfchecker 4.1 rejects them, and HDF5 filters skip them); written
+    with the netCDF4 library directly, without importing xarray (rotorsweep.pipeline.plainnc)."""
+    plain = result if isinstance(result, plainnc.Plain) else plainnc.of_dataset(result)
     with fileio.atomic_path(path) as tmp:
         try:
-            ds.to_netcdf(tmp, engine="netcdf4", encoding=enc)
+            plainnc.write(plain, tmp)
         except RuntimeError as exc:   # netCDF-C reports a full disk as "NetCDF: HDF error"
             raise OSError(errno.EIO, f"netCDF write failed ({exc}; is the disk full?)", str(path)) from None
     return path
-
-
-def _text(var):
-    return {"dtype": "S1"} if var.dtype.kind in "OU" else {}
 
 
 @contextlib.contextmanager

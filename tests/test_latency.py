@@ -43,6 +43,9 @@ COMMANDS = {
     # a unit string loads pint, and pint alone (not the Dask it would import: units._pint_without_dask)
     "point with units": (["-m", "rotorsweep.pipeline.cli", "point", "--speed", "600 rpm", "--clearance", "7.6 um"],
                          HEAVY + ("xarray", "pandas", "netCDF4")),
+    # a small continuation writes its result with netCDF4 alone (rotorsweep.pipeline.plainnc)
+    "continue": (["-m", "rotorsweep.pipeline.cli", "continue", "configs/duffing_resonance.toml", "-o", "{out}",
+                  "--workers", "0", "-q"], HEAVY + ("xarray", "pandas")),
 }
 
 
@@ -213,9 +216,10 @@ def heavy(modules, listed):
 
 
 @pytest.mark.parametrize("command", COMMANDS)
-def test_a_command_imports_only_what_it_uses(command, tiny_cube):
+def test_a_command_imports_only_what_it_uses(command, tiny_cube, tmp_path):
     args, listed = COMMANDS[command]
-    assert heavy(imported_modules([a.replace("{cube}", str(tiny_cube)) for a in args]), listed) == []
+    args = [a.replace("{cube}", str(tiny_cube)).replace("{out}", str(tmp_path / "out.nc")) for a in args]
+    assert heavy(imported_modules(args), listed) == []
 
 
 @pytest.fixture(scope="module")

@@ -84,7 +84,7 @@ def test_a_full_disk_keeps_the_finished_lines_and_resume_gives_the_uninterrupted
     def hdf_error(*_, **__):
         raise RuntimeError("NetCDF: HDF error")          # what netCDF-C says when the disk fills
 
-    monkeypatch.setattr("xarray.Dataset.to_netcdf", hdf_error)
+    monkeypatch.setattr("netCDF4.Dataset", hdf_error)     # the result writer's (rotorsweep.pipeline.plainnc)
     rc, err = run_cli(capsys, *args, "--resume")
     assert rc == 2 and "NetCDF: HDF error" in err and str(out) in err and "the 3 finished line(s)" in err, err
     assert not out.exists() and len(list(cube.parts_dir(out).glob("*.npz"))) == 3

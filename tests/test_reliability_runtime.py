@@ -346,7 +346,7 @@ def test_a_full_disk_in_continue_is_one_line_naming_the_output(tmp_path, monkeyp
     def hdf_error(*_, **__):
         raise RuntimeError("NetCDF: HDF error")
 
-    monkeypatch.setattr("xarray.Dataset.to_netcdf", hdf_error)
+    monkeypatch.setattr("netCDF4.Dataset", hdf_error)
     with pytest.raises(OSError) as err:
         results.write(xr.Dataset({"x": ("i", [1.0])}), tmp_path / "c.nc")
     assert cli.error_text(err.value).startswith(f"{tmp_path / 'c.nc'}: netCDF write failed")
