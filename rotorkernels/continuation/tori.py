@@ -41,7 +41,6 @@ from dataclasses import replace
 from typing import Callable, NamedTuple
 
 import numpy as np
-import scipy.linalg
 
 from rotorsweep.kernels import torus as tr
 from rotorsweep.kernels.continuation import engine, events as ev
@@ -174,7 +173,7 @@ class TorusFamily(NamedTuple):
         solution, whose monodromies are the point's (stability, tangent): the solution meets the
         same tolerance as a full Newton's, and differs from it by at most that residual times
         ||dR/dX^-1|| (tests/test_tori_corrector.py)."""
-        X, res, lu = X0.copy(), np.inf, None
+        X, res, solve = X0.copy(), np.inf, None
         jac = self.shifted_jacobian(at, X0)
         for it in range(settings.max_newton + 1):
             r, _, _, ok, n_rhs = self.residual(X, False)
@@ -182,7 +181,7 @@ class TorusFamily(NamedTuple):
             if not ok:
                 return None, INTEGRATION_FAILED
             last, res, base = res, _relative(r, self.nodes(X)), r
-            stale = lu is None or res > CONTRACTION * last
+            stale = solve is None or res > CONTRACTION * last
             if res <= settings.tol or (stale and jac is None):
                 r, jac, monos, ok, n_rhs = self.residual(X, True)
                 counter.n += n_rhs
@@ -197,10 +196,10 @@ class TorusFamily(NamedTuple):
             if stale:
                 col, n_rhs = self.dr_dmu(X, settings.fd_step, base)
                 counter.n += n_rhs
-                lu, jac = (None if col is None else _factored(_bordered(jac, col, c))), None
-                if lu is None:
+                solve, jac = (None if col is None else _factored(_bordered(jac, col, c))), None
+                if solve is None:
                     return (None, INTEGRATION_FAILED) if col is None else (None, NEWTON_FAILED)
-            X = X + scipy.linalg.lu_solve(lu, np.append(-r.ravel(), target - c @ X))
+            X = X + solve(np.append(-r.ravel(), target - c @ X))
         return None, NEWTON_FAILED
 
     def point(self, sol, at, settings, counter):
@@ -253,14 +252,17 @@ def _relative(r, nodes):
 
 
 def _factored(matrix):
-    """The LU factors of a bordered matrix (scipy.linalg.lu_factor), None where it is singular or
-    not finite."""
+    """b -> matrix^-1 b by the LU factors of a bordered matrix (scipy.linalg, imported here: a
+    command that follows no torus does not load it), None where it is singular or not finite."""
+    import scipy.linalg
     if not np.isfinite(matrix).all():
         return None
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
         lu = scipy.linalg.lu_factor(matrix)
-    return lu if np.all(np.diag(lu[0]) != 0.0) else None
+    if not np.all(np.diag(lu[0]) != 0.0):
+        return None
+    return lambda b: scipy.linalg.lu_solve(lu, b)
 
 
 def _bordered(jac, col, c):
