@@ -6,10 +6,10 @@ The integrated vector is z = [u (n), Phi (n x n, row-major)] when `variational` 
 Phi' = J(t, u) Phi; otherwise z = u. With parameters `TangentParams` instead of the kernel vector
 p (the tangent-linear mode), z = [u, v] with v' = J(t, u) v + df/dlambda dlambda, one direction
 of the variational equations and a parameter change; its error control reads u only, so u takes
-exactly the steps it takes alone, and v is the derivative of that discrete solution. Both integrators return (z_end, status, n_rhs, h_next):
-`status` is one of the STATUS_* codes (failure is data, never an exception), `n_rhs` counts
-right-hand-side evaluations (for benchmarks) and `h_next` is the step size to reuse on the next
-call over a similar interval.
+exactly the steps it takes alone, and v is the derivative of that discrete solution. Both
+integrators return (z_end, status, n_rhs, h_next): `status` is one of the STATUS_* codes (failure
+is data, never an exception), `n_rhs` counts right-hand-side evaluations (for benchmarks) and
+`h_next` is the step size to reuse on the next call over a similar interval.
 
 - dop853: Dormand-Prince 8(5,3) with the step-size control of Hairer/scipy (error measured on
   every component of z, so the monodromy is as accurate as the orbit).
