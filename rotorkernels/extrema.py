@@ -20,7 +20,6 @@ import numpy as np
 from numba import njit
 
 from rotorsweep.kernels import integrators as ig
-from rotorsweep.kernels.dop853_tableau import N_STAGES
 
 XTOL = 1e-9                 # zero of g: relative to the step (o's error o'' (XTOL h)^2 / 2 ~ 1e-20 o)
 MAX_REFINE = 60             # iterations per bracket (Newton: 2-4, Illinois: ~6-10)
@@ -168,38 +167,37 @@ def orbit_extent(kernel, u0, p, span, weights, opts, mean):
     integral of o by the quintic Hermite rule on the accepted steps where `_accelerated` and
     `mean` is set (g' from one right-hand side per step end: the cost of a mean that is wanted),
     else the cubic one (`_quadrature`); mean_error its estimate."""
-    hi, lo, avg, error, _, _, _, status, n_rhs = _extent(kernel, u0, p, span, weights, opts, mean, np.zeros(u0.size),
-                                                         p, p, opts, opts, False)
+    hi, lo, avg, error, _, _, _, status, n_rhs = _extent(kernel, u0, p, p, span, weights, opts, mean)
     return hi, lo, avg, error, status, n_rhs
 
 
 @njit(cache=True, nogil=True)
-def orbit_extent_slope(kernel, u0, p, span, weights, opts, du, p_plus, p_minus, loose, single):
-    """(highest, lowest, d_highest, d_lowest, d_end, status, n_rhs): `orbit_extent`'s extremes and
-    their first-order change, and the perturbed orbits' difference at the end. d_highest is o on the orbit from u0 + du (parameters p_plus) minus o on
-    the orbit from u0 - du (p_minus), both at the time of the highest value (d_lowest likewise).
-    At an extremum o's time derivative vanishes, so the extremum moves with o at its time to
-    second order, and the second-order terms of the two sides cancel: d / 2 is the extremum's
-    derivative along (du, dp) to O(|du|^3) (envelope theorem). The perturbed orbits are
-    integrated alongside, each over every step of the orbit from u0 in one step of the same
-    method (`loose`: settings whose tolerance accepts any step, integrators.loosened). The orbit
-    advances one accepted step at a time (`single`: opts with max_steps 1); where its error
-    control rejected a step, the shorter step it accepted is taken again alone, so that the
-    perturbed orbits take exactly the accepted steps (a rejected step across a contact's onset is
-    far less accurate). So d is the difference of
-    one smooth map of (u0, p): no step-size noise; its error the round-off
-    over |du| and the change of the method's truncation error, both ~1e-12 relative. Kinks of
-    the extremes (two local maxima of o exchange which is the highest) are where d jumps."""
-    hi, lo, _, _, d_hi, d_lo, d_end, status, n_rhs = _extent(kernel, u0, p, span, weights, opts, False, du, p_plus,
-                                                             p_minus, loose, single, True)
-    return hi, lo, d_hi, d_lo, d_end, status, n_rhs
+def orbit_extent_slope(kernel, u0, v0, tangent, span, weights, opts):
+    """(highest, lowest, d_highest, d_lowest, v_end, status, n_rhs): `orbit_extent`'s extremes, their
+    derivatives along a direction (v0 of the state, the parameter change of `tangent`, an
+    integrators.TangentParams whose p is the orbit's) and the flow's derivative v_end along it at
+    span. The direction is integrated with the orbit (the integrator's tangent-linear mode), on
+    the orbit's own steps: v is the exact derivative of the discrete orbit, no step-size noise.
+    At an extremum o's time derivative vanishes, so the extremum's derivative is w . v at its
+    refined time, whose own change does not enter (envelope theorem). Its error: the method's
+    truncation error's derivative (~rtol relative) and the parameter term's central difference
+    (TangentParams, ~1e-10). Kinks of the extremes (two local maxima of o exchange which is the
+    highest) are where d jumps."""
+    z0 = np.empty(2 * u0.size)
+    for i in range(u0.size):    # element loops: no slice assignment's shape check
+        z0[i], z0[u0.size + i] = u0[i], v0[i]
+    hi, lo, _, _, d_hi, d_lo, v_end, status, n_rhs = _extent(kernel, z0, tangent.p, tangent, span, weights, opts,
+                                                             False)
+    return hi, lo, d_hi, d_lo, v_end, status, n_rhs
 
 
 @njit(cache=True, nogil=True)
-def _extent(kernel, u0, p, span, weights, opts, mean, du, p_plus, p_minus, loose, single, perturbed):
-    """orbit_extent's pass, and where `perturbed` orbit_extent_slope's: (highest, lowest, mean,
-    mean_error, d_highest, d_lowest, d_end, status, n_rhs)."""
+def _extent(kernel, z0, p, q, span, weights, opts, mean):
+    """orbit_extent's pass from z0 = u0 (q = p), and orbit_extent_slope's from z0 = [u0, v0] (q
+    the TangentParams): (highest, lowest, mean, mean_error, d_highest, d_lowest, v_end, status,
+    n_rhs)."""
     n, n_obs = kernel.n_state, weights.shape[0]
+    tangent = z0.size > n
     hi, lo, ga, gb, oa, ob = (np.empty(n_obs), np.empty(n_obs), np.empty(n_obs), np.empty(n_obs),
                               np.empty(n_obs), np.empty(n_obs))
     sa, sb, f, jbuf = np.zeros(n_obs), np.zeros(n_obs), np.empty(n), np.empty((n, n))
@@ -208,12 +206,11 @@ def _extent(kernel, u0, p, span, weights, opts, mean, du, p_plus, p_minus, loose
     rhs_per_end = 1 if quintic or not _accelerated(kernel, weights) else 0     # `_rates`
     est_hi, est_lo = np.empty(n_obs), np.empty(n_obs)     # hi and lo with the brackets' estimates
     held = np.empty((CANDIDATES, 7))        # t, h, s, estimate, k, ga, gb of a bracket
-    held_z = np.empty((CANDIDATES, 3, n))   # its starting states (the orbit's, the perturbed ones)
-    count, retried = 0, False
-    z, zp, zm = u0.copy(), u0 + du, u0 - du
-    zpb, zmb = zp, zm
+    held_z = np.empty((CANDIDATES, z0.size))   # its starting states
+    count = 0
+    z = z0.copy()
     _values(weights, z, oa)
-    _difference(weights, zp, zm, dv)
+    _directional(weights, z, n, tangent, dv)
     for k in range(n_obs):
         hi[k] = lo[k] = est_hi[k] = est_lo[k] = oa[k]
         d_hi[k] = d_lo[k] = dv[k]
@@ -225,19 +222,11 @@ def _extent(kernel, u0, p, span, weights, opts, mean, du, p_plus, p_minus, loose
             status = ig.STATUS_OK
             break
         t1 = min(t + h, span)
-        zb, status, spent, h_next = ig.flow(kernel, t, t1, z, p, False, single, h)
+        zb, status, spent, h_next = ig.flow(kernel, t, t1, z, q, tangent, opts, h)
         n_rhs += spent + rhs_per_end
-        if perturbed and status == ig.STATUS_STEP_UNDERFLOW and _rejected(opts, spent):
-            h, retried = min(h_next, 0.5 * (t1 - t)), True      # again, shorter, alone
-            continue
-        if perturbed and status == ig.STATUS_OK:
-            if retried:     # no longer than the step accepted (as the method does after a rejection)
-                h_next, retried = min(h_next, t1 - t), False
-            zpb, zmb, status, spent = _lockstep(kernel, t, t1, zp, zm, p_plus, p_minus, loose)
-            n_rhs += spent
-            _difference(weights, zpb, zmb, dv)
         if status != ig.STATUS_OK:
             break
+        _directional(weights, zb, n, tangent, dv)
         _rates(kernel, t1, zb, p, weights, f, jbuf, gb, sb, quintic)
         _values(weights, zb, ob)
         _quadrature(oa, ob, ga, gb, sa, sb, t1 - t, quintic, integral, error)
@@ -251,11 +240,11 @@ def _extent(kernel, u0, p, span, weights, opts, mean, du, p_plus, p_minus, loose
             if (ga[k] < 0.0) != (gb[k] < 0.0) and ga[k] != 0.0 and gb[k] != 0.0:
                 s, est = _hermite(oa[k], ob[k], ga[k], gb[k], t1 - t)
                 if count == CANDIDATES:     # no room: refined at once
-                    status, spent = _settle(kernel, p, weights, opts, k, t, t1 - t, s, ga[k], gb[k], z, zp, zm,
-                                            p_plus, p_minus, loose, perturbed, hi, lo, d_hi, d_lo)
+                    status, spent = _settle(kernel, p, q, weights, opts, k, t, t1 - t, s, ga[k], gb[k], z,
+                                            (hi, lo, d_hi, d_lo))
                     n_rhs += spent
                 else:
-                    _hold(held, held_z, count, (t, t1 - t, s, est, float(k), ga[k], gb[k]), z, zp, zm)
+                    _hold(held, held_z, count, (t, t1 - t, s, est, float(k), ga[k], gb[k]), z)
                     count += 1
                 est_hi[k] = max(est_hi[k], est)
                 est_lo[k] = min(est_lo[k], est)
@@ -263,17 +252,17 @@ def _extent(kernel, u0, p, span, weights, opts, mean, du, p_plus, p_minus, loose
             break
         for k in range(n_obs):
             ga[k], oa[k], sa[k] = gb[k], ob[k], sb[k]
-        z, zp, zm, t, h = zb, zpb, zmb, t1, h_next
+        z, t, h = zb, t1, h_next
     if status == ig.STATUS_OK and t < span:
         status = ig.STATUS_STEP_UNDERFLOW       # max_steps spent before the end
     if status == ig.STATUS_OK:
-        status, spent = _refine_held(kernel, p, weights, opts, (hi, lo, d_hi, d_lo), est_hi, est_lo, held[:count],
-                                     held_z, p_plus, p_minus, loose, perturbed)
+        status, spent = _refine_held(kernel, p, q, weights, opts, (hi, lo, d_hi, d_lo), est_hi, est_lo, held[:count],
+                                     held_z)
         n_rhs += spent
     if status != ig.STATUS_OK:
         for a in (hi, lo, integral, error, d_hi, d_lo):
             a[:] = np.nan
-    return hi, lo, integral / span, error / span, d_hi, d_lo, zp - zm, status, n_rhs
+    return hi, lo, integral / span, error / span, d_hi, d_lo, z[n:], status, n_rhs
 
 
 def orbit_extrema(kernel, u0, p, span, weights, opts):
@@ -283,61 +272,46 @@ def orbit_extrema(kernel, u0, p, span, weights, opts):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _difference(weights, a, b, out):
-    """out = o(a) - o(b) for each observable."""
+def _directional(weights, z, n, tangent, out):
+    """out = w . v for each observable where `tangent` (z = [u, v], v from index n), else 0."""
     for k in range(weights.shape[0]):
         acc = 0.0
-        for i in range(weights.shape[1]):
-            acc += weights[k, i] * (a[i] - b[i])
+        if tangent:
+            for i in range(weights.shape[1]):
+                acc += weights[k, i] * z[n + i]
         out[k] = acc
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _rejected(opts, spent):
-    """A flow from a fresh start spent more than one attempt at a step of Dormand-Prince (RK4:
-    fixed steps, never rejected)."""
-    return opts[ig.S_METHOD] == ig.METHOD_DOP853 and spent > N_STAGES + 1
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _lockstep(kernel, t, t1, zp, zm, p_plus, p_minus, loose):
-    """The perturbed orbits from t to t1, one step each (`loose`; a first step proposed longer
-    than t1 - t is cut to end at t1 exactly): (z+, z-, status, n_rhs)."""
-    a, status_a, spent_a, _ = ig.flow(kernel, t, t1, zp, p_plus, False, loose, 2.0 * (t1 - t))
-    b, status_b, spent_b, _ = ig.flow(kernel, t, t1, zm, p_minus, False, loose, 2.0 * (t1 - t))
-    return a, b, status_a if status_a != ig.STATUS_OK else status_b, spent_a + spent_b
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _hold(held, held_z, i, row, z, zp, zm):
+def _hold(held, held_z, i, row, z):
     """Row i of the held brackets (element loops: no slice assignment's shape check)."""
     for j in range(7):
         held[i, j] = row[j]
     for j in range(z.size):
-        held_z[i, 0, j] = z[j]
-        held_z[i, 1, j] = zp[j]
-        held_z[i, 2, j] = zm[j]
+        held_z[i, j] = z[j]
 
 
 @njit(cache=True, nogil=True)
-def _settle(kernel, p, weights, opts, k, t, h, s, ga, gb, z, zp, zm, p_plus, p_minus, loose, perturbed,
-            hi, lo, d_hi, d_lo):
+def _settle(kernel, p, q, weights, opts, k, t, h, s, ga, gb, z, extremes):
     """Refine the bracket of o_k's extremum in the step [t, t + h] from z (estimate t + s); where
-    it beats hi[k] (a maximum: g from + to -) or lo[k], set it and, if perturbed, its d from the
-    perturbed orbits' states zp, zm at t (one step each to its time): (status, n_rhs)."""
-    v, c, n_rhs = _refine(kernel, t, h, s, z, p, weights, k, ga, gb, opts)
+    it beats hi[k] (a maximum: g from + to -) or lo[k] (extremes = (hi, lo, d_hi, d_lo)), set it
+    and, in the tangent-linear mode (z = [u, v], q its TangentParams), its derivative from the
+    direction carried to its time (one step, the refinement's last): (status, n_rhs)."""
+    hi, lo, d_hi, d_lo = extremes
+    n = kernel.n_state
+    v, c, n_rhs = _refine(kernel, t, h, s, z[:n], p, weights, k, ga, gb, opts)
     if not np.isfinite(v):
         return ig.STATUS_NAN, n_rhs
     maximum = ga > 0.0
     if (v > hi[k]) if maximum else (v < lo[k]):
         d = 0.0
-        if perturbed:
-            a, b, status, spent = _lockstep(kernel, t, t + c, zp, zm, p_plus, p_minus, loose)
+        if z.size > n:
+            zc, status, spent, _ = ig.flow(kernel, t, t + c, z, q, True, opts, c)
             n_rhs += spent
             if status != ig.STATUS_OK:
                 return status, n_rhs
             dv = np.empty(weights.shape[0])
-            _difference(weights, a, b, dv)
+            _directional(weights, zc, n, True, dv)
             d = dv[k]
         if maximum:
             hi[k], d_hi[k] = v, d
@@ -347,11 +321,10 @@ def _settle(kernel, p, weights, opts, k, t, h, s, ga, gb, z, zp, zm, p_plus, p_m
 
 
 @njit(cache=True, nogil=True)
-def _refine_held(kernel, p, weights, opts, extremes, est_hi, est_lo, held, held_z, p_plus, p_minus, loose, perturbed):
+def _refine_held(kernel, p, q, weights, opts, extremes, est_hi, est_lo, held, held_z):
     """Refine the held brackets whose estimate is within CANDIDATE_MARGIN of the estimated
     highest (est_hi; a maximum: g from + to -) or lowest value (est_lo), updating extremes = (hi,
     lo, d_hi, d_lo) (`_settle`): (status, right-hand sides evaluated)."""
-    hi, lo, d_hi, d_lo = extremes
     n_rhs = 0
     for i in range(held.shape[0]):
         t, h, s, est, k, ga, gb = held[i, 0], held[i, 1], held[i, 2], held[i, 3], int(held[i, 4]), held[i, 5], held[i, 6]
@@ -359,8 +332,7 @@ def _refine_held(kernel, p, weights, opts, extremes, est_hi, est_lo, held, held_
         maximum = ga > 0.0
         if (maximum and est < est_hi[k] - margin) or (not maximum and est > est_lo[k] + margin):
             continue
-        status, spent = _settle(kernel, p, weights, opts, k, t, h, s, ga, gb, held_z[i, 0], held_z[i, 1], held_z[i, 2],
-                                p_plus, p_minus, loose, perturbed, hi, lo, d_hi, d_lo)
+        status, spent = _settle(kernel, p, q, weights, opts, k, t, h, s, ga, gb, held_z[i], extremes)
         n_rhs += spent
         if status != ig.STATUS_OK:
             return status, n_rhs
@@ -398,38 +370,35 @@ def amplitudes(model, state, p, span, opts, period):
     return np.maximum(hi, -lo), 0.5 * (hi - lo)
 
 
-# The perturbed orbits' tolerance (orbit_extent_slope): any step passes its error test at once.
-LOOSE_RTOL = 1e30
-
-
-def lockstep_settings(opts):
-    """(loose, single) of orbit_extent_slope: the perturbed orbits' settings and the orbit's, one
-    accepted step per flow."""
-    return ig.loosened(opts, LOOSE_RTOL), opts._replace(max_steps=2.0)
+def tangent_params(params, lam, dlam, step):
+    """integrators.TangentParams of a parameter change dlam at lam (params(lambda) -> p), its term
+    a central difference of step `step` in lambda: truncation ~step^2, round-off ~1e-16 / step
+    relative to f's change with lambda."""
+    return ig.TangentParams(params(lam), params(lam + step), params(lam - step), dlam / (2.0 * step))
 
 
 def amplitudes_and_slope(kernel, X, tangent, params, scale, span, weights, row, opts, step):
     """(amplitudes, slope, n_rhs) at a branch point X = (s, mu) (lambda = mu scale, params(lambda)
     -> p) with unit tangent, in one pass: amplitudes = [max |o|, half peak-to-peak of o] per
     observable (the rows of weights), slope the derivative of row's half peak-to-peak along the
-    tangent, from orbit_extent_slope's extremes' changes over X +- step tangent (a central
-    difference at the extremes' times: truncation O(step^2), round-off 1e-16 / step relative).
+    tangent (orbit_extent_slope; the parameter term's step: `step` relative to max(1, |mu|)).
     NaN where the orbit cannot be integrated."""
-    s, mu, h = np.ascontiguousarray(X[:-1], dtype=float), float(X[-1]), step
+    s, mu = np.ascontiguousarray(X[:-1], dtype=float), float(X[-1])
+    e = step * max(1.0, abs(mu)) * scale
     hi, lo, d_hi, d_lo, _, _, n_rhs = orbit_extent_slope(
-        kernel, s, params(mu * scale), span, weights, opts, h * np.ascontiguousarray(tangent[:-1], dtype=float),
-        params((mu + h * tangent[-1]) * scale), params((mu - h * tangent[-1]) * scale), *lockstep_settings(opts))
+        kernel, s, np.ascontiguousarray(tangent[:-1], dtype=float),
+        tangent_params(params, mu * scale, float(tangent[-1]) * scale, e), span, weights, opts)
     amplitudes = np.array([np.maximum(hi, -lo), 0.5 * (hi - lo)])
-    return amplitudes, float((d_hi[row] - d_lo[row]) / (4.0 * h)), n_rhs
+    return amplitudes, float(0.5 * (d_hi[row] - d_lo[row])), n_rhs
 
 
 def parameter_derivative(kernel, s, params, lam, step, span, opts):
-    """(d phi / d lambda, status, n_rhs): the flow phi over span from s, differentiated in the
-    parameter by a central difference of step `step` whose two orbits take the steps of the orbit
-    at lam (orbit_extent_slope): no step-size noise (two independent adaptive integrations leave
-    rtol / step), so a branch's tangent is as exact as its orbits."""
+    """(d phi / d lambda, status, n_rhs): the flow phi over span from s differentiated in the
+    parameter, integrated with the orbit on its steps (orbit_extent_slope; `step`: the parameter
+    term's), so a branch's tangent is as exact as its orbits (two independent adaptive
+    integrations would leave rtol / step)."""
     n = s.size
-    _, _, _, _, d_end, status, n_rhs = orbit_extent_slope(
-        kernel, np.ascontiguousarray(s, dtype=float), params(lam), span, np.zeros((1, n)), opts, np.zeros(n),
-        params(lam + step), params(lam - step), *lockstep_settings(opts))
-    return d_end / (2.0 * step), status, n_rhs
+    _, _, _, _, v_end, status, n_rhs = orbit_extent_slope(
+        kernel, np.ascontiguousarray(s, dtype=float), np.zeros(n), tangent_params(params, lam, 1.0, step), span,
+        np.zeros((1, n)), opts)
+    return v_end.copy(), status, n_rhs

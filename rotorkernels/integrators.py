@@ -3,10 +3,13 @@
 carrying the variational equations.
 
 The integrated vector is z = [u (n), Phi (n x n, row-major)] when `variational` is set, with
-Phi' = J(t, u) Phi; otherwise z = u. Both integrators return (z_end, status, n_rhs, h_next):
-`status` is one of the STATUS_* codes (failure is data, never an exception), `n_rhs` counts
-right-hand-side evaluations (for benchmarks) and `h_next` is the step size to reuse on the next
-call over a similar interval.
+Phi' = J(t, u) Phi; otherwise z = u. With parameters `TangentParams` instead of the kernel vector
+p (the tangent-linear mode), z = [u, v] with v' = J(t, u) v + df/dlambda dlambda, one direction
+of the variational equations and a parameter change; its error control reads u only, so u takes
+exactly the steps it takes alone, and v is the derivative of that discrete solution. Both
+integrators return (z_end, status, n_rhs, h_next): `status` is one of the STATUS_* codes (failure
+is data, never an exception), `n_rhs` counts right-hand-side evaluations (for benchmarks) and
+`h_next` is the step size to reuse on the next call over a similar interval.
 
 - dop853: Dormand-Prince 8(5,3) with the step-size control of Hairer/scipy (error measured on
   every component of z, so the monodromy is as accurate as the orbit).
@@ -47,17 +50,90 @@ _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
 _ERR_EXPONENT = -1.0 / 8.0
 
 
+# The tangent-linear mode's parameters (`_derivative`): the kernel vector p of the orbit, p at
+# lambda + e and lambda - e, and scale = dlambda / (2 e), so that the direction's parameter term
+# df/dlambda dlambda is the central difference (f(u, plus) - f(u, minus)) scale (f is smooth in
+# the parameters at fixed u; scale 0: no parameter change, no extra evaluation).
+TangentParams = namedtuple("TangentParams", ("p", "plus", "minus", "scale"))
+
+
+def _is_tangent(p):
+    return getattr(p, "instance_class", None) is TangentParams
+
+
+def _controlled(z, n, p):
+    raise TypeError("jitted code only: the overload below picks the body")
+
+
+@overload(_controlled, jit_options=PICKED_BODY)
+def _controlled_of(z, n, p):
+    """The components of z the error control reads: all (the monodromy as accurate as the orbit),
+    or u alone in the tangent-linear mode (u's steps those of the orbit alone)."""
+    return (lambda z, n, p: n) if _is_tangent(p) else (lambda z, n, p: z.size)
+
+
+def _evaluations(p):
+    raise TypeError("jitted code only: the overload below picks the body")
+
+
+@overload(_evaluations, jit_options=PICKED_BODY)
+def _evaluations_of(p):
+    """Right-hand sides per stage, as n_rhs counts them: one (with the Jacobian: one ball sum),
+    and in the tangent-linear mode two more for a parameter change's term."""
+    if _is_tangent(p):
+        return lambda p: 3 if p.scale != 0.0 else 1
+    return lambda p: 1
+
+
 @njit(cache=True, nogil=True, inline="always")
-def _derivative(kernel, t, z, p, variational, dz, jbuf):
-    """dz/dt of the (possibly augmented) system, inlined into the step loops: no call and no
-    array views of z and dz (the models read and write the first n entries). With the
-    variational equations the model's right-hand side and Jacobian come from one evaluation
-    (`rhs_jac`, one ball sum)."""
+def _orbit_derivative(kernel, t, z, p, variational, dz, jbuf):
+    """`_derivative` with the kernel vector p. With the variational equations the model's
+    right-hand side and Jacobian come from one evaluation (`rhs_jac`, one ball sum)."""
     if variational:
         dispatch.rhs_jac(kernel.tag, t, z, p, dz, jbuf)
         dispatch.tangent(kernel.tag, kernel.velocity_form, z, kernel.n_state, jbuf, dz)
     else:
         dispatch.rhs(kernel.tag, t, z, p, dz)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _tangent_linear_derivative(kernel, t, z, q, variational, dz, jbuf):
+    """`_derivative` in the tangent-linear mode (q: TangentParams): with `variational`, dz[n:] =
+    J v + the parameter term, f at q.plus and q.minus in jbuf's first two rows once J v is done."""
+    if not variational:
+        dispatch.rhs(kernel.tag, t, z, q.p, dz)
+        return
+    dispatch.rhs_jac(kernel.tag, t, z, q.p, dz, jbuf)
+    n = kernel.n_state
+    half = n // 2 if kernel.velocity_form else 0    # J = [[0, I], [A, B]]: the upper half of J v is v's lower half
+    for i in range(half):
+        dz[n + i] = z[n + half + i]
+    for i in range(half, n):
+        acc = 0.0
+        for k in range(n):
+            acc += jbuf[i, k] * z[n + k]
+        dz[n + i] = acc
+    if q.scale != 0.0:
+        dispatch.rhs(kernel.tag, t, z, q.plus, jbuf[0])
+        dispatch.rhs(kernel.tag, t, z, q.minus, jbuf[1])
+        for i in range(n):
+            dz[n + i] += (jbuf[0, i] - jbuf[1, i]) * q.scale
+
+
+def _derivative(kernel, t, z, p, variational, dz, jbuf):
+    raise TypeError("jitted code only: the overload below picks the body")
+
+
+@overload(_derivative, jit_options=PICKED_BODY)
+def _derivative_of(kernel, t, z, p, variational, dz, jbuf):
+    """dz/dt of the (possibly augmented) system, inlined into the step loops: no call and no
+    array views of z and dz (the models read and write the first n entries); the body by p's
+    type (a TangentParams: the tangent-linear mode)."""
+    body = _tangent_linear_derivative if _is_tangent(p) else _orbit_derivative
+
+    def picked(kernel, t, z, p, variational, dz, jbuf):
+        body(kernel, t, z, p, variational, dz, jbuf)
+    return picked
 
 
 @njit(cache=True, nogil=True)
@@ -101,9 +177,9 @@ def initial_state(u0, n, variational):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _error_norm(K, h, z, znew, rtol, atol, w5, w3):
-    """Hairer's DOP853 error norm of the step (w5, w3: work arrays of size z.size)."""
-    m = z.size
+def _error_norm(K, h, z, znew, rtol, atol, w5, w3, m):
+    """Hairer's DOP853 error norm of the step on z's first m components (w5, w3: work arrays of
+    size z.size)."""
     for i in range(m):
         w5[i] = 0.0
         w3[i] = 0.0
@@ -162,6 +238,8 @@ def _dop853_steps(kernel, t0, t1, z, p, variational, rtol, atol, h0, max_steps, 
     t = t0
     h = h0 if h0 > 0.0 else 0.01 * (t1 - t0)
     m = z.size
+    controlled = _controlled(z, kernel.n_state, p)
+    per_stage = _evaluations(p)
     for _ in range(max_steps):
         if t >= t1:
             return STATUS_OK, n_rhs, h
@@ -178,9 +256,9 @@ def _dop853_steps(kernel, t0, t1, z, p, variational, rtol, atol, h0, max_steps, 
                     target = znew if s == _N_STAGES else stage
                     dispatch.combine(kernel.tag, K, _A[s], s, z, step, target)
                 _derivative(kernel, t + _C[s] * step, target, p, variational, K[s], jbuf)
-            n_rhs += _N_STAGES + 1 - first_stage
+            n_rhs += (_N_STAGES + 1 - first_stage) * per_stage
             first_stage = 1
-            err = _error_norm(K, step, z, znew, rtol, atol, w5, w3)
+            err = _error_norm(K, step, z, znew, rtol, atol, w5, w3, controlled)
             if err < 1.0:
                 break
             # a NaN error (overflow inside a too-large step) shrinks the step like a huge error
@@ -244,8 +322,8 @@ def _rk4_steps(kernel, t0, z, p, variational, n_steps, h, amplitude_limit, work,
             z[i] += h / 6.0 * (work[0, i] + 2.0 * work[1, i] + 2.0 * work[2, i] + work[3, i])
         status = state_status(z, kernel.n_state, kernel.n_position, amplitude_limit)
         if status != STATUS_OK:
-            return status, 4 * (step + 1)
-    return STATUS_OK, 4 * n_steps
+            return status, 4 * (step + 1) * _evaluations(p)
+    return STATUS_OK, 4 * n_steps * _evaluations(p)
 
 
 # Integrator settings travel as one named tuple of floats so that every caller passes the same

@@ -125,7 +125,7 @@ def entry_points(spec, opts):
         return calls + [(shooting.shoot_staged, (kernel, u, p, 1.0, opts, opts, 1e-9, 1)),
                         (extrema.orbit_extent, (kernel, u, p, 1.0, np.zeros((1, n)), opts, True)),   # amplitudes (, means)
                         (extrema.orbit_extent_slope,   # a peak's slope and a locked tangent (continuation)
-                         (kernel, u, p, 1.0, np.zeros((1, n)), opts, u, p, p, *extrema.lockstep_settings(opts)))]
+                         (kernel, u, u, ig.TangentParams(p, p, p, 0.0), 1.0, np.zeros((1, n)), opts))]
     return calls + [
         (ig.derivative, (kernel, 0.0, u, p, False, u, np.zeros((n, n)))),
         (dispatch.jac, (kernel.tag, 0.0, u, p, np.zeros((n, n)))),

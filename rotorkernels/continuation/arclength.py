@@ -70,10 +70,9 @@ class Point(NamedTuple):
         return self.X[:-1]
 
 
-# The step in mu of `Family.locked_dphi_dmu`: no integration noise to divide, so smaller than
-# fd_step; its error is then the contact force's (C^1 only): measured on the Bai rotor's period-2
-# and -4 orbits, tangents at steps 1e-7, 3e-7 and 1e-6 agree to 3e-8 and 3e-6, at 1e-5 they are
-# 6e-7 and 1e-5 off.
+# The step in mu of `Family.locked_dphi_dmu`'s parameter term (extrema.tangent_params: a central
+# difference of the right-hand side at a fixed state, smooth in the parameters): truncation
+# ~step^2, round-off ~1e-16 / step, both ~1e-10 here.
 LOCKED_STEP = 1e-6
 
 
@@ -84,8 +83,8 @@ class Family(NamedTuple):
     weights: observables o = weights @ u[:m] whose exact extrema every point records
     (`Point.amplitudes`, rotorsweep.kernels.extrema); peak: the row of weights whose half peak-to-peak
     amplitude's local maxima are `events.Peak` events (-1: none), its slope along the tangent
-    from the extremes' change along it (extrema.amplitudes_and_slope: no step-size noise, a peak
-    located like a fold)."""
+    from the tangent-linear solution at the extremes' times (extrema.amplitudes_and_slope: no
+    step-size noise, a peak located like a fold)."""
     model: object
     params: Callable
     opts: np.ndarray
@@ -123,10 +122,10 @@ class Family(NamedTuple):
         return (plus[0] - minus[0]) / (2.0 * step), bad, plus[3] + minus[3]
 
     def locked_dphi_dmu(self, X):
-        """dphi/dmu as `dphi_dmu`, its two orbits on the steps of the orbit at X
-        (extrema.parameter_derivative: no rtol / fd_step noise), of step LOCKED_STEP: the
-        tangent the peaks' slope is taken along, to ~1e-7 where `dphi_dmu`'s is good to ~1e-5
-        (a 1e-5 tilt moves the Bai rotor's flat period-4 peak by 1e-4 Hz): (column, status, n_rhs)."""
+        """dphi/dmu integrated with the orbit at X on its steps (extrema.parameter_derivative: no
+        rtol / fd_step noise; its parameter term of step LOCKED_STEP): the tangent the peaks'
+        slope is taken along, as exact as the orbit where `dphi_dmu`'s is good to ~1e-5 (a 1e-5
+        tilt moves the Bai rotor's flat period-4 peak by 1e-4 Hz): (column, status, n_rhs)."""
         step = LOCKED_STEP * max(1.0, abs(X[-1]))
         dphi, status, n_rhs = extrema.parameter_derivative(self.model.kernel, X[:-1], self.params, self.lam(X),
                                                            step * self.scale, float(self.periods), self.opts)
