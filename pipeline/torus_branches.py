@@ -201,7 +201,8 @@ def torus_record(model, family, built, run, n_rhs):
     counts = np.array([family.nodes(p.X).shape[0] for p in pts], int)
     periods = np.array([built(p.lam).period for p in pts])
     none = np.zeros(0)
-    return {**torus_events.event_rows(model, family, built, run, amp),
+    return {**torus_events.event_rows(model, family, built, run,
+                                      lambda p: torus_amplitudes(model, family, built, p)),
         "parameter": np.array([p.lam for p in pts]), "arclength": arclength(family, pts),
         "state": np.array([family.nodes(p.X)[0] for p in pts]).reshape(len(pts), n_state),
         "multipliers": np.full((len(pts), n_state), np.nan + 0j),

@@ -90,7 +90,7 @@ def continuation_result():
         "parameter": (bp, lam), "stable": (bp, stable), "torus_status": (bp, status), "max_abs_multiplier": (bp, mu),
         "torus_exponent": (bp, exponent), "branch_points": ("branch", [6, 6]), "branch_kind": ("branch", [0, 1]),
         "event_branch": ("event", [0, 0, 1]), "event_point": ("event", [1, 4, 1]),
-        "event_parameter": ("event", [2.5, 5.5, 8.0]),
+        "event_parameter": ("event", [2.5, 5.5, np.nan]),     # the TS flag not located: NaN
         "event_type": ("event", [ev.FOLD, ev.PERIOD_DOUBLING, ev.TORUS_STABILITY])},
         coords={"speed": ("branch", [250.0, 250.0])})
 
