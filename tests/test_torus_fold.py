@@ -140,21 +140,10 @@ def _extreme_lambda(fam, a, b, sign, xtol=1e-4):
     return sign * max(f1, f2)
 
 
-def _corrector_error(fam, point):
-    """The lambda error of a point solved to the corrector's tolerance: its residual (at most tol
-    max(1, max |U|)) times the norm of the inverse bordered Jacobian [dR/dU dR/dmu; t] (the
-    distance from the exact branch point on its hyperplane), in lambda's units."""
-    _, jac, _, ok, _ = fam.residual(point.X, True)
-    col, _ = fam.dr_dmu(point.X, SETTINGS.fd_step)
-    bordered = np.vstack([np.column_stack([jac, col]), point.tangent])
-    return (np.linalg.norm(np.linalg.inv(bordered), 2) * SETTINGS.tol * max(1.0, np.abs(point.X[:-1]).max())
-            * fam.scale)
-
-
 def test_the_folds_are_located_at_the_extremum_of_lambda(run):
     """TF located (tangent's d mu / ds = 0 by Brent) against a golden-section search for the
     extremum of lambda over corrected points: both are corrected points, each within its
-    corrector error of the branch (twice _corrector_error for the two), plus the search's own
+    corrector error of the branch (twice tori.corrector_error for the two), plus the search's own
     error: lambda ~ lambda* - a (sigma - sigma*)^2 near the fold (a ~ 2e-4 here: lambda changes by
     ~3e-5 over the fold's 0.4-long step) is resolved to a xtol^2 ~ 2e-12 by sigma to 1e-4."""
     fam, r = run
@@ -165,7 +154,7 @@ def test_the_folds_are_located_at_the_extremum_of_lambda(run):
         fam_n = fam._replace(n_nodes=fam.nodes(a.X).shape[0])
         sign = 1.0 if a.tangent[-1] > 0 else -1.0      # the upper fold turns from increasing lambda
         brute = _extreme_lambda(fam_n, a, b, sign)
-        tol = 2.0 * _corrector_error(fam_n, f.point) + 1e-11
+        tol = 2.0 * tori.corrector_error(fam_n, f.point, SETTINGS) + 1e-11
         assert abs(f.point.lam - brute) <= tol, (f.point.lam, brute, tol)
         assert sign * f.point.lam >= max(sign * a.lam, sign * b.lam)     # beyond both ends of its step
         assert abs(f.point.tangent[-1]) < 1e-8           # the located point's d mu / ds: Brent to locate_xtol
@@ -181,7 +170,8 @@ def test_the_stability_change_is_located_at_the_fold_within_its_stated_error(run
     for ts, tf in zip(changes, folds):
         where = ts.event.location
         assert ts.point is not None and not where.reason and 0 < where.lam_error < 1e-4
-        assert abs(ts.point.lam - tf.point.lam) <= where.lam_error + 2.0 * _corrector_error(fam, tf.point)
+        assert 0 < tf.event.location.lam_error < 1e-7      # the corrector's error: tol 1e-10 times ~20
+        assert abs(ts.point.lam - tf.point.lam) <= where.lam_error + tf.event.location.lam_error
 
 
 def test_a_stability_change_hidden_by_the_exponents_error_keeps_its_bracket(run):

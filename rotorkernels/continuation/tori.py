@@ -260,14 +260,14 @@ class StabilityChange(ev.BranchEvent):
         found = engine.locate_zero(problem, a, b, lambda sol: _as_point(problem, sol, a, settings, counter)
                                    .stability.exponents[0], replace(settings, locate_xtol=max(ds_e, settings.locate_xtol)),
                                    counter)
-        return _located(problem, a, b, found, 2.0 * ds_e)    # the estimate's zero within ds_e, Brent's within ds_e
+        return _located(problem, a, b, found, 2.0 * ds_e, settings)  # the estimate's zero within ds_e, Brent's too
 
 
 class Fold(ev.BranchEvent):
     """A fold of tori: the tangent's parameter component d mu / ds changes sign (the branch turns
     back in lambda). A flag to the engine, located afterwards (locate_flags) at the zero of d mu /
     ds by Brent on the arclength to the engine's locate_xtol: lambda is stationary there, so its
-    error is the corrector's (a point solved to the corrector's tolerance), not the arclength's."""
+    error is the corrector's (corrector_error), not the arclength's."""
     label, code, locates, end = ev.EVENT_LABELS[ev.TORUS_FOLD], ev.TORUS_FOLD, False, None
 
     def detect(self, problem, a, b):
@@ -277,7 +277,7 @@ class Fold(ev.BranchEvent):
         """(point, correctors spent, Location)."""
         found = engine.locate_zero(problem, a, b, lambda sol: _as_point(problem, sol, a, settings, counter).tangent[-1],
                                    settings, counter)
-        return _located(problem, a, b, found, settings.locate_xtol)
+        return _located(problem, a, b, found, settings.locate_xtol, settings)
 
 
 class Location(NamedTuple):
@@ -308,10 +308,11 @@ def _as_point(problem, solution, a, settings, counter):
     return point
 
 
-def _located(problem, a, b, found, ds):
+def _located(problem, a, b, found, ds, settings):
     """(point, correctors spent, Location) of engine.locate_zero's answer `found`, the located
     point's arclength known to ds: its lambda to |d lambda / ds| ds plus the curvature's term
-    (the tangent's parameter component's change over the step times ds^2 / 2)."""
+    (the tangent's parameter component's change over the step times ds^2 / 2), plus the
+    corrector's own error (corrector_error)."""
     bracket = (a.lam, b.lam)
     if found is None:
         return None, 0, Location(np.nan, bracket, "the branch could not be followed between the points, or Brent "
@@ -320,7 +321,21 @@ def _located(problem, a, b, found, ds):
     sigma_b = float(a.tangent @ (b.X - a.X))
     bend = abs((b.tangent[-1] - a.tangent[-1]) / sigma_b)
     err = problem.scale * (abs(point.tangent[-1]) * ds + 0.5 * bend * ds ** 2)
-    return point, spent, Location(err, bracket, "")
+    return point, spent, Location(err + corrector_error(problem, point, settings), bracket, "")
+
+
+def corrector_error(problem, point, settings):
+    """The lambda error of a point solved to the corrector's tolerance: its residual, at most tol
+    max(1, max |U|), times the norm of the inverse bordered Jacobian [dR/dU dR/dmu; t] (the
+    distance from the exact branch point on its hyperplane), in lambda's units (inf where the
+    point's shots or the Jacobian fail)."""
+    _, jac, _, ok, _ = problem.residual(point.X, True)
+    col, _ = problem.dr_dmu(point.X, settings.fd_step)
+    if not ok or col is None:
+        return np.inf
+    smallest = np.linalg.svd(_bordered(jac, col, point.tangent), compute_uv=False)[-1]
+    bound = settings.tol * max(1.0, np.abs(point.X[:-1]).max()) / smallest if smallest > 0 else np.inf
+    return float(problem.scale * bound)
 
 
 def locate_flags(problem, run, settings, counter):
