@@ -218,7 +218,8 @@ def stable_runs(ds, b):
     n = int(ds["branch_points"].values[b])
     located = {int(p): float(v) for br, p, v, k in zip(ds["event_branch"].values, ds["event_point"].values,
                                                        ds["event_parameter"].values, ds["event_type"].values)
-               if br == b and k != codes.PEAK}     # a peak changes no stability
+               if br == b and k not in (codes.PEAK, codes.LOCKED) and np.isfinite(v)}
+    # a peak or a locked ratio changes no stability; a torus flag not located has no parameter
     return runs_of(ds["parameter"].values[b, :n], ds["stable"].values[b, :n] == 1, located)
 
 

@@ -51,6 +51,10 @@ def _num(lo=-math.inf, hi=math.inf, lo_open=False, hi_open=False, default=None, 
 # spec has one)
 FREQUENCY_UNITS = ("Hz", "omega_l")
 
+# A torus branch's Fourier modes K (2K + 1 nodes): the counts its adaptive node count takes (it
+# doubles, N -> 2N + 1, i.e. K -> 2K + 1, from the first torus's 15 nodes, and halves back), 7..127 nodes
+TORUS_MODES = (3, 7, 15, 31, 63)
+
 SCHEMA = {
     "scene": {
         "name": Key("str", required=True, pattern=r"[A-Za-z0-9_.-]+", help="name of the scene; default output out/<name>.nc"),
@@ -98,6 +102,12 @@ SCHEMA = {
                                          help="branch switching depth at period doublings (2: 1 -> 2 -> 4)"),
         "curves_in": Key("str", default="", help="a second swept axis: continue every fold, period doubling and "
                                                   "Neimark-Sacker point of the period-1 branches in it (boundary curves)"),
+        "torus_min_modes": Key("choice", default=3, choices=TORUS_MODES,
+                               help="a torus branch's fewest Fourier modes K (2K + 1 nodes): its circle's node count "
+                                    "shrinks to no fewer where a coarser count resolves it (K -> (K - 1) / 2)"),
+        "torus_max_modes": Key("choice", default=31, choices=TORUS_MODES,
+                               help="a torus branch's most Fourier modes K (2K + 1 nodes; K -> 2K + 1 where the "
+                                    "spectrum widens): where its circle needs more, the branch ends torus_breakdown"),
     },
     "backbone": {   # `rotorsweep backbone`: nonlinear normal modes of a conservative model
         "modes": Key("str", default="all", help="mode numbers (1 = the lowest linear frequency), e.g. \"1, 3\"; or all"),
@@ -412,10 +422,19 @@ def _cross_checks(spec, data, axes, errors):
         errors.append("analysis: floquet and attractor are both false; nothing to compute")
     errors.extend(attractor.Settings.from_keys(ana).problems("analysis."))
     errors.extend(_report_checks(spec, data["report"]))
+    errors.extend(_torus_mode_checks(data["continuation"]))
     num = data["numerics"]
     if num["integrator"] == "dop853" and num["newton_tol"] < num["rtol"]:
         errors.append(f"numerics.newton_tol: must be >= numerics.rtol ({num['rtol']:g}); Newton cannot "
                       "converge below the integration accuracy")
+
+
+def _torus_mode_checks(sec):
+    """The torus branches' node-count bounds: the fewest modes no more than the most."""
+    lo, hi = sec["torus_min_modes"], sec["torus_max_modes"]
+    if lo > hi:
+        return [f"continuation.torus_min_modes: must be <= continuation.torus_max_modes ({hi}), got {lo}"]
+    return []
 
 
 def _report_checks(spec, rep):

@@ -5,7 +5,7 @@ import json
 
 import numpy as np
 
-from rotorsweep.pipeline import result_kinds
+from rotorsweep.pipeline import query, result_kinds
 from rotorsweep.pipeline.coexistence import bistable_intervals, branch_copy_of, distinct_branches, distinct_events
 from rotorsweep.kernels import continuation_codes as codes
 
@@ -104,7 +104,7 @@ def torus_lines(ds, par, unit):
         return []
     obs = list(ds["observable"].values)
     j = obs.index(ds.attrs["report_observable"]) if ds.attrs.get("report_observable") in obs else 0
-    out = []
+    out, stretches = [], query.branch_unstable_stretches(ds)
     for b in np.flatnonzero(ds["branch_kind"].values == 1):
         n = int(ds["branch_points"].values[b])
         if not n:
@@ -117,10 +117,27 @@ def torus_lines(ds, par, unit):
                    f"{np.nanmax(ds['torus_error'].values[b, :n]):.2g}{modes_text(ds, b, n)}")
         out += [f"    stability changes between {par} {lam[i]:.10g} and {lam[i + 1]:.10g} {unit}"
                 for i in np.flatnonzero((status[:-1] != status[1:]) & (status[:-1] < 2) & (status[1:] < 2))]
-        out += [f"    {codes.EVENT_LABELS[int(ds['event_type'].values[k])]} at {par} {ds['event_parameter'].values[k]:.10g} "
-                f"{unit}: {ds['event_note'].values[k]}"
-                for k in np.flatnonzero(ds["event_branch"].values == b)] if "event_note" in ds else []
+        out += [event_line(ds, k, par, unit) for k in np.flatnonzero(ds["event_branch"].values == b)] \
+            if "event_note" in ds else []
+        out += [stretch_line(st, par, unit) for st in stretches if st["branch"] == b]
     return out
+
+
+def stretch_line(st, par, unit):
+    """`info`'s line of an unstable torus stretch (query.branch_unstable_stretches): its points and
+    where its stability is lost and regained (the located TS / TF events)."""
+    def at(value):
+        return f"{value:.10g} {unit}" if np.isfinite(value) else "not located"
+    return (f"    unstable from {par} {st['start']:.10g} to {st['end']:.10g} {unit} ({st['n_points']} points): "
+            f"onset {at(st['onset'])}, offset {at(st['offset'])}")
+
+
+def event_line(ds, k, par, unit):
+    """`info`'s line of a torus branch's event k: where it was located (a flag kept as a bracket,
+    NaN parameter, says so; its note gives the bracket)."""
+    value = ds["event_parameter"].values[k]
+    where = f"at {par} {value:.10g} {unit}" if np.isfinite(value) else "(not located)"
+    return f"    {codes.EVENT_LABELS[int(ds['event_type'].values[k])]} {where}: {ds['event_note'].values[k]}"
 
 
 def modes_text(ds, b, n):

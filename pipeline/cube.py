@@ -293,7 +293,8 @@ def _describe_classes(ds):
         totals[run["class"]] = totals.get(run["class"], 0) + run["n_points"]
     lines = ["", "points per stability class (stable, bistable, no_orbit, not_applicable: what the grid "
              "point is; fold, period_doubling, neimark_sacker, none: how stability was lost before its "
-             "unstable interval, as `query --unstable` says):"]
+             "unstable interval, as `query --unstable` says"
+             + (f"; {query.TORUS_CLASS_LEGEND}" if "torus_status" in ds else "") + "):"]
     lines += [f"  {name:<16} {n:>8}" for name, n in totals.items()]
     lines += ["", f"stability intervals along {along}:"]
     for run in runs:

@@ -367,6 +367,13 @@ def class_runs(ds):
     return out
 
 
+# `info`'s legend of the torus classes (torus_class_names), after the orbit classes' one
+TORUS_CLASS_LEGEND = ("quasi_periodic_stable, quasi_periodic_unstable, quasi_periodic_undecided: the point's forcing "
+                      "is quasi-periodic (no periodic orbit by design) and its torus is normally stable, unstable, or "
+                      "undecided (the largest normal exponent within its error of 0); torus_failed: its torus did not "
+                      "converge (torus_status says why)")
+
+
 def torus_class_names(ds):
     """Per point (array over orbit_status' dims): where the point has no orbit by design and its
     torus was attempted (rotorsweep.pipeline.torus_points) "quasi_periodic_<stable|unstable|undecided>",
@@ -449,27 +456,33 @@ def branch_unstable_stretches(ds):
 
     Each entry: the line's coordinates, `branch`, `kind` (periodic_orbit / torus), `start`/`end`
     (the parameter at the run's first and last point), `onset`/`offset` (the located fold, period
-    doubling, Neimark-Sacker or branch point just before / after the run; NaN where none: at a
-    branch end, and on torus branches, whose stability changes are flagged between points, not
-    located), `n_points`, `type` (the onset's event name, "none" without one, or
-    quasi_periodic_unstable), the run's largest `max_abs_multiplier` (orbits) and
-    `max_torus_exponent` [1/s] (tori)."""
+    doubling, Neimark-Sacker or branch point just before / after the run; on a torus branch the
+    located change of normal stability, TS, else the located fold of tori, TF, between the run and
+    the nearest decided point outside it (the undecided points next to a crossing lie between);
+    NaN where none was located: at a branch end, or a flag kept as a bracket), `n_points`, `type`
+    (the onset's event name, "none" without one, or quasi_periodic_unstable), the run's largest
+    `max_abs_multiplier` (orbits) and `max_torus_exponent` [1/s] (tori)."""
     from rotorsweep.pipeline import coexistence
     from rotorsweep.kernels import continuation_codes as ev
 
     tori = ds["branch_kind"].values == 1 if "branch_kind" in ds else np.zeros(ds.sizes["branch"], bool)
     lines = [c for c in ds.coords if ds[c].dims == ("branch",)]
-    located = {(int(b), int(p)): (float(v), ev.EVENT_TYPES[int(k)]) for b, p, v, k in zip(
-        ds["event_branch"].values, ds["event_point"].values, ds["event_parameter"].values, ds["event_type"].values)
-        if k in (ev.FOLD, ev.PERIOD_DOUBLING, ev.NEIMARK_SACKER, ev.BRANCH_POINT)}
+    rows = list(zip(ds["event_branch"].values, ds["event_point"].values, ds["event_parameter"].values,
+                    ds["event_type"].values))
+    located = {(int(b), int(p)): (float(v), ev.EVENT_TYPES[int(k)]) for b, p, v, k in rows
+               if k in (ev.FOLD, ev.PERIOD_DOUBLING, ev.NEIMARK_SACKER, ev.BRANCH_POINT)}
     out = []
     for b in coexistence.distinct_branches(ds):
         n = int(ds["branch_points"].values[b])
         lam = ds["parameter"].values[b, :n]
         torus = bool(tori[b])
-        unstable = (ds["torus_status"].values[b, :n] == 0) if torus else (ds["stable"].values[b, :n] == 0)
+        status = ds["torus_status"].values[b, :n] if torus else None
+        unstable = (status == 0) if torus else (ds["stable"].values[b, :n] == 0)
         for i0, i1 in _runs(unstable):
-            onset, offset = located.get((b, i0 - 1), (np.nan, "none")), located.get((b, i1), (np.nan, None))
+            if torus:
+                onset, offset = torus_crossings(rows, b, status, i0, i1)
+            else:
+                onset, offset = located.get((b, i0 - 1), (np.nan, "none")), located.get((b, i1), (np.nan, None))
             out.append({**{c: float(ds[c].values[b]) for c in lines}, "branch": int(b),
                         "kind": "torus" if torus else "periodic_orbit", "start": float(lam[i0]), "end": float(lam[i1]),
                         "onset": onset[0], "offset": offset[0], "n_points": int(i1 - i0 + 1),
@@ -478,3 +491,25 @@ def branch_unstable_stretches(ds):
                         "max_torus_exponent": _nanmax(ds["torus_exponent"].values[b, i0:i1 + 1])
                         if "torus_exponent" in ds else float("nan")})
     return out
+
+
+def torus_crossings(rows, b, status, i0, i1):
+    """((onset, label), (offset, label)) of the unstable run i0..i1 of torus branch b (status: its
+    torus_status, 2 undecided): the located TS, else TF, event row (rows: (branch, point,
+    parameter, type)) on a step between the run's end and the nearest decided point beyond the
+    undecided ones next to it; (NaN, "none") where there is none."""
+    from rotorsweep.kernels import continuation_codes as ev
+
+    def crossing(lo, hi):
+        """The event on the steps lo .. hi (a step k: points k to k + 1)."""
+        for code in (ev.TORUS_STABILITY, ev.TORUS_FOLD):
+            hits = [v for eb, p, v, k in rows if eb == b and k == code and lo <= p <= hi and np.isfinite(v)]
+            if hits:
+                return float(hits[0]), ev.EVENT_TYPES[code]
+        return np.nan, "none"
+    before, after = i0 - 1, i1 + 1
+    while before > 0 and status[before] == 2:
+        before -= 1
+    while after < len(status) - 1 and status[after] == 2:
+        after += 1
+    return crossing(max(before, 0), i0 - 1), crossing(i1, after - 1)

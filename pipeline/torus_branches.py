@@ -4,12 +4,13 @@ the parameter by rotorsweep.kernels.continuation.tori instead of a periodic orbi
 
 The first torus comes from a settled transient: the stroboscopic map (one first-forcing period T,
 the second forcing's phase advancing by rho) iterated SETTLE_PERIODS times from the model's cold
-guess, then FIT_PERIODS samples fitted by a trigonometric interpolant (torus.fitted_guess) and
-solved (torus.solve_torus, nodes grown until the Fourier tail is below DECAY_TOL). Along the branch
-the node count adapts to the circle's spectral decay (tori.follow_tori): it grows (N -> 2N + 1, at
-most MAX_NODES) where a point's tail exceeds DECAY_TOL, as the first torus's, and shrinks (to no
-fewer than MIN_NODES) where a coarser count keeps it a thousandfold below; at MAX_NODES the tail
-may rise to BREAKDOWN_TOL, and the branch ends `torus_breakdown` where it exceeds that, its detail
+guess, then FIT_PERIODS samples fitted by a trigonometric interpolant (torus.fitted_guess) on
+FIRST_NODES nodes (within the scene's bounds) and solved (torus.solve_torus, nodes grown until the
+Fourier tail is below DECAY_TOL). Along the branch the node count adapts to the circle's spectral
+decay (tori.follow_tori) within the bounds of the scene's [continuation] torus_min_modes and
+torus_max_modes (K Fourier modes, 2K + 1 nodes; node_bounds): it grows (N -> 2N + 1) where a
+point's tail exceeds DECAY_TOL, as the first torus's, and shrinks where a coarser count keeps it a
+thousandfold below; at the most nodes the tail may rise to BREAKDOWN_TOL, and the branch ends `torus_breakdown` where it exceeds that, its detail
 saying whether a contact opens along the last circle (contact_note: contact_loss, the usual cause).
 Each point records its count (torus_modes: K of its 2K + 1 nodes).
 
@@ -33,12 +34,11 @@ import time
 import numpy as np
 
 from rotorsweep.pipeline import compute, runlog, torus_events, torus_points
-from rotorsweep.pipeline.torus_points import AMPLITUDE_PHASES, DECAY_TOL, FIRST_NODES, FIT_PERIODS, MAX_NODES, SETTLE_PERIODS
+from rotorsweep.pipeline.torus_points import AMPLITUDE_PHASES, DECAY_TOL, FIRST_NODES, FIT_PERIODS, SETTLE_PERIODS
 from rotorsweep.kernels import torus as tr
 from rotorsweep.kernels.continuation import engine, tori
 
-BREAKDOWN_TOL = 1e-7    # a tail above it at MAX_NODES ends the branch (below it: more nodes above DECAY_TOL)
-MIN_NODES = 7           # the fewest nodes a branch shrinks to (3 Fourier modes)
+BREAKDOWN_TOL = 1e-7    # a tail above it at the most nodes ends the branch (below it: more nodes above DECAY_TOL)
 # The torus branch's parameter counts in its own unit (Hz), not in range widths: the circle's rms
 # change is ~0.02 per Hz where the response is flat (Fig. 3a), so there a step of ds_max moves the
 # parameter by ~ds_max Hz whatever the range, and near a resonance the circle by ~ds_max (tori.py).
@@ -107,14 +107,21 @@ def _builder(scene, where, parameter):
     return lambda lam: build({**values, parameter: lam})
 
 
+def node_bounds(scene):
+    """(fewest, most) nodes of the scene's torus branches: [continuation] torus_min_modes and
+    torus_max_modes K, 2K + 1 nodes each."""
+    sec = scene.continuation
+    return 2 * int(sec.torus_min_modes) + 1, 2 * int(sec.torus_max_modes) + 1
+
+
 def torus_family(scene, pl, where, n_nodes):
     spec = scene.model
     phase, freq, _ = spec.torus_forcing
     built = _builder(scene, where, pl.parameter)
+    lo, hi = node_bounds(scene)
     return tori.TorusFamily(spec.kernel, lambda lam: built(lam).p, lambda lam: float(built(lam).p[freq]), phase,
                             scene.integrator, n_nodes, scale=PARAMETER_UNIT,
-                            decay_tol=DECAY_TOL, min_nodes=MIN_NODES, max_nodes=MAX_NODES,
-                            breakdown_tol=BREAKDOWN_TOL), built
+                            decay_tol=DECAY_TOL, min_nodes=lo, max_nodes=hi, breakdown_tol=BREAKDOWN_TOL), built
 
 
 def first_torus(scene, pl, where):
@@ -122,11 +129,12 @@ def first_torus(scene, pl, where):
     whether it converged."""
     spec = scene.model
     phase, freq, _ = spec.torus_forcing
-    family, built = torus_family(scene, pl, where, FIRST_NODES)
+    lo, hi = node_bounds(scene)
+    n_first = min(max(FIRST_NODES, lo), hi)
+    family, built = torus_family(scene, pl, where, n_first)
     p = built(pl.start).p
     circle = tr.torus_from_transient(spec.kernel, spec.cold_guess(p), p, phase, p[freq], family.opts, SETTLE_PERIODS,
-                                     FIT_PERIODS, FIRST_NODES, tol=pl.settings.tol, decay_tol=DECAY_TOL,
-                                     max_nodes=MAX_NODES)
+                                     FIT_PERIODS, n_first, tol=pl.settings.tol, decay_tol=DECAY_TOL, max_nodes=hi)
     if circle is None:
         return None, family, built
     return circle, family._replace(n_nodes=circle.nodes.shape[0]), built
@@ -205,7 +213,8 @@ def torus_record(model, family, built, run, n_rhs):
     counts = np.array([family.nodes(p.X).shape[0] for p in pts], int)
     periods = np.array([built(p.lam).period for p in pts])
     none = np.zeros(0)
-    return {**torus_events.event_rows(model, family, built, run, amp),
+    return {**torus_events.event_rows(model, family, built, run,
+                                      lambda p: torus_amplitudes(model, family, built, p)),
         "parameter": np.array([p.lam for p in pts]), "arclength": arclength(family, pts),
         "state": np.array([family.nodes(p.X)[0] for p in pts]).reshape(len(pts), n_state),
         "multipliers": np.full((len(pts), n_state), np.nan + 0j),

@@ -1,6 +1,7 @@
 """The events of a torus branch (rotorsweep.pipeline.torus_branches) as the continuation result's event rows:
 the flags of rotorsweep.kernels.continuation.tori (TS: the normal stability changes, TF: a fold of
-tori) between two points, and each locked ratio omega / Omega = p / q (q <= LOCK_DENOMINATOR)
+tori), each located between two points (tori.locate_flags; where not located, the row's values
+are NaN and its note gives the bracket and why), and each locked ratio omega / Omega = p / q (q <= LOCK_DENOMINATOR)
 the branch passes, linked to the periodic-orbit solver.
 
 At a locked ratio the branch's torus is solved exactly there (tori.Locked); its circle then
@@ -24,15 +25,15 @@ SHOOT_TOL = 1e-11       # the shooting's residual (scaled state: um and um per s
 LINK_TOL = 1e-6
 
 
-def event_rows(model, family, built, run, amplitudes):
-    """The record's event_* arrays of a torus Run (amplitudes: (points, 2, observables), the
-    points' max |o| and half-swing), plus event_note (words per event) and event_periods (forcing
+def event_rows(model, family, built, run, amplitudes_at):
+    """The record's event_* arrays of a torus Run (amplitudes_at: a point -> (max |o|, half-swing)
+    of each observable over its torus), plus event_note (words per event) and event_periods (forcing
     periods of the event's orbit: a locked p/q row's linked orbit closes after q shaft turns; 1 on a
     flag's row, the branch's). A branch's end (breakdown) is its end reason, not an event
     (tori.follow_tori leaves it out of run.found)."""
-    rows = [_locked_row(model, family, built, f) if f.event.code == ev.LOCKED else _flag_row(family, run, f, amplitudes)
-            for f in run.found]
     n, n_obs = family.kernel.n_state, len(model.observables)
+    rows = [_locked_row(model, family, built, f) if f.event.code == ev.LOCKED else
+            _flag_row(family, run, f, amplitudes_at, n_obs) for f in run.found]
     return {
         "event_type": np.array([f.event.code for f in run.found], int),
         "event_parameter": np.array([r[0] for r in rows], float),
@@ -46,16 +47,24 @@ def event_rows(model, family, built, run, amplitudes):
     }
 
 
-def _flag_row(family, run, found, amplitudes):
-    """A flag between points index and index + 1: recorded at the second point (its circle at
-    phase 0 and its amplitudes; a torus has no Floquet multipliers)."""
-    a, b = run.points[found.index], run.points[found.index + 1]
+def _flag_row(family, run, found, amplitudes_at, n_obs):
+    """A TS or TF flag between points index and index + 1, located there by
+    tori.locate_flags: the located torus (its lambda, its circle at phase 0, its amplitudes; a
+    torus has no Floquet multipliers), or NaN where it was not located, the note then giving the
+    bracket and why."""
+    a, b = run.points[found.index], run.points[min(found.index + 1, len(run.points) - 1)]
+    where = found.event.location
     what = {ev.TORUS_STABILITY: f"normal stability {a.stability.status} -> {b.stability.status}",
             ev.TORUS_FOLD: "the branch turns back"}[found.event.code]
-    note = f"{what} between {a.lam:.10g} and {b.lam:.10g}"
-    k = found.index + 1
-    return (b.lam, family.nodes(b.X)[0], np.full(family.kernel.n_state, np.nan + 0j),
-            amplitudes[k, 0], amplitudes[k, 1], note)
+    between = f"between {where.bracket[0]:.10g} and {where.bracket[1]:.10g}"
+    nan = np.full(family.kernel.n_state, np.nan + 0j)
+    point = found.point
+    if point is None:
+        return (np.nan, nan.real, nan, np.full(n_obs, np.nan), np.full(n_obs, np.nan),
+                f"{what} {between}, not located: {where.reason}")
+    hi, half = amplitudes_at(point)
+    return (point.lam, family.nodes(point.X)[0], nan, hi, half,
+            f"{what}, located to {where.lam_error:.2g} ({between})")
 
 
 def locked_orbit(model, family, point, q):

@@ -14,7 +14,7 @@ from scipy.integrate import solve_ivp
 from rotorsweep.kernels import torus as tr
 from rotorsweep.kernels.continuation import engine, events as ev
 from rotorsweep.kernels.models import rigid_preloaded_kernels as rp
-from rotorsweep.pipeline import cli, config, continuation, continuation_result, torus_branches
+from rotorsweep.pipeline import cli, config, continuation, continuation_result, query, torus_branches
 
 SCENE = "configs/filipkovsky2016_torus_fold.toml"
 STABLE, UNSTABLE, UNDECIDED = (torus_branches.TORUS_STATUS[k] for k in (tr.STABLE, tr.UNSTABLE, tr.UNDECIDED))
@@ -100,3 +100,26 @@ def test_the_flow_leaves_an_unstable_torus_and_returns_to_a_stable_one(result):
         ratio = dist[-1] / 1e-6
         assert (ratio > 1.0) == leaves, (k, ratio)
         assert np.log(ratio) / (turns * period) == pytest.approx(exponent[k], abs=np.log(5.0) / (turns * period))
+
+
+def located_error(note):
+    """The error a located flag's note states ("..., located to 1.2e-03 (between ...)")."""
+    return float(note.split("located to ")[1].split()[0])
+
+
+def test_the_fold_and_the_stability_change_are_located_and_bound_the_unstable_stretch(result):
+    """TF located at the turn: at or beyond the branch's largest speed (the fold is lambda's
+    maximum), within the step that brackets it; TS located at the fold within the two stated
+    errors (theory: a normal multiplier is 1 at a fold of tori); the first unstable stretch's
+    onset is that TS (query --unstable)."""
+    ds, _ = result
+    lam, _, _ = branch(ds)
+    types, values = ds["event_type"].values, ds["event_parameter"].values
+    notes = [str(n) for n in ds["event_note"].values]
+    (k_tf,), (k_ts,) = np.flatnonzero(types == ev.TORUS_FOLD), np.flatnonzero(types == ev.TORUS_STABILITY)
+    tf, ts = values[k_tf], values[k_ts]
+    err_tf, err_ts = located_error(notes[k_tf]), located_error(notes[k_ts])
+    assert lam.max() - err_tf <= tf <= lam.max() + np.abs(np.diff(lam)).max()
+    assert abs(ts - tf) <= err_ts + err_tf
+    stretches = query.branch_unstable_stretches(ds)
+    assert stretches[0]["onset"] == ts

@@ -90,7 +90,7 @@ def continuation_result():
         "parameter": (bp, lam), "stable": (bp, stable), "torus_status": (bp, status), "max_abs_multiplier": (bp, mu),
         "torus_exponent": (bp, exponent), "branch_points": ("branch", [6, 6]), "branch_kind": ("branch", [0, 1]),
         "event_branch": ("event", [0, 0, 1]), "event_point": ("event", [1, 4, 1]),
-        "event_parameter": ("event", [2.5, 5.5, 8.0]),
+        "event_parameter": ("event", [2.5, 5.5, np.nan]),     # the TS flag not located: NaN
         "event_type": ("event", [ev.FOLD, ev.PERIOD_DOUBLING, ev.TORUS_STABILITY])},
         coords={"speed": ("branch", [250.0, 250.0])})
 
@@ -104,3 +104,34 @@ def test_a_continuation_lists_the_unstable_stretches_of_orbit_and_torus_branches
     assert np.isnan(rows[1]["onset"]) and np.isnan(rows[1]["offset"])        # a TS flag is not located
     assert (rows[1]["max_torus_exponent"], rows[2]["max_torus_exponent"]) == (2.0, 4.0)
     assert all(r["speed"] == 250.0 for r in rows)
+
+
+def test_info_explains_the_torus_classes_in_its_legend(ds):
+    from rotorsweep.pipeline import cube
+    text = cube.describe(ds)
+    legend = next(line for line in text.splitlines() if line.startswith("points per stability class"))
+    for name in ("quasi_periodic_stable", "quasi_periodic_unstable", "quasi_periodic_undecided", "torus_failed"):
+        assert name in legend
+
+
+def test_a_located_stability_change_is_the_torus_stretch_onset_and_offset():
+    """Torus branch 1 (statuses 1 1 0 0 2 0): its located TS on the step 1 -> 2 is the first unstable
+    stretch's onset; a located TF on the step 3 -> 4, beside the undecided point 4, is both that
+    stretch's offset and the next one's onset (TF stands in where no TS is located), which runs to
+    the branch's end (no offset); a TS not located (NaN) is never an onset."""
+    from rotorsweep.kernels.continuation import events as ev
+    result = continuation_result()
+    result = result.assign(event_branch=("event", [0, 0, 1, 1, 1]), event_point=("event", [1, 4, 1, 3, 3]),
+                           event_parameter=("event", [2.5, 5.5, 8.5, np.nan, 6.75]),
+                           event_type=("event", [ev.FOLD, ev.PERIOD_DOUBLING, ev.TORUS_STABILITY,
+                                                 ev.TORUS_STABILITY, ev.TORUS_FOLD]))
+    rows = query.branch_unstable_stretches(result)
+    assert [(r["onset"], r["offset"]) for r in rows[1:2]] == [(8.5, 6.75)]
+    assert rows[2]["onset"] == 6.75 and np.isnan(rows[2]["offset"])     # the branch ends unstable
+    assert (rows[0]["onset"], rows[0]["offset"]) == (2.5, 5.5)
+
+
+def test_info_names_a_torus_stretch_onset_and_offset_or_says_not_located():
+    from rotorsweep.pipeline import continuation_result as cr
+    line = cr.stretch_line({"start": 8.0, "end": 7.0, "n_points": 2, "onset": 8.5, "offset": np.nan}, "speed", "Hz")
+    assert line.strip() == "unstable from speed 8 to 7 Hz (2 points): onset 8.5 Hz, offset not located"

@@ -96,13 +96,14 @@ def test_a_torus_line_that_does_not_start_is_an_empty_branch_with_a_reason(resul
 def test_each_torus_point_records_its_fourier_modes(result, capsys):
     """torus_modes: K of each point's 2K + 1 nodes, matching its non-NaN torus_nodes, within the
     adaptive bounds, with its CF attributes; `info` shows it beside the error estimate."""
-    d, _ = result
+    d, scene = result
     ds = continuation_result.open_result(d / "tori.nc")
     n = int(ds["branch_points"].values[0])
+    lo, hi = torus_branches.node_bounds(scene)
     modes = ds["torus_modes"].values[0, :n]
     held = (~np.isnan(ds["torus_nodes"].values[0, :n, :, 0])).sum(axis=1)
     assert (held == 2 * modes + 1).all()
-    assert ((torus_branches.MIN_NODES - 1) // 2 <= modes).all() and (modes <= (torus_branches.MAX_NODES - 1) // 2).all()
+    assert ((lo - 1) // 2 <= modes).all() and (modes <= (hi - 1) // 2).all()
     assert ds["torus_modes"].attrs["units"] == "1" and "Fourier modes" in ds["torus_modes"].attrs["long_name"]
     assert cli.main(["info", str(d / "tori.nc")]) in (0, None)
     assert f"Fourier modes {modes.min()}" in capsys.readouterr().out

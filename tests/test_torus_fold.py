@@ -2,8 +2,9 @@
 two-frequency Duffing oscillator (validation model duffing2) with its second forcing near the
 hardening resonance, continued in that forcing's frequency over a short range that passes both
 folds. Checked against harmonic balance (the fold's frequency), against theory (at a fold of tori
-a normal exponent crosses 0: the stability changes in the fold's step) and against the flow (a
-perturbed unstable circle is left, a perturbed stable one is approached, at the rate of the
+a normal exponent crosses 0: the stability changes in the fold's step, and is located there), against
+a brute-force search (the located fold is the extremum of lambda along the branch) and against the
+flow (a perturbed unstable circle is left, a perturbed stable one is approached, at the rate of the
 largest normal exponent)."""
 import numpy as np
 import pytest
@@ -15,6 +16,7 @@ from rotorsweep.kernels.models import duffing2, get
 MODEL = get("duffing2")
 OPTS = ig.settings(rtol=1e-11, atol=1e-13)
 K, C, GAMMA, F1, F2 = 2.0, 0.1, 0.5, 1.0, 0.2
+SETTINGS = engine.Settings(ds=0.1, ds_max=0.4, max_steps=120)
 
 
 def params(w2):
@@ -43,7 +45,7 @@ def run():
     fam = tori.TorusFamily(MODEL.kernel, params, lambda w2: w2, duffing2.P_PHASE, OPTS, start.nodes.shape[0],
                            decay_tol=1e-7)
     first = tori.start(fam, 1.5, start.nodes)
-    return fam, tori.follow_tori(fam, first, (1.5, 1.62), engine.Settings(ds=0.1, ds_max=0.4, max_steps=120))
+    return fam, tori.follow_tori(fam, first, (1.5, 1.62), SETTINGS)
 
 
 def harmonic_balance_fold():
@@ -109,3 +111,77 @@ def test_the_flow_leaves_an_unstable_torus_and_returns_to_a_stable_one(run):
         ratio = _drift(fam, point, n_maps) / 1e-7
         assert (ratio > 1) == (point.stability.status == tr.UNSTABLE)
         assert np.log(ratio) / n_maps == pytest.approx(point.stability.exponents[0], abs=np.log(5.0) / n_maps)
+
+
+def _located(r, code):
+    return [f for f in r.found if f.event.code == code]
+
+
+def _extreme_lambda(fam, a, b, sign, xtol=1e-4):
+    """sign * the largest sign * lambda of the corrected points on the arclength between points a
+    and b (the hyperplanes t_a . (X - X_a) = sigma), by a golden-section search on sigma to xtol:
+    the fold by brute force, from lambda alone (no tangent, no test function)."""
+    def lam(sigma):
+        sol, failure = engine.on_arclength(fam, a, sigma, SETTINGS, engine.Counter())
+        assert failure is None
+        return sign * sol.X[-1] * fam.scale
+    lo, hi, g = 0.0, float(a.tangent @ (b.X - a.X)), (np.sqrt(5.0) - 1.0) / 2.0
+    x1, x2 = hi - g * (hi - lo), lo + g * (hi - lo)
+    f1, f2 = lam(x1), lam(x2)
+    while hi - lo > xtol:
+        if f1 > f2:
+            hi, x2, f2 = x2, x1, f1
+            x1 = hi - g * (hi - lo)
+            f1 = lam(x1)
+        else:
+            lo, x1, f1 = x1, x2, f2
+            x2 = lo + g * (hi - lo)
+            f2 = lam(x2)
+    return sign * max(f1, f2)
+
+
+def test_the_folds_are_located_at_the_extremum_of_lambda(run):
+    """TF located (tangent's d mu / ds = 0 by Brent) against a golden-section search for the
+    extremum of lambda over corrected points: both are corrected points, each within its
+    corrector error of the branch (twice tori.corrector_error for the two), plus the search's own
+    error: lambda ~ lambda* - a (sigma - sigma*)^2 near the fold (a ~ 2e-4 here: lambda changes by
+    ~3e-5 over the fold's 0.4-long step) is resolved to a xtol^2 ~ 2e-12 by sigma to 1e-4."""
+    fam, r = run
+    folds = _located(r, ev.TORUS_FOLD)
+    assert len(folds) == 2 and all(f.point is not None and not f.event.location.reason for f in folds)
+    for f in folds:
+        a, b = r.points[f.index], r.points[f.index + 1]
+        fam_n = fam._replace(n_nodes=fam.nodes(a.X).shape[0])
+        sign = 1.0 if a.tangent[-1] > 0 else -1.0      # the upper fold turns from increasing lambda
+        brute = _extreme_lambda(fam_n, a, b, sign)
+        tol = 2.0 * tori.corrector_error(fam_n, f.point, SETTINGS) + 1e-11
+        assert abs(f.point.lam - brute) <= tol, (f.point.lam, brute, tol)
+        assert sign * f.point.lam >= max(sign * a.lam, sign * b.lam)     # beyond both ends of its step
+        assert abs(f.point.tangent[-1]) < 1e-8           # the located point's d mu / ds: Brent to locate_xtol
+
+
+def test_the_stability_change_is_located_at_the_fold_within_its_stated_error(run):
+    """At a fold of tori a normal multiplier is 1 (theory): the largest normal exponent's zero,
+    located by TS to its stated error (from the exponent's own error estimate), is the fold TF
+    locates independently (from the tangent) to the corrector's tolerance."""
+    fam, r = run
+    changes, folds = _located(r, ev.TORUS_STABILITY), _located(r, ev.TORUS_FOLD)
+    assert [f.index for f in changes] == [f.index for f in folds]
+    for ts, tf in zip(changes, folds):
+        where = ts.event.location
+        assert ts.point is not None and not where.reason and 0 < where.lam_error < 1e-4
+        assert 0 < tf.event.location.lam_error < 1e-7      # the corrector's error: tol 1e-10 times ~20
+        assert abs(ts.point.lam - tf.point.lam) <= where.lam_error + tf.event.location.lam_error
+
+
+def test_a_stability_change_hidden_by_the_exponents_error_keeps_its_bracket(run):
+    """Where the exponent's error estimate exceeds half its change over the step, TS is not
+    located: no point, no corrector spent, the bracket and the reason kept."""
+    fam, r = run
+    ts = _located(r, ev.TORUS_STABILITY)[0]
+    a, b = r.points[ts.index], r.points[ts.index + 1]
+    change = abs(b.stability.exponents[0] - a.stability.exponents[0])
+    noisy = b._replace(stability=b.stability._replace(spread=0.6 * change))
+    point, spent, where = tori.StabilityChange().place(fam, a, noisy, SETTINGS, engine.Counter())
+    assert point is None and spent == 0 and np.isnan(where.lam_error)
+    assert where.bracket == (a.lam, b.lam) and "exceeds half its change" in where.reason

@@ -32,7 +32,10 @@ bounds resolves it); a coarser count whose re-solve misses the tolerance is not 
 branch. Default bounds min_nodes = max_nodes = the family's n_nodes: a fixed count.
 
 The branch flags a change of normal stability (`TS`: the largest normal Lyapunov exponent changes
-sign) and a fold of tori (`TF`: the branch turns back in lambda), and solves the torus exactly
+sign) and a fold of tori (`TF`: the branch turns back in lambda), each located after the engine's
+run on the corrected points between the step's two (`locate_flags`: Brent on the arclength, TF at
+the zero of d mu / ds, TS at the zero of the exponent to the arclength its own error estimate
+allows, kept as a bracket with the reason where that error hides the sign), and solves the torus exactly
 where the rotation is 2 pi p / q with small q (`Locked`: there the circle consists of q-periodic
 points, which the caller links to the periodic-orbit solver's orbits).
 """
@@ -313,24 +316,122 @@ class Resolution(ev.BranchEvent):
 
 class StabilityChange(ev.BranchEvent):
     """The largest normal Lyapunov exponent changes sign (a fold of tori or a loss of normal
-    hyperbolicity); a flag between two points. The sign is read even where a point is undecided
-    (its exponent within its error of 0): next to a fold both points around the crossing are
-    (filipkovsky2016_torus_fold over 380-420 Hz: -0.71 and +0.31 1/s), and a rule on decided
-    statuses alone missed it; a point without exponents (NaN) never flags."""
+    hyperbolicity). The sign is read even where a point is undecided (its exponent within its
+    error of 0): next to a fold both points around the crossing are (filipkovsky2016_torus_fold
+    over 380-420 Hz: -0.71 and +0.31 1/s), and a rule on decided statuses alone missed it; a point
+    without exponents (NaN) never flags. A flag to the engine, located afterwards (locate_flags)."""
     label, code, locates, end = ev.EVENT_LABELS[ev.TORUS_STABILITY], ev.TORUS_STABILITY, False, None
 
     def detect(self, problem, a, b):
         ea, eb = a.stability.exponents[0], b.stability.exponents[0]
         return bool(np.isfinite(ea) and np.isfinite(eb) and (ea < 0) != (eb < 0))
 
+    def place(self, problem, a, b, settings, counter):
+        """(point, correctors spent, Location): the zero of the largest exponent by Brent on the
+        arclength, to the arclength ds_e = spread / |slope| over which the exponent's own error
+        (Stability.spread, the larger of the two ends') hides its sign (slope: the exponent's
+        secant over the step); not located (point None) where 2 ds_e exceeds the step."""
+        sigma_b = float(a.tangent @ (b.X - a.X))
+        ea, eb = a.stability.exponents[0], b.stability.exponents[0]
+        spread = max(a.stability.spread, b.stability.spread)
+        ds_e = spread * abs(sigma_b / (eb - ea))
+        if 2.0 * ds_e >= abs(sigma_b):
+            return None, 0, Location(np.nan, (a.lam, b.lam), f"the exponent's error {spread:.2g} exceeds half its "
+                                     f"change {abs(eb - ea):.2g} over the step (per unit scaled time)")
+        found = engine.locate_zero(problem, a, b, lambda sol: _as_point(problem, sol, a, settings, counter)
+                                   .stability.exponents[0], replace(settings, locate_xtol=max(ds_e, settings.locate_xtol)),
+                                   counter)
+        return _located(problem, a, b, found, 2.0 * ds_e, settings)  # the estimate's zero within ds_e, Brent's too
+
 
 class Fold(ev.BranchEvent):
-    """A fold of tori: the tangent's parameter component changes sign (the branch turns back in
-    lambda); a flag between two points."""
+    """A fold of tori: the tangent's parameter component d mu / ds changes sign (the branch turns
+    back in lambda). A flag to the engine, located afterwards (locate_flags) at the zero of d mu /
+    ds by Brent on the arclength to the engine's locate_xtol: lambda is stationary there, so its
+    error is the corrector's (corrector_error), not the arclength's."""
     label, code, locates, end = ev.EVENT_LABELS[ev.TORUS_FOLD], ev.TORUS_FOLD, False, None
 
     def detect(self, problem, a, b):
         return a.tangent[-1] * b.tangent[-1] < 0
+
+    def place(self, problem, a, b, settings, counter):
+        """(point, correctors spent, Location)."""
+        found = engine.locate_zero(problem, a, b, lambda sol: _as_point(problem, sol, a, settings, counter).tangent[-1],
+                                   settings, counter)
+        return _located(problem, a, b, found, settings.locate_xtol, settings)
+
+
+class Location(NamedTuple):
+    """Where a flag was located (locate_flags): lam_error the located lambda's error estimate
+    (physical units; NaN where not located), bracket the lambdas of the step's two points, reason
+    why it was not located ("" where it was)."""
+    lam_error: float
+    bracket: tuple
+    reason: str
+
+
+class LocatedFlag(NamedTuple):
+    """A TS or TF flag after location: what a Found's event is then (its code and label, and
+    where it was located)."""
+    code: int
+    label: str
+    location: Location
+
+
+def _as_point(problem, solution, a, settings, counter):
+    """A corrector's solution made a point (its tangent and stability; a Point, e.g. a step's end,
+    as it is); ValueError where it has no tangent (engine.locate_zero then gives up)."""
+    if isinstance(solution, Point):
+        return solution
+    point = problem.point(solution, a, settings, counter)
+    if point is None:
+        raise ValueError("no tangent at a corrector's solution")
+    return point
+
+
+def _located(problem, a, b, found, ds, settings):
+    """(point, correctors spent, Location) of engine.locate_zero's answer `found`, the located
+    point's arclength known to ds: its lambda to |d lambda / ds| ds plus the curvature's term
+    (the tangent's parameter component's change over the step times ds^2 / 2), plus the
+    corrector's own error (corrector_error)."""
+    bracket = (a.lam, b.lam)
+    if found is None:
+        return None, 0, Location(np.nan, bracket, "the branch could not be followed between the points, or Brent "
+                                                  "did not converge")
+    point, spent = found
+    sigma_b = float(a.tangent @ (b.X - a.X))
+    bend = abs((b.tangent[-1] - a.tangent[-1]) / sigma_b)
+    err = problem.scale * (abs(point.tangent[-1]) * ds + 0.5 * bend * ds ** 2)
+    return point, spent, Location(err + corrector_error(problem, point, settings), bracket, "")
+
+
+def corrector_error(problem, point, settings):
+    """The lambda error of a point solved to the corrector's tolerance: its residual, at most tol
+    max(1, max |U|), times the norm of the inverse bordered Jacobian [dR/dU dR/dmu; t] (the
+    distance from the exact branch point on its hyperplane), in lambda's units (inf where the
+    point's shots or the Jacobian fail)."""
+    _, jac, _, ok, _ = problem.residual(point.X, True)
+    col, _ = problem.dr_dmu(point.X, settings.fd_step)
+    if not ok or col is None:
+        return np.inf
+    smallest = np.linalg.svd(_bordered(jac, col, point.tangent), compute_uv=False)[-1]
+    bound = settings.tol * max(1.0, np.abs(point.X[:-1]).max()) / smallest if smallest > 0 else np.inf
+    return float(problem.scale * bound)
+
+
+def locate_flags(problem, run, settings, counter):
+    """The run with its TS and TF flags located: each such Found gets the located point (None where
+    not located), the correctors spent and a LocatedFlag as its event (module docstring). The
+    flags are located after the run, not by the engine, so that one not located keeps its row
+    (the engine drops a located event it cannot locate)."""
+    def placed(f):
+        if not isinstance(f.event, (StabilityChange, Fold)):
+            return f
+        a = run.points[f.index]
+        b = run.points[f.index + 1] if f.index + 1 < len(run.points) else run.points[0]  # a closed loop's last step
+        point, spent, where = f.event.place(problem, a, b, settings, counter)
+        return f._replace(event=LocatedFlag(f.event.code, f.event.label, where), point=point, evaluations=spent)
+    return run._replace(found=[placed(f) for f in run.found])
 
 
 class Locked(ev.Level):
@@ -420,7 +521,8 @@ def follow_tori(family, first, lam_range, settings=engine.Settings(), counter=No
         if len(points) >= settings.max_steps:
             return engine.Run(points + [first], found, engine.STEP_BUDGET, f"{settings.max_steps} steps")
         budget = replace(settings, ds=ds, max_steps=settings.max_steps - len(points))
-        run = engine.follow(family, first, [tuple(lam_range)], budget, events, counter)
+        run = locate_flags(family, engine.follow(family, first, [tuple(lam_range)], budget, events, counter),
+                           settings, counter)
         found += [f._replace(index=f.index + len(points)) for f in run.found if not isinstance(f.event, Resolution)]
         if run.end != TORUS_BREAKDOWN:
             last = run.points[-1]
