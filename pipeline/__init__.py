@@ -127,6 +127,20 @@ def numba_without_cffi():
     _around_import("numba.core.typing.cffi_utils", _cffi_unavailable)
 
 
+def pools_as_a_worker():
+    """For the command line's own process, before numpy loads: no BLAS or Numba thread pools of its
+    own (cluster.WORKER_ENV, where the user has not set them), as each Dask worker has. Small work
+    runs in this process (cluster.InProcess) one task at a time, like a worker; with OpenBLAS's
+    default threads, which spin while waiting, a torus branch's 631 x 631 solve took 136 ms of CPU
+    on a loaded 2-core machine instead of 7 ms single-threaded (issue 38)."""
+    import os
+
+    from rotorsweep.pipeline.cluster import WORKER_ENV
+
+    for key, value in WORKER_ENV.items():
+        os.environ.setdefault(key, value)
+
+
 def as_config(cfg, allow_large=False, whole_grid=True):
     """A validated Config from a path (or the name of a shipped scene: rotorsweep.pipeline.scenes), a Config
     (as it is) or None (the embedded demo scene).

@@ -425,6 +425,7 @@ def main(argv=None):
     """The command line (argv None: sys.argv, and the process exits when this returns)."""
     args = build_parser().parse_args(argv)
     if argv is None:
+        pipeline.pools_as_a_worker()
         pipeline.numba_without_cffi()
     interrupts = []
     disabled = logging.root.manager.disable

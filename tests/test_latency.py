@@ -312,6 +312,22 @@ def test_without_cffi_numba_treats_it_as_absent_and_cffi_still_imports():
     subprocess.run([sys.executable, "-c", code], check=True, env=env(), timeout=300, cwd=ROOT)
 
 
+# --- the command line's process has no thread pools of its own, as a worker (issue 38) ----------
+
+def test_the_command_line_process_sets_single_threaded_pools_before_numpy_and_keeps_the_users():
+    """numpy reads OPENBLAS_NUM_THREADS when it loads: the command line's own process (small work
+    runs there) must have it set by then, to what each Dask worker gets, unless the user set it."""
+    code = ("import os, sys; sys.argv = ['rotorsweep', 'scenes']; from rotorsweep.pipeline import cli, cluster; "
+            "assert 'numpy' not in sys.modules; cli.main(); "
+            "print(','.join(os.environ[k] for k in sorted(cluster.WORKER_ENV)))")
+    base = {k: v for k, v in env().items() if k not in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS",
+                                                        "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
+    run = lambda extra: subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,  # noqa: E731
+                                       env={**base, **extra}, timeout=300, cwd=ROOT, check=True).stdout
+    assert run({}).splitlines()[-1] == "1,1,1,1"
+    assert run({"OPENBLAS_NUM_THREADS": "2"}).splitlines()[-1] == "1,1,1,2"
+
+
 # --- info and query on a continuation or backbone result import no Numba (issue 35) ---------------
 
 @pytest.fixture(scope="module")
