@@ -57,7 +57,7 @@ def _flag_row(family, run, found, amplitudes_at, n_obs):
     bracket and why."""
     a, b = run.points[found.index], run.points[min(found.index + 1, len(run.points) - 1)]
     where = found.event.location
-    what = {ev.TORUS_STABILITY: f"normal stability {a.stability.status} -> {b.stability.status}",
+    what = {ev.TORUS_STABILITY: _exponent_change(family, a, b),
             ev.TORUS_FOLD: "the branch turns back"}[found.event.code]
     between = f"between {where.bracket[0]:.10g} and {where.bracket[1]:.10g}"
     nan = np.full(family.kernel.n_state, np.nan + 0j)
@@ -68,6 +68,15 @@ def _flag_row(family, run, found, amplitudes_at, n_obs):
     hi, half = amplitudes_at(point)
     return (point.lam, family.nodes(point.X)[0], nan, hi, half,
             f"{what}, located to {where.lam_error:.2g} ({between})")
+
+
+def _exponent_change(family, a, b):
+    """A TS flag in words: the largest normal exponent on both sides (per forcing period) with each
+    side's normal stability (both can be undecided next to the crossing, where the exponent lies
+    within its error of 0, while its sign change is what the flag says)."""
+    ea, eb = (p.stability.exponents[0] * family.period for p in (a, b))
+    return (f"largest normal exponent {ea:+.3g} -> {eb:+.3g} per forcing period (normal stability "
+            f"{a.stability.status} -> {b.stability.status})")
 
 
 def locked_orbit(model, family, point, q):

@@ -7,6 +7,8 @@ the flow, not the torus solver: a scipy DOP853 run from a point of a circle pert
 (scaled state, um) moves away from a torus the solver calls unstable and returns to one it calls
 stable, at about the rate of its largest normal exponent (issue 38: "a torus the transient
 diagnostics call attracting is stable, one they leave is unstable"). About 2 CPU minutes."""
+import re
+
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -121,5 +123,7 @@ def test_the_fold_and_the_stability_change_are_located_and_bound_the_unstable_st
     err_tf, err_ts = located_error(notes[k_tf]), located_error(notes[k_ts])
     assert lam.max() - err_tf <= tf <= lam.max() + np.abs(np.diff(lam)).max()
     assert abs(ts - tf) <= err_ts + err_tf
+    # the note says the exponent's sign change even where both sides are undecided (within error of 0)
+    assert re.search(r"largest normal exponent -\S+ -> \+\S+ per forcing period", notes[k_ts])
     stretches = query.branch_unstable_stretches(ds)
     assert stretches[0]["onset"] == ts
