@@ -12,13 +12,16 @@ Numba's cache index is read, extended and rewritten without a lock, and its data
 numbered by the index's length: two processes compiling different signatures of one function at
 once (two models' groups) may both write `<function>.1.nbc`, and the index may then point one
 signature at the other's machine code. Compiling under an exclusive lock on the cache directory
-serialises them; the process that waited then loads what the other compiled."""
+serialises them; the process that waited then loads what the other compiled. Loading what is
+cached only reads, so it holds the lock shared: small commands that only load run side by side,
+and none waits behind another's load, only behind a compilation (issue 35)."""
 import contextlib
 import fcntl
 import os
 import time
 
 import numba
+import numba.core.event
 
 import rotorsweep.kernels.attractor as diagnostics
 from rotorsweep.kernels import integrators as ig, models, orbits
@@ -36,14 +39,36 @@ def entry_points(spec, attractor=True, integrator="dop853"):
     return orbits.entry_points(spec, opts) + (diagnostics.entry_points(spec, opts) if attractor else [])
 
 
+class _ExclusiveOnCompile(numba.core.event.Listener):
+    """Turns the cache lock held on `fd` exclusive when Numba starts compiling, that is after it
+    found no cached compilation to load and before it writes one; once is enough."""
+
+    def __init__(self, fd):
+        self.fd, self.exclusive = fd, False
+
+    def on_start(self, event):
+        if not self.exclusive:
+            # not atomic (flock drops the shared lock first), so two upgrading readers cannot
+            # deadlock; one that compiled meanwhile makes this compilation redundant, not unsafe
+            fcntl.flock(self.fd, fcntl.LOCK_EX)
+            self.exclusive = True
+
+    def on_end(self, event):
+        pass
+
+
 @contextlib.contextmanager
 def cache_lock():
-    """An exclusive flock on the Numba cache directory (blocking; released when the process ends)."""
+    """A flock on the Numba cache directory (blocking; released on leaving, or when the process
+    ends): shared while Numba only loads cached kernels, exclusive from the first kernel it compiles
+    (and writes to the cache) on."""
     os.makedirs(numba.config.CACHE_DIR, exist_ok=True)
     fd = os.open(os.path.join(numba.config.CACHE_DIR, "compile.lock"), os.O_RDWR | os.O_CREAT, 0o666)
+    listener = _ExclusiveOnCompile(fd)
     try:
-        fcntl.flock(fd, fcntl.LOCK_EX)
-        yield
+        fcntl.flock(fd, fcntl.LOCK_SH)
+        with numba.core.event.install_listener("numba:compile", listener):
+            yield
     finally:
         os.close(fd)
 
