@@ -84,6 +84,9 @@ def run_command(tree, args, tree_name):
     env = trees.env(tree)
     env.pop("NUMBA_CACHE_DIR", None)            # each tree keys its own cache on its kernel sources
     env.pop("ROTORSWEEP_NUMBA_CACHE_DIR", None)
+    # an installed package has its bytecode (pip compiles it; the unmeasured first run writes a
+    # tree's): with PYTHONDONTWRITEBYTECODE set, every command compiled all its modules from source
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
     argv = argv_of(args, tree_name)
     cmd = [sys.executable, *argv] if argv[0] == "-c" else [sys.executable, "-m", trees.cli_module(tree), *argv]
     (BUILD / tree_name).mkdir(parents=True, exist_ok=True)
