@@ -321,7 +321,7 @@ def test_cubes_follow_the_cf_rules(tiny_cube, tmp_path):
     attrs = cube.open_cube(tiny_cube).attrs
     assert attrs["Conventions"] == cube.CONVENTIONS
     assert attrs["history"].endswith("rotorsweep 0.1.0: run scene tiny_attractor")
-    assert attrs["source"].startswith("rotorsweep 0.1.0, model jeffcott_clearance version 1:")
+    assert attrs["source"].startswith("rotorsweep 0.1.0, model jeffcott_clearance version 2:")
     assert "Bai" in attrs["references"] and "Applied Mathematics and Mechanics" in attrs["references"]
 
 

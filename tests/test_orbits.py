@@ -67,8 +67,8 @@ def test_a_point_without_orbit_has_every_multiplier_component_nan():
     from rotorsweep.kernels import continuation
 
     jeff = models.get("jeffcott_clearance")
-    built = jeff.build({"speed": 60.0, "clearance": 3.8e-6, "preset": "209", "stiffness": "bai2006",
-                        "preload_constant": "consistent", "cage_rotation": True, "mass": 2.0,
+    built = jeff.build({"speed": 60.0, "clearance": 3.8e-6, "preset": "209", "free_angle": "geometry",
+                        "stiffness": "bai2006", "preload_constant": "consistent", "cage_rotation": True, "mass": 2.0,
                         "damping": 300.0, "radial_load": "gravity", "gravity": 9.8})
     sol = continuation.solve_orbit(jeff, built.p, TIGHT, cold_guess=jeff.cold_guess, max_iter=1,
                                    tol=1e-300, transient_periods=0)
