@@ -174,14 +174,17 @@ def test_the_stability_change_is_located_at_the_fold_within_its_stated_error(run
         assert abs(ts.point.lam - tf.point.lam) <= where.lam_error + tf.event.location.lam_error
 
 
-def test_a_stability_change_hidden_by_the_exponents_error_keeps_its_bracket(run):
-    """Where the exponent's error estimate exceeds half its change over the step, TS is not
-    located: no point, no corrector spent, the bracket and the reason kept."""
+def test_a_stability_change_hidden_by_the_exponents_error_is_placed_with_that_error(run):
+    """Where the exponent's error estimate exceeds half its change over the step, Brent has nothing
+    to refine: TS is placed at the secant's zero (one corrector) with an error of at least the
+    step (2 ds_e = 1.2 steps in arclength here), never without a value."""
     fam, r = run
     ts = _located(r, ev.TORUS_STABILITY)[0]
     a, b = r.points[ts.index], r.points[ts.index + 1]
     change = abs(b.stability.exponents[0] - a.stability.exponents[0])
     noisy = b._replace(stability=b.stability._replace(spread=0.6 * change))
     point, spent, where = tori.StabilityChange().place(fam, a, noisy, SETTINGS, engine.Counter())
-    assert point is None and spent == 0 and np.isnan(where.lam_error)
-    assert where.bracket == (a.lam, b.lam) and "exceeds half its change" in where.reason
+    assert point is not None and spent == 1 and not where.reason
+    sigma_b = a.tangent @ (b.X - a.X)
+    assert 0.0 <= a.tangent @ (point.X - a.X) <= sigma_b       # within the step (lambda is not: a fold)
+    assert where.lam_error > ts.event.location.lam_error        # wider than where Brent could refine

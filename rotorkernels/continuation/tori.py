@@ -330,14 +330,16 @@ class StabilityChange(ev.BranchEvent):
         """(point, correctors spent, Location): the zero of the largest exponent by Brent on the
         arclength, to the arclength ds_e = spread / |slope| over which the exponent's own error
         (Stability.spread, the larger of the two ends') hides its sign (slope: the exponent's
-        secant over the step); not located (point None) where 2 ds_e exceeds the step."""
+        secant over the step). Where 2 ds_e reaches the step (small steps near a fold), Brent has
+        nothing to refine: the secant's zero, corrected once, to that same 2 ds_e, which then
+        exceeds the step (an honest error bar rather than no value: the flag was raised)."""
         sigma_b = float(a.tangent @ (b.X - a.X))
         ea, eb = a.stability.exponents[0], b.stability.exponents[0]
         spread = max(a.stability.spread, b.stability.spread)
         ds_e = spread * abs(sigma_b / (eb - ea))
         if 2.0 * ds_e >= abs(sigma_b):
-            return None, 0, Location(np.nan, (a.lam, b.lam), f"the exponent's error {spread:.2g} exceeds half its "
-                                     f"change {abs(eb - ea):.2g} over the step (per unit scaled time)")
+            return _located(problem, a, b, _secant_zero(problem, a, sigma_b * ea / (ea - eb), settings, counter),
+                            2.0 * ds_e, settings)
         found = engine.locate_zero(problem, a, b, lambda sol: _as_point(problem, sol, a, settings, counter)
                                    .stability.exponents[0], replace(settings, locate_xtol=max(ds_e, settings.locate_xtol)),
                                    counter)
@@ -387,6 +389,14 @@ def _as_point(problem, solution, a, settings, counter):
     if point is None:
         raise ValueError("no tangent at a corrector's solution")
     return point
+
+
+def _secant_zero(problem, a, sigma, settings, counter):
+    """(the point corrected at arclength sigma from a, 1 corrector spent), or None where it fails
+    (engine.locate_zero's answer, for one corrector)."""
+    sol, failure = engine.on_arclength(problem, a, sigma, settings, counter)
+    point = None if failure is not None else problem.point(sol, a, settings, counter)
+    return None if point is None else (point, 1)
 
 
 def _located(problem, a, b, found, ds, settings):
