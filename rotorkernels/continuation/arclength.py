@@ -79,6 +79,12 @@ LOCKED_STEP = 1e-6
 # re-solved with the integrator's tolerances and the corrector's this many times tighter: the
 # default tolerances' error to leading order (the tighter solve's own is REFINE times smaller).
 REFINE = 100.0
+# The orbits' error is not smooth in the tolerance (a C^1 contact force: each step sequence leaves
+# its own), so one solve's slope error can be small by accident (the Bai rotor's period-4 peak at
+# 15.2 um: 2e-8 Hz from one solve where the peak lies 2e-6 Hz away); its size is taken as the
+# largest over the located solve and re-solves at these factors times the tolerances (more
+# realizations of the same error level).
+TOLERANCE_SPREAD = (0.5, 2.0)
 # A peak is a smooth zero of the slope (Family.peak_error's `smooth`) when the located point's
 # |slope| is within this factor of what the location's tolerance and the slope's error explain;
 # at a jump of the slope (a corner opening downward, a jump of the amplitude) Brent shrinks the
@@ -141,32 +147,40 @@ class Family(NamedTuple):
                                                            step * self.scale, float(self.periods), self.opts)
         return dphi * self.scale, status, n_rhs
 
-    def refined(self, settings):
-        """(family, settings) with the integrator's error and the corrector's tolerance REFINE times
-        smaller (fixed-step RK4: REFINE^(1/4) times the steps, its error ~ h^4)."""
+    def refined(self, settings, factor):
+        """(family, settings) with the integrator's error and the corrector's tolerance `factor`
+        times theirs (fixed-step RK4: factor^(-1/4) times the steps, its error ~ h^4)."""
         if type(self.opts) is ig.Dop853Settings:
-            opts = self.opts._replace(rtol=self.opts.rtol / REFINE, atol=self.opts.atol / REFINE)
+            opts = self.opts._replace(rtol=self.opts.rtol * factor, atol=self.opts.atol * factor)
         else:
-            opts = self.opts._replace(steps_per_unit=self.opts.steps_per_unit * REFINE ** 0.25)
-        return self._replace(opts=opts), replace(settings, tol=settings.tol / REFINE)
+            opts = self.opts._replace(steps_per_unit=self.opts.steps_per_unit * factor ** -0.25)
+        return self._replace(opts=opts), replace(settings, tol=settings.tol * factor)
+
+    def resolved(self, point, a, settings, factor, counter):
+        """`point` re-solved on its own hyperplane at `factor` times the tolerances (`refined`): a
+        Point, or None where it fails."""
+        family, changed = self.refined(settings, factor)
+        sol, failure = family.correct(point.X, point.tangent, point.tangent @ point.X, a, changed, counter)
+        again = None if failure is not None else family.point(sol, a, changed, counter)
+        return again if again is not None and np.isfinite(again.slope) else None
 
     def peak_error(self, point, a, b, settings, counter):
         """(lambda error estimate, smooth) of a peak located at `point` between the steps' points a
-        and b: the slope's error (its change when the point is re-solved on its own hyperplane at
-        REFINE times tighter tolerances, `refined`) over d slope / d sigma (the slope's secant over
-        the step; the peak a smooth maximum, its slope near linear there), plus the location's
-        tolerance, both along the tangent's lambda component, plus the re-solved point's own move
-        in lambda. smooth: the located |slope| is within KINK_MARGIN of what they explain (else a
-        jump of the slope, no maximum). inf and True where the re-solve fails."""
-        fine, tight = self.refined(settings)
-        sol, failure = fine.correct(point.X, point.tangent, point.tangent @ point.X, a, tight, counter)
-        again = None if failure is not None else fine.point(sol, a, tight, counter)
-        if again is None or not np.isfinite(again.slope):
+        and b: the slope's error over d slope / d sigma (the slope's secant over the step; the peak
+        a smooth maximum, its slope near linear there), plus the location's tolerance, both along
+        the tangent's lambda component, plus the reference's own move in lambda. The slope's
+        error: the largest difference from the reference (the point re-solved at 1 / REFINE times
+        the tolerances) of its slope and of the point's re-solved at the TOLERANCE_SPREAD factors
+        (`resolved`). smooth: the located |slope| is within KINK_MARGIN of what they explain (else
+        a jump of the slope, no maximum). inf and True where a re-solve fails."""
+        others = [self.resolved(point, a, settings, f, counter) for f in (1.0 / REFINE,) + TOLERANCE_SPREAD]
+        if any(p is None for p in others):
             return np.inf, True
+        reference = others[0]
         curvature = (a.slope - b.slope) / float(a.tangent @ (b.X - a.X))
-        d_slope = abs(again.slope - point.slope)
+        d_slope = max(abs(p.slope - reference.slope) for p in [point] + others[1:])
         sigma_error = d_slope / curvature + settings.locate_xtol
-        error = self.scale * abs(point.tangent[-1]) * sigma_error + abs(again.lam - point.lam)
+        error = self.scale * abs(point.tangent[-1]) * sigma_error + abs(reference.lam - point.lam)
         return float(error), abs(point.slope) <= KINK_MARGIN * curvature * sigma_error
 
     def with_periods(self, periods):
