@@ -60,14 +60,16 @@ def same_orbit(copies, state, tol):
 AMPLITUDE_FACTOR = SAME_ORBIT_FACTOR
 
 
-def peak_candidates(r, k, r2, k2, tol):
+def peak_candidates(r, k, r2, k2, row, tol):
     """Peaks k of record r and k2 of r2 may be one orbit: parameters within the sum of their error
-    estimates (never where one has no finite estimate), all amplitudes within AMPLITUDE_FACTOR x tol."""
+    estimates (never where one has no finite estimate), the peak observable's (`row`) half
+    peak-to-peak within AMPLITUDE_FACTOR x tol of itself (the other observables' are not
+    stationary there: they move with the parameter's error)."""
     error = sum(x["event_parameter_error"][j] if "event_parameter_error" in x else np.nan for x, j in ((r, k), (r2, k2)))
     if not (np.isfinite(error) and abs(r2["event_parameter"][k2] - r["event_parameter"][k]) <= error):
         return False
-    a, a2 = (np.asarray(x["event_amplitude_half_pp"][j]) for x, j in ((r, k), (r2, k2)))
-    return bool(np.all(np.abs(a - a2) <= AMPLITUDE_FACTOR * tol * np.maximum(np.abs(a), np.abs(a2))))
+    a, a2 = (float(x["event_amplitude_half_pp"][j][row]) for x, j in ((r, k), (r2, k2)))
+    return abs(a - a2) <= AMPLITUDE_FACTOR * tol * max(abs(a), abs(a2))
 
 
 def mark_copies(family, records, settings):
@@ -87,7 +89,8 @@ def mark_copies(family, records, settings):
                     (not peak and abs(r2["event_parameter"][k2] - lam) > window):
                 continue
             if peak:
-                found = peak_candidates(r, k, r2, k2, settings.tol) and _same_peak(family, r, k, r2, k2, settings)
+                found = peak_candidates(r, k, r2, k2, family.peak, settings.tol) and \
+                    _same_peak(family, r, k, r2, k2, settings)
             else:
                 copies = copies or phase_copies(family, r["event_state"][k], lam, r["periods"])
                 found = same_orbit(copies, r2["event_state"][k2], settings.tol)
