@@ -61,3 +61,22 @@ def test_a_peak_on_a_jump_of_the_slope_is_dropped():
                                      kinked.point(s, a, settings, al.Counter()).slope, settings, al.Counter())
     assert abs(point.lam - Kinked.KINK) < 1e-8
     assert not kinked.peak_error(point, a, b, settings, al.Counter())[1]
+
+
+def test_peak_error_in_the_result_info_and_events_table():
+    """The hardening peak's error estimate is the event's event_parameter_error (the folds': NaN,
+    not estimated here), shown in `info` as "omega <value> +- <error>" and in the events table's
+    omega_error column."""
+    from rotorsweep.pipeline import config, continuation, continuation_result
+    from tests.test_extrema import DUFFING_SCENE
+
+    cfg = config.parse_config(DUFFING_SCENE.format(gamma=1.0, force=0.3, lo=0.5, hi=5.0))
+    pl = continuation.plan(cfg.scene)
+    ds = continuation.to_dataset(cfg.scene, pl, [(w, continuation.continue_line(cfg.scene, w)) for w in pl.lines], {})
+    kinds, errors = ds["event_type"].values, ds["event_parameter_error"].values
+    (k,) = np.flatnonzero(kinds == al.PEAK)
+    assert 0.0 < errors[k] < 1e-9 and np.isnan(errors[kinds != al.PEAK]).all()
+    assert f"omega {ds['event_parameter'].values[k]:.10g} +- {errors[k]:.2g}" in continuation_result.describe(ds)
+    cols = continuation_result.events_table(ds)
+    row = cols["type"].index("PK")
+    assert cols["omega_error"][row] == errors[k]
