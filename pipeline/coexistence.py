@@ -65,7 +65,8 @@ def peak_candidates(r, k, r2, k2, row, tol):
     estimates (never where one has no finite estimate), the peak observable's (`row`) half
     peak-to-peak within AMPLITUDE_FACTOR x tol of itself (the other observables' are not
     stationary there: they move with the parameter's error)."""
-    error = sum(x["event_parameter_error"][j] if "event_parameter_error" in x else np.nan for x, j in ((r, k), (r2, k2)))
+    error = sum(x["event_parameter_error"][j] if "event_parameter_error" in x else np.nan
+                for x, j in ((r, k), (r2, k2)))
     if not (np.isfinite(error) and abs(r2["event_parameter"][k2] - r["event_parameter"][k]) <= error):
         return False
     a, a2 = (float(x["event_amplitude_half_pp"][j][row]) for x, j in ((r, k), (r2, k2)))

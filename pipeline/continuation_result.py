@@ -66,7 +66,9 @@ def _peak_lines(ds, par, unit):
 
 def parameter_errors(ds):
     """Each event's parameter error estimate (NaN: not estimated, or a result written before it was)."""
-    return ds["event_parameter_error"].values if "event_parameter_error" in ds else np.full(ds.sizes.get("event", 0), np.nan)
+    if "event_parameter_error" in ds:
+        return ds["event_parameter_error"].values
+    return np.full(ds.sizes.get("event", 0), np.nan)
 
 
 def error_text(ds, k):

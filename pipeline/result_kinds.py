@@ -163,8 +163,8 @@ CONTINUATION_OPTIONAL = ("branch_kind", "torus_status", "torus_error", "torus_ex
                          "event_note", "event_periods", "parameter_over_omega_l",
                          "event_parameter_over_omega_l", "curve_parameter", "curve_second", "curve_critical_real",
                          "curve_critical_imag", "curve_type", "curve_points", "curve_end", "curve_detail",
-                         "piece_lo", "piece_hi", "piece_line", "piece_branches", "event_copy_of", "event_parameter_error",
-                         "branch_copy_of")
+                         "piece_lo", "piece_hi", "piece_line", "piece_branches", "event_copy_of",
+                         "branch_copy_of", "event_parameter_error")
 
 # CF has one unit per variable; the manifold's coefficients have one per element, stated as a rule.
 MIXED_UNITS = ("no units attribute: the units differ from element to element (SI); P is the unit of "
