@@ -48,34 +48,50 @@ def same_orbit(copies, state, tol):
     return copies is not None and any(np.abs(c - state).max() <= SAME_ORBIT_FACTOR * tol * scale for c in copies)
 
 
-# A peak's parameter is as exact as the amplitude's slope along the branch over the amplitude's
-# curvature there: the Bai rotor's period-2 and -4 peaks at 15.2 um are so flat (the half
-# peak-to-peak falls by ~1e-7 of itself over 1e-3 Hz) that the contact's C^1 force leaves their
-# copies up to 1.8e-5 Hz (5.6e-7 relative, slope from the tangent-linear solution; 2.6e-6 with
-# the former perturbed orbits) apart, while one orbit's other events agree to 1e-9 Hz: kept with
-# the former margin, as one run's spread is no bound. Two peaks this close are compared as
-# orbits at one parameter (`_same_peak`); distinct peaks of one family lie far further apart.
-PEAK_RTOL = 3e-5
+# A peak's parameter is as exact as the amplitude's slope along the branch over the slope's own
+# derivative there: the Bai rotor's period-4 peak at 15.2 um is so flat that its copies (the same
+# orbit reached as different branches) lie up to ~2e-5 Hz apart while one orbit's other events
+# agree to 1e-9 Hz. Each located peak carries that error (event_parameter_error, estimated by
+# arclength.Family.peak_error): two peaks are candidates for one orbit when their parameters agree
+# within the sum of their errors and their amplitudes within AMPLITUDE_FACTOR x newton_tol of
+# themselves (at a peak the amplitude is stationary: the parameter's error moves it only to second
+# order, the orbit's error by about the Newton's residual; the factor as SAME_ORBIT_FACTOR's).
+# The orbits then decide, compared at one parameter (`_same_peak`).
+AMPLITUDE_FACTOR = SAME_ORBIT_FACTOR
+
+
+def peak_candidates(r, k, r2, k2, row, tol):
+    """Peaks k of record r and k2 of r2 may be one orbit: parameters within the sum of their error
+    estimates (never where one has no finite estimate), the peak observable's (`row`) half
+    peak-to-peak within AMPLITUDE_FACTOR x tol of itself (the other observables' are not
+    stationary there: they move with the parameter's error)."""
+    error = sum(x["event_parameter_error"][j] if "event_parameter_error" in x else np.nan
+                for x, j in ((r, k), (r2, k2)))
+    if not (np.isfinite(error) and abs(r2["event_parameter"][k2] - r["event_parameter"][k]) <= error):
+        return False
+    a, a2 = (float(x["event_amplitude_half_pp"][j][row]) for x, j in ((r, k), (r2, k2)))
+    return abs(a - a2) <= AMPLITUDE_FACTOR * tol * max(abs(a), abs(a2))
 
 
 def mark_copies(family, records, settings):
     """Set records[b]["event_copy_of"] (per event: the line's flat event index of the first
     record of the same located orbit) in place. Events match when of one kind and period, at the
-    same parameter (within the same tolerance in mu = lambda / scale; peaks within PEAK_RTOL,
-    `_same_peak`) and one state is a phase copy of the other."""
+    same parameter (within the same tolerance in mu = lambda / scale; peaks within their errors,
+    `peak_candidates`, then `_same_peak`) and one state is a phase copy of the other."""
     events = [(b, k) for b, r in enumerate(records) for k in range(len(r["event_type"]))]
     first = list(range(len(events)))
     for i, (b, k) in enumerate(events):
         r, copies = records[b], None
         lam, peak = r["event_parameter"][k], r["event_type"][k] == codes.PEAK
-        window = PEAK_RTOL * abs(lam) if peak else SAME_ORBIT_FACTOR * settings.tol * family.scale
+        window = SAME_ORBIT_FACTOR * settings.tol * family.scale
         for j in range(i):
             r2, k2 = records[events[j][0]], events[j][1]
             if first[j] != j or r2["periods"] != r["periods"] or r2["event_type"][k2] != r["event_type"][k] or \
-                    abs(r2["event_parameter"][k2] - lam) > window:
+                    (not peak and abs(r2["event_parameter"][k2] - lam) > window):
                 continue
             if peak:
-                found = _same_peak(family, r, k, r2, k2, settings)
+                found = peak_candidates(r, k, r2, k2, family.peak, settings.tol) and \
+                    _same_peak(family, r, k, r2, k2, settings)
             else:
                 copies = copies or phase_copies(family, r["event_state"][k], lam, r["periods"])
                 found = same_orbit(copies, r2["event_state"][k2], settings.tol)

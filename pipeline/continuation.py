@@ -240,6 +240,7 @@ def branch_record(family, built, branch, parent):
         "n_rhs": int(branch.n_rhs),
         "event_type": np.array([e.kind for e in ev], int),
         "event_parameter": np.array([e.point.lam for e in ev]),
+        "event_parameter_error": np.array([e.lam_error for e in ev], float),
         "event_index": np.array([e.index for e in ev], int),
         "event_state": np.array([e.point.state for e in ev]).reshape(len(ev), model.n_state),
         "event_multipliers": np.array([e.point.multipliers for e in ev]).reshape(len(ev), model.n_state),
@@ -426,6 +427,8 @@ def to_result(scene, pl, lines, provenance):
         "branch_detail": np.array([r["detail"] for _, r in records], object),
         "event_type": per_event("event_type", "int8"), "event_branch": np.array([b for b, _, _ in ev], "int32"),
         "event_point": per_event("event_index", "int32"), "event_parameter": per_event("event_parameter"),
+        "event_parameter_error": np.array([r.get("event_parameter_error", np.full(len(r["event_type"]), np.nan))[k]
+                                           for _, r, k in ev], float),
         "event_multiplier_real": ev_mult.real, "event_multiplier_imag": ev_mult.imag,
         "event_state": per_event("event_state", tail=(n,)),
         "event_amplitude_max": per_event("event_amplitude_max", tail=(n_obs,)),
@@ -435,7 +438,7 @@ def to_result(scene, pl, lines, provenance):
     obs_units = [o.unit for o in spec.observables]
     amp = {"units": obs_units[0] if len(set(obs_units)) == 1 else "various"}
     attrs = {"parameter": {**par_attrs, "comment": f"the continued parameter: {pl.parameter}"},
-             "event_parameter": par_attrs, "branch_end": schema.flag_attrs(al.END_REASONS),
+             "event_parameter": par_attrs, "event_parameter_error": par_attrs, "branch_end": schema.flag_attrs(al.END_REASONS),
              "event_type": schema.flag_attrs(al.EVENT_TYPES),
              **{name: amp for name in ("amplitude_max", "amplitude_half_pp", "event_amplitude_max",
                                        "event_amplitude_half_pp")}}

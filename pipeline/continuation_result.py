@@ -57,10 +57,24 @@ def _peak_lines(ds, par, unit):
     j = obs.index(ds.attrs["report_observable"]) if ds.attrs.get("report_observable") in obs else 0
     units = ds["event_amplitude_half_pp"].attrs.get("units", "")
     mult = ds["event_multiplier_real"].values + 1j * ds["event_multiplier_imag"].values
-    return [f"  peak on branch {int(ds['event_branch'].values[k])}: {par} {ds['event_parameter'].values[k]:.10g} {unit}, "
+    return [f"  peak on branch {int(ds['event_branch'].values[k])}: {par} {ds['event_parameter'].values[k]:.10g}"
+            f"{error_text(ds, k)} {unit}, "
             f"half peak-to-peak {obs[j]} {ds['event_amplitude_half_pp'].values[k, j]:.10g} {units}, "
             f"{'stable' if np.abs(mult[k]).max() < 1.0 else 'unstable'}"
             for k in np.flatnonzero(ds["event_type"].values == codes.PEAK)]
+
+
+def parameter_errors(ds):
+    """Each event's parameter error estimate (NaN: not estimated, or a result written before it was)."""
+    if "event_parameter_error" in ds:
+        return ds["event_parameter_error"].values
+    return np.full(ds.sizes.get("event", 0), np.nan)
+
+
+def error_text(ds, k):
+    """" +- 2e-05" of event k's parameter error estimate ("" where it has none)."""
+    error = parameter_errors(ds)[k]
+    return f" +- {error:.2g}" if np.isfinite(error) else ""
 
 
 def _event_periods(ds):
@@ -71,7 +85,8 @@ def _event_periods(ds):
 
 def events_table(ds):
     """The located events as columns (for query's renderer), each orbit once (its first record):
-    type, branch, parameter, period, the critical multiplier, max |observable|."""
+    type, branch, parameter and its error estimate (NaN: none), period, the critical multiplier,
+    max |observable|."""
     par = ds.attrs["parameter"]
     ds = ds.isel(event=distinct_events(ds))
     mult = ds["event_multiplier_real"].values + 1j * ds["event_multiplier_imag"].values
@@ -82,7 +97,7 @@ def events_table(ds):
     branch = ds["event_branch"].values
     cols = {"type": [codes.EVENT_LABELS[int(k)] for k in kinds], "branch": branch.tolist(),
             "periods": _event_periods(ds).tolist(),
-            par: ds["event_parameter"].values.tolist(),
+            par: ds["event_parameter"].values.tolist(), f"{par}_error": parameter_errors(ds).tolist(),
             "multiplier_real": [float(c.real) for c in critical], "multiplier_imag": [float(c.imag) for c in critical]}
     for c in ds.coords:
         if ds[c].dims == ("branch",):

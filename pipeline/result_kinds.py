@@ -105,6 +105,9 @@ CONTINUATION_VARIABLES = {
     "branch_copy_of": (("branch",), {"units": "1", "long_name": "first branch of the same closed orbits (phase copy, loop met twice; -1: distinct)"}),
     "event_point": (("event",), {"units": "1", "long_name": "branch point just before the event"}),
     "event_parameter": (("event",), {"comment": "located on the branch to the arclength tolerance"}),
+    "event_parameter_error": (("event",), {"long_name": "error estimate of the event's parameter (peaks: the "
+                                          "slope's error over its derivative, plus the location's tolerance; NaN: "
+                                          "not estimated)"}),
     "event_multiplier_real": (("event", "multiplier"), {"units": "1", "long_name": "Floquet multiplier at the event, real part"}),
     "event_multiplier_imag": (("event", "multiplier"), {"units": "1", "long_name": "Floquet multiplier at the event, imaginary part"}),
     "event_state": (("event", "state"), _ORBIT_STATE),
@@ -161,7 +164,7 @@ CONTINUATION_OPTIONAL = ("branch_kind", "torus_status", "torus_error", "torus_ex
                          "event_parameter_over_omega_l", "curve_parameter", "curve_second", "curve_critical_real",
                          "curve_critical_imag", "curve_type", "curve_points", "curve_end", "curve_detail",
                          "piece_lo", "piece_hi", "piece_line", "piece_branches", "event_copy_of",
-                         "branch_copy_of")
+                         "branch_copy_of", "event_parameter_error")
 
 # CF has one unit per variable; the manifold's coefficients have one per element, stated as a rule.
 MIXED_UNITS = ("no units attribute: the units differ from element to element (SI); P is the unit of "

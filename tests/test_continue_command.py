@@ -205,8 +205,8 @@ def test_continuation_report_renders_in_a_browser(duffing_result, tmp_path):
 
 def test_events_csv_has_units_in_every_numeric_header(duffing_result):
     header = (duffing_result[1] / "report" / "events.csv").read_text().splitlines()[0].split(",")
-    assert header == ["type", "branch", "periods [1]", "omega [rad s-1]", "multiplier_real [1]",
-                      "multiplier_imag [1]", "stable", "amplitude_max_x [1]", "amplitude_half_pp_x [1]"]
+    assert header == ["type", "branch", "periods [1]", "omega [rad s-1]", "omega_error [rad s-1]",
+                      "multiplier_real [1]", "multiplier_imag [1]", "stable", "amplitude_max_x [1]", "amplitude_half_pp_x [1]"]
 
 
 def test_every_plot_of_the_report_has_a_legend_and_a_hover(duffing_result):

@@ -222,10 +222,10 @@ def _bode(ds, observable, backend):
 
 
 def column_units(ds):
-    """{column of the events and bistable tables: its unit}: the parameter's, the line axes', the
-    observables' (model spec), 1 for multipliers and period counts."""
-    par_unit = ds["parameter"].attrs.get("units", "")
-    units = {ds.attrs["parameter"]: par_unit, "lo": par_unit, "hi": par_unit, "periods": "1",
+    """{column of the events and bistable tables: its unit}: the parameter's (and its error's), the
+    line axes', the observables' (model spec), 1 for multipliers and period counts."""
+    par, par_unit = ds.attrs["parameter"], ds["parameter"].attrs.get("units", "")
+    units = {par: par_unit, f"{par}_error": par_unit, "lo": par_unit, "hi": par_unit, "periods": "1",
              "multiplier_real": "1", "multiplier_imag": "1"}
     units.update({c: ds[c].attrs.get("units", "") for c in ds.coords if ds[c].dims == ("branch",)})
     units.update({f"{kind}_{o.name}": o.unit for o in schema.model_of(ds).observables

@@ -75,6 +75,23 @@ class Point(NamedTuple):
 # ~step^2, round-off ~1e-16 / step, both ~1e-10 here.
 LOCKED_STEP = 1e-6
 
+# A located peak's error (Family.peak_error) is what its slope changes by when the point is
+# re-solved with the integrator's tolerances and the corrector's this many times tighter (the
+# reference; its own error is far smaller: on the Bai rotor's flat period-4 peak the re-solves at
+# 1/100 and 1/1000 of the tolerances agree to 3e-7 Hz where the default solves are up to 1e-5 off).
+REFINE = 100.0
+# The orbits' error is not smooth in the tolerance (a C^1 contact force: each step sequence leaves
+# its own), so one solve's slope error can be small by accident (the Bai rotor's period-4 peak at
+# 15.2 um: 2e-8 Hz from one solve where the peak lies 2e-6 Hz away); its size is taken as the
+# largest over the located solve and re-solves at these factors times the tolerances (more
+# realizations of the same error level).
+TOLERANCE_SPREAD = (0.5, 2.0)
+# A peak is a smooth zero of the slope (Family.peak_error's `smooth`) when the located point's
+# |slope| is within this factor of what the location's tolerance and the slope's error explain;
+# at a jump of the slope (a corner opening downward, a jump of the amplitude) Brent shrinks the
+# bracket onto the jump and |slope| there stays at the jump's size, orders of magnitude above.
+KINK_MARGIN = 100.0
+
 
 class Family(NamedTuple):
     """The forced-orbit problems of `model` along lambda: params(lambda) -> kernel vector p. An
@@ -130,6 +147,42 @@ class Family(NamedTuple):
         dphi, status, n_rhs = extrema.parameter_derivative(self.model.kernel, X[:-1], self.params, self.lam(X),
                                                            step * self.scale, float(self.periods), self.opts)
         return dphi * self.scale, status, n_rhs
+
+    def refined(self, settings, factor):
+        """(family, settings) with the integrator's error and the corrector's tolerance `factor`
+        times theirs (fixed-step RK4: factor^(-1/4) times the steps, its error ~ h^4)."""
+        if type(self.opts) is ig.Dop853Settings:
+            opts = self.opts._replace(rtol=self.opts.rtol * factor, atol=self.opts.atol * factor)
+        else:
+            opts = self.opts._replace(steps_per_unit=self.opts.steps_per_unit * factor ** -0.25)
+        return self._replace(opts=opts), replace(settings, tol=settings.tol * factor)
+
+    def resolved(self, point, a, settings, factor, counter):
+        """`point` re-solved on its own hyperplane at `factor` times the tolerances (`refined`): a
+        Point, or None where it fails."""
+        family, changed = self.refined(settings, factor)
+        sol, failure = family.correct(point.X, point.tangent, point.tangent @ point.X, a, changed, counter)
+        again = None if failure is not None else family.point(sol, a, changed, counter)
+        return again if again is not None and np.isfinite(again.slope) else None
+
+    def peak_error(self, point, a, b, settings, counter):
+        """(lambda error estimate, smooth) of a peak located at `point` between the steps' points a
+        and b: the slope's error over d slope / d sigma (the slope's secant over the step; the peak
+        a smooth maximum, its slope near linear there), plus the location's tolerance, both along
+        the tangent's lambda component, plus the reference's own move in lambda. The slope's
+        error: the largest difference from the reference (the point re-solved at 1 / REFINE times
+        the tolerances) of its slope and of the point's re-solved at the TOLERANCE_SPREAD factors
+        (`resolved`). smooth: the located |slope| is within KINK_MARGIN of what they explain (else
+        a jump of the slope, no maximum). inf and True where a re-solve fails."""
+        others = [self.resolved(point, a, settings, f, counter) for f in (1.0 / REFINE,) + TOLERANCE_SPREAD]
+        if any(p is None for p in others):
+            return np.inf, True
+        reference = others[0]
+        curvature = (a.slope - b.slope) / float(a.tangent @ (b.X - a.X))
+        d_slope = max(abs(p.slope - reference.slope) for p in [point] + others[1:])
+        sigma_error = d_slope / curvature + settings.locate_xtol
+        error = self.scale * abs(point.tangent[-1]) * sigma_error + abs(reference.lam - point.lam)
+        return float(error), abs(point.slope) <= KINK_MARGIN * curvature * sigma_error
 
     def with_periods(self, periods):
         return self._replace(periods=float(periods))
@@ -212,6 +265,7 @@ class Event(NamedTuple):
     point: Point            # the located point
     index: int              # the branch point before it
     evaluations: int        # correctors spent locating it
+    lam_error: float = np.nan   # the located lambda's error estimate (peaks: Family.peak_error; NaN: not estimated)
 
 
 class Branch(NamedTuple):
@@ -258,8 +312,19 @@ def follow_branch(family, first, lam_range, settings=Settings(), stop_at_branch_
     events = ev.orbit_events(brent_root, Rejoin if stop_at_branch_point else ev.BranchPoint)
     events += (ev.Peak(brent_root),) if family.peak >= 0 else ()
     run = engine.follow(family, first, [lam_range], settings, events, counter)
-    located = [Event(f.event.code, f.point, f.index, f.evaluations) for f in run.found]
-    return Branch(run.points, located, run.end, run.detail, family.periods, counter.n)
+    located = [_with_error(family, run.points, Event(f.event.code, f.point, f.index, f.evaluations), settings,
+                           counter) for f in run.found]
+    return Branch(run.points, [e for e in located if e is not None], run.end, run.detail, family.periods, counter.n)
+
+
+def _with_error(family, points, event, settings, counter):
+    """A located peak with its error estimate (Family.peak_error), None where it is no smooth
+    maximum (dropped); other events as they are."""
+    if event.kind != PEAK or event.point is None:
+        return event
+    b = points[event.index + 1] if event.index + 1 < len(points) else points[0]   # a closed loop's last step
+    error, smooth = family.peak_error(event.point, points[event.index], b, settings, counter)
+    return event._replace(lam_error=error) if smooth else None
 
 
 def continue_orbit(family, lam0, guess, lam_range, settings=Settings(), direction=1):

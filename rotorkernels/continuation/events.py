@@ -221,7 +221,8 @@ class Peak(Zero):
     solution made a point (its tangent and slope) by the problem. Only smooth maxima: the
     amplitude (half peak-to-peak) is the largest local maximum of the signal minus the smallest
     local minimum, so where two local maxima exchange which is the largest (a kink, on period-k
-    orbits) it is the larger of two smooth curves, a corner opening upward, never a maximum."""
+    orbits) it is the larger of two smooth curves, a corner opening upward, never a maximum. The
+    problem checks the located zero is smooth and estimates its error (arclength.Family.peak_error)."""
     label, code = EVENT_LABELS[PEAK], PEAK
 
     def value(self, point):
