@@ -106,8 +106,8 @@ CONTINUATION_VARIABLES = {
     "event_point": (("event",), {"units": "1", "long_name": "branch point just before the event"}),
     "event_parameter": (("event",), {"comment": "located on the branch to the arclength tolerance"}),
     "event_parameter_error": (("event",), {"long_name": "error estimate of the event's parameter (peaks: the "
-                                          "slope's error over its derivative, plus the location's tolerance; NaN: "
-                                          "not estimated)"}),
+                                          "slope's error over its derivative, plus the location's tolerance; torus "
+                                          "TS / TF: the exponent's or the corrector's error; NaN: not estimated)"}),
     "event_multiplier_real": (("event", "multiplier"), {"units": "1", "long_name": "Floquet multiplier at the event, real part"}),
     "event_multiplier_imag": (("event", "multiplier"), {"units": "1", "long_name": "Floquet multiplier at the event, imaginary part"}),
     "event_state": (("event", "state"), _ORBIT_STATE),

@@ -47,6 +47,8 @@ def event_rows(model, family, built, run, amplitudes_at):
         "event_amplitude_half_pp": np.array([r[4] for r in rows], float).reshape(len(rows), n_obs),
         "event_note": [r[5] for r in rows],
         "event_periods": np.array([f.event.q if f.event.code == ev.LOCKED else 1 for f in run.found], int),
+        "event_parameter_error": np.array([np.nan if f.event.code == ev.LOCKED else f.event.location.lam_error
+                                           for f in run.found], float),
     }
 
 

@@ -121,6 +121,8 @@ def test_the_fold_and_the_stability_change_are_located_and_bound_the_unstable_st
     (k_tf,), (k_ts,) = np.flatnonzero(types == ev.TORUS_FOLD), np.flatnonzero(types == ev.TORUS_STABILITY)
     tf, ts = values[k_tf], values[k_ts]
     err_tf, err_ts = located_error(notes[k_tf]), located_error(notes[k_ts])
+    # the same errors as numbers (the notes round them to 2 digits)
+    assert ds["event_parameter_error"].values[[k_tf, k_ts]] == pytest.approx([err_tf, err_ts], rel=0.05)
     assert lam.max() - err_tf <= tf <= lam.max() + np.abs(np.diff(lam)).max()
     assert abs(ts - tf) <= err_ts + err_tf
     # the note says the exponent's sign change even where both sides are undecided (within error of 0)
