@@ -247,9 +247,10 @@ def error_estimate(kernel, nodes, jac, p, phase_index, rho, period, opts, tail):
     singular (the circle is not isolated). The midpoints are shot at a hundredth of the
     tolerances, so that the defect holds the solver's own integration error too (against the
     flow, not only against its own map). The norm is exact, from the inverse (LAPACK's getri,
-    scipy.linalg: 3/4 of numpy's solve against I; at 63 nodes of 10 states ~17 ms, a third of a
-    variational collocation): LAPACK's condition estimate (gecon, a lower bound) fell short of
-    it by 1.5x on the preloaded rotor's tori at 31 and 63 nodes."""
+    scipy.linalg, imported here: a command that solves no torus does not load it; 3/4 of numpy's
+    solve against I, ~17 ms at 63 nodes of 10 states, a third of a variational collocation):
+    LAPACK's condition estimate (gecon, a lower bound) fell short of it by 1.5x on the preloaded
+    rotor's tori at 31 and 63 nodes."""
     import scipy.linalg
     n_nodes = nodes.shape[0]
     mid = node_phases(n_nodes) + np.pi / n_nodes
