@@ -153,12 +153,12 @@ def continue_torus_line(scene, pl, where):
     counter = engine.Counter()
     first = tori.start(family, pl.start, circle.nodes, direction, pl.settings, counter)
     if first is None:
-        run = engine.Run([], [], engine.START_FAILED, f"the torus start did not converge at {pl.start!r}")
+        run, errors = engine.Run([], [], engine.START_FAILED, f"the torus start did not converge at {pl.start!r}"), []
     else:
-        run = polished(family, tori.follow_tori(family, first, pl.range, pl.settings, counter,
-                                                torus_events.LOCK_DENOMINATOR))
+        run, errors = polished(family, tori.follow_tori(family, first, pl.range, pl.settings, counter,
+                                                        torus_events.LOCK_DENOMINATOR))
         run = run._replace(detail=run.detail + contact_note(spec, family, run))
-    record = torus_record(spec, family, built, run, counter.n)
+    record = torus_record(spec, family, built, run, counter.n, errors)
     record["coexistence"] = stable_pieces(record, pl.range)
     return [record]
 
@@ -178,12 +178,15 @@ def contact_note(spec, family, run):
 
 
 def polished(family, run):
-    """The run with each point's and located event's circle refined to POLISH_TOL at its lambda
-    (tori.polish: what the result stores, its amplitudes and error estimate, is then solved far
-    below the continuation's corrector tolerance; docs/guide/continue.md, "error estimate")."""
+    """(run, errors): the run with each point's and located event's circle refined to POLISH_TOL
+    at its lambda (tori.polish: what the result stores, its amplitudes and error estimate, is then
+    solved far below the continuation's corrector tolerance; docs/guide/continue.md, "error
+    estimate"), and each point's error estimate (torus_error) from the polish's last Jacobian."""
     def refine(point):
-        return None if point is None else tori.polish(family, point, POLISH_TOL)
-    return run._replace(points=[refine(p) for p in run.points], found=[f._replace(point=refine(f.point)) for f in run.found])
+        return None if point is None else tori.polish(family, point, POLISH_TOL)[0]
+    done = [tori.polish(family, p, POLISH_TOL) for p in run.points]
+    errors = [torus_error(family, p, jac) for p, jac in done]
+    return run._replace(points=[p for p, _ in done], found=[f._replace(point=refine(f.point)) for f in run.found]), errors
 
 
 def stable_pieces(record, lam_range):
@@ -200,14 +203,17 @@ def stable_pieces(record, lam_range):
         [(hi, lam_range[1], [])] if hi < lam_range[1] else [])
 
 
-def torus_record(model, family, built, run, n_rhs):
+def torus_record(model, family, built, run, n_rhs, errors=()):
     """One torus branch as plain arrays: the orbit record's keys (multipliers NaN, orbit_state
-    the circle at phase 0, period T), torus_error, torus_exponent [1/s], torus_status, torus_modes
+    the circle at phase 0, period T), torus_error (`errors`: polished's, one per point; none
+    for a run without points), torus_exponent [1/s], torus_status, torus_modes
     (K of each point's 2K + 1 nodes), torus_nodes (points, N, n: the circle's node values, scaled
     state, at phases 2 pi j / N_k, NaN beyond a point's own N_k), and the branch's events
     (rotorsweep.pipeline.torus_events: flags and locked ratios, with event_note)."""
     n_state = family.kernel.n_state
     pts = run.points
+    if len(errors) != len(pts):
+        raise ValueError(f"{len(errors)} error estimates for {len(pts)} torus points")
     amp = np.array([torus_amplitudes(model, family, built, p) for p in pts]).reshape(
         len(pts), 2, len(model.observables))
     counts = np.array([family.nodes(p.X).shape[0] for p in pts], int)
@@ -220,7 +226,7 @@ def torus_record(model, family, built, run, n_rhs):
         "multipliers": np.full((len(pts), n_state), np.nan + 0j),
         "amplitude_max": amp[:, 0], "amplitude_half_pp": amp[:, 1], "period": periods,
         "periods": 1, "parent": -1, "end": int(run.end), "detail": run.detail, "n_rhs": int(n_rhs),
-        "torus_error": np.array([torus_error(family, p) for p in pts]),
+        "torus_error": np.array(errors, float),
         "torus_exponent": np.array([p.stability.exponents[0] for p in pts]) / periods if len(pts) else none,
         "torus_status": np.array([TORUS_STATUS[p.stability.status] for p in pts], int),
         "torus_modes": (counts - 1) // 2,
@@ -245,13 +251,15 @@ def padded_nodes(family, points, n_nodes):
     return out
 
 
-def torus_error(family, point):
-    """The point's error estimate (torus.error_estimate; inf where its shots failed)."""
+def torus_error(family, point, jacobian):
+    """The point's error estimate (torus.error_estimate) from dR/dX at its circle (tori.polish's;
+    inf where that or the estimate's shots failed)."""
+    if jacobian is None:
+        return np.inf
     lam = family.lam(point.X)
-    nodes = family.nodes(point.X)
-    jac = family.circle_jacobian(point.X, family.residual(point.X, True)[1])
-    err, ok, _ = tr.error_estimate(family.kernel, nodes, jac, family.params(lam), family.phase_index,
-                                   family.rotation(lam), family.period, family.opts, point.tail)
+    err, ok, _ = tr.error_estimate(family.kernel, family.nodes(point.X), family.circle_jacobian(point.X, jacobian),
+                                   family.params(lam), family.phase_index, family.rotation(lam), family.period,
+                                   family.opts, point.tail)
     return err if ok else np.inf
 
 

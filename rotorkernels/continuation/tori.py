@@ -232,21 +232,27 @@ class TorusFamily(NamedTuple):
 
 
 def polish(family, point, tol, max_iter=3):
-    """The point with its circle refined by Newton at its fixed lambda until max |R| <= tol max(1,
-    max |U|) (at most max_iter steps; the point as it was where a step fails). The corrector stops
-    at the continuation's tolerance, relative to the largest node value, so its absolute residual
-    varies from point to point by orders of magnitude (quadratic convergence lands anywhere below
-    it), and the circle's distance from the invariant one is that residual times ||dR/dU^-1||."""
+    """(point, jacobian): the point with its circle refined by Newton at its fixed lambda until
+    max |R| <= tol max(1, max |U|) (at most max_iter steps; where a step cannot be solved, the
+    point as far as it got), and dR/dX (family.residual's) at the returned circle, None where its
+    shots failed. The corrector stops at the continuation's tolerance, relative to the largest
+    node value, so its absolute residual varies from point to point by orders of magnitude
+    (quadratic convergence lands anywhere below it), and the circle's distance from the invariant
+    one is that residual times ||dR/dU^-1||. Each iterate is judged on a variational collocation
+    (the point's monodromies do not serve the first: with the variational equations the
+    integrator controls the error of every component, so its u, and R, differ from a plain
+    collocation's by the integration error, ~1e-9 here); the last one's Jacobian is returned, the
+    error estimate's (torus.error_estimate) at the polished circle."""
     X = point.X.copy()
-    for _ in range(max_iter):
+    for it in range(max_iter + 1):
         r, jac, _, ok, _ = family.residual(X, True)
-        if not ok or np.abs(r).max() <= tol * max(1.0, np.abs(family.nodes(X)).max()):
+        if not ok or it == max_iter or np.abs(r).max() <= tol * max(1.0, np.abs(family.nodes(X)).max()):
             break
         try:
             X[:-1] += np.linalg.solve(jac, -r.ravel())
         except np.linalg.LinAlgError:
             break
-    return point._replace(X=X, tail=tr.fourier_tail(family.nodes(X)))
+    return point._replace(X=X, tail=tr.fourier_tail(family.nodes(X))), (jac if ok else None)
 
 
 def _relative(r, nodes):

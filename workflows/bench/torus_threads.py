@@ -27,10 +27,9 @@ SERIAL = tr.node_maps
 
 
 def problem():
-    data = config.parse_config(open(SCENE).read()).data
-    spec = compute.model_of(data)
-    opts = compute.integrator_settings(data)
-    built = compute.builder(data)({**compute.fixed_values(data), **POINT})
+    scene = config.load_config(SCENE).scene
+    spec, opts = scene.model, scene.integrator
+    built = compute.builder(scene)({**scene.fixed, **POINT})
     phase, freq, _ = spec.torus_forcing
     circle = tr.torus_from_transient(spec.kernel, spec.cold_guess(built.p), built.p, phase, built.p[freq], opts,
                                      400, 120, 15, tol=1e-9, decay_tol=1e-9, max_nodes=63)
