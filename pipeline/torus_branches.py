@@ -92,6 +92,22 @@ class BranchProgress:
                 f"passed: {' '.join(passed) or 'none'}")
 
 
+def shown(items, what):
+    """The items one by one, with a line every PROGRESS_SECONDS while they take long ("torus record:
+    polishing 40 of 925 points after 1m10s"): the record after a branch (each point polished, its
+    amplitudes over the circle, the locked ratios' periodic orbits) took longer than the branch
+    itself on Fig. 3a (3.3 of 5.9 min wall) and was silent."""
+    items = list(items)
+    say = runlog.phase_printer(_Shown.stream)
+    t0 = last = time.monotonic()
+    for k, item in enumerate(items):
+        now = time.monotonic()
+        if now - last >= PROGRESS_SECONDS:
+            last = now
+            say(f"torus record: {what} {k} of {len(items)} after {runlog.fmt_seconds(now - t0)}")
+        yield item
+
+
 def is_torus_line(scene, parameter, start, where):
     """Whether the line's forcing at the start is quasi-periodic (a torus, not an orbit)."""
     spec = scene.model
@@ -184,7 +200,7 @@ def polished(family, run):
     estimate"), and each point's error estimate (torus_error) from the polish's last Jacobian."""
     def refine(point):
         return None if point is None else tori.polish(family, point, POLISH_TOL)[0]
-    done = [tori.polish(family, p, POLISH_TOL) for p in run.points]
+    done = [tori.polish(family, p, POLISH_TOL) for p in shown(run.points, "polishing points:")]
     errors = [torus_error(family, p, jac) for p, jac in done]
     return run._replace(points=[p for p, _ in done], found=[f._replace(point=refine(f.point)) for f in run.found]), errors
 
@@ -214,13 +230,14 @@ def torus_record(model, family, built, run, n_rhs, errors=()):
     pts = run.points
     if len(errors) != len(pts):
         raise ValueError(f"{len(errors)} error estimates for {len(pts)} torus points")
-    amp = np.array([torus_amplitudes(model, family, built, p) for p in pts]).reshape(
+    amp = np.array([torus_amplitudes(model, family, built, p) for p in shown(pts, "amplitudes of points:")]).reshape(
         len(pts), 2, len(model.observables))
     counts = np.array([family.nodes(p.X).shape[0] for p in pts], int)
     periods = np.array([built(p.lam).period for p in pts])
     none = np.zeros(0)
     return {**torus_events.event_rows(model, family, built, run,
-                                      lambda p: torus_amplitudes(model, family, built, p)),
+                                      lambda p: torus_amplitudes(model, family, built, p),
+                                      lambda found: shown(found, "events (locked ratios' orbits):")),
         "parameter": np.array([p.lam for p in pts]), "arclength": arclength(family, pts),
         "state": np.array([family.nodes(p.X)[0] for p in pts]).reshape(len(pts), n_state),
         "multipliers": np.full((len(pts), n_state), np.nan + 0j),

@@ -28,15 +28,16 @@ SHOOT_TOL = 1e-10
 LINK_TOL = 1e-6
 
 
-def event_rows(model, family, built, run, amplitudes_at):
+def event_rows(model, family, built, run, amplitudes_at, each=iter):
     """The record's event_* arrays of a torus Run (amplitudes_at: a point -> (max |o|, half-swing)
-    of each observable over its torus), plus event_note (words per event) and event_periods (forcing
+    of each observable over its torus; each: the run's events -> them one by one, e.g. with
+    progress lines), plus event_note (words per event) and event_periods (forcing
     periods of the event's orbit: a locked p/q row's linked orbit closes after q shaft turns; 1 on a
     flag's row, the branch's). A branch's end (breakdown) is its end reason, not an event
     (tori.follow_tori leaves it out of run.found)."""
     n, n_obs = family.kernel.n_state, len(model.observables)
     rows = [_locked_row(model, family, built, f) if f.event.code == ev.LOCKED else
-            _flag_row(family, run, f, amplitudes_at, n_obs) for f in run.found]
+            _flag_row(family, run, f, amplitudes_at, n_obs) for f in each(run.found)]
     return {
         "event_type": np.array([f.event.code for f in run.found], int),
         "event_parameter": np.array([r[0] for r in rows], float),

@@ -47,6 +47,19 @@ def test_a_torus_branch_shows_its_progress(result):
     assert sum("torus branch:" in line for line in open(d / "tori.nc.log")) == len(shown)
 
 
+def test_the_record_after_the_branch_shows_its_progress(result):
+    """What follows the branch (polishing each point, its amplitudes, the events' orbits) is not
+    silent either: with PROGRESS_SECONDS 0 each stage counts its items up, logged as shown."""
+    d, _ = result
+    shown = [line for line in (d / "stderr.txt").read_text().splitlines() if "torus record:" in line]
+    n = int(continuation_result.open_result(d / "tori.nc")["branch_points"].values[0])
+    for stage in ("polishing points:", "amplitudes of points:"):
+        counts = [re.search(rf"torus record: {stage} (\d+) of (\d+) after \S+$", line) for line in shown
+                  if stage in line]
+        assert [(int(m.group(1)), int(m.group(2))) for m in counts] == [(k, n) for k in range(n)]
+    assert sum("torus record:" in line for line in open(d / "tori.nc.log")) == len(shown)
+
+
 def test_the_result_holds_a_torus_branch_with_stability_and_error(result, capsys):
     d, _ = result
     ds = continuation_result.open_result(d / "tori.nc")
