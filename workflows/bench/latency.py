@@ -164,7 +164,7 @@ def floor_text(runs):
             f"{cpu['import numba + scipy.linalg'] - cpu['import numba']:.2f} s more, which numba's BLAS check imported "
             "at the first compiled call before: now only a kernel calling LAPACK imports it, at its first call "
             "(pipeline/__init__.py); xarray (with pandas) "
-            f"{cpu['import xarray']:.2f} s, which `info`, `query` and `run`/`point` (a sweep cube) import; `continue` and "
+            f"{cpu['import xarray']:.2f} s, which `info`, `query` and `run` (a sweep cube) import; `continue` and "
             "`backbone` write their results with netCDF4 directly (pipeline/plainnc.py) and import neither. "
             "A command run as the process skips the interpreter's final garbage collection (`gc.freeze`) and "
             "numba's cffi set-up. "
