@@ -122,11 +122,11 @@ def _attractor_row(args, cfg):
 def _given(args, cfg):
     """The point's axis values from --speed/--clearance/--contact-angle/--preload and --at: SI
     numbers, or unit strings in the axis's unit ("7.6 um", "600 rpm")."""
-    from rotorsweep.pipeline import config as config_mod
+    from rotorsweep.pipeline import point_input
 
     flags = {"speed": ("--speed", args.speed), "clearance": ("--clearance", args.clearance),
              "contact_angle": ("--contact-angle", args.contact_angle), "preload": ("--preload", args.preload)}
-    return config_mod.flag_values({**flags, **_at(args.at)}, cfg.model)
+    return point_input.flag_values({**flags, **_at(args.at)}, cfg.model)
 
 
 def _at(items):
@@ -143,8 +143,7 @@ def _at(items):
 
 
 def cmd_modes(args):
-    from rotorsweep.pipeline import config as config_mod
-    from rotorsweep.pipeline import modes
+    from rotorsweep.pipeline import modes, point_input
 
     cfg = pipeline.as_config(args.config, whole_grid=False)
     if args.output:
@@ -152,7 +151,7 @@ def cmd_modes(args):
     if args.report:     # refused now as modes_report would refuse it after the analysis: a foreign directory
         fileio.check_report_dir(args.report, None, overwrite=True)
         preflight.check_report(args.report)
-    print(modes.command(cfg, config_mod.flag_values(_at(args.at), cfg.model), args.campbell, args.output, args.json,
+    print(modes.command(cfg, point_input.flag_values(_at(args.at), cfg.model), args.campbell, args.output, args.json,
                         args.report))
     return 0
 

@@ -39,7 +39,7 @@ def point_params(scene, point):
 def point_values(cfg, given):
     """A point {axis: value} of the scene's model from `given` (None: not given) and the scene's
     fixed values; raises config.ConfigError naming what is missing or out of range."""
-    from rotorsweep.pipeline import config
+    from rotorsweep.pipeline import config, point_input
 
     require_forced(cfg.model, "point")
     spec = cfg.model
@@ -50,7 +50,7 @@ def point_values(cfg, given):
     problems += [f"{name}: required (an axis of model {spec.name} that the scene does not fix)" for name in missing]
     if problems:
         raise config.ConfigError("\n".join(problems))
-    config.check_point(values, cfg.data)
+    point_input.check_point(values, cfg.data)
     return values
 
 

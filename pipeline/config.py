@@ -92,7 +92,8 @@ SCHEMA = {
         "parameter": Key("str", default="", help="the scene parameter continued (default: the model's continuation axis)"),
         "start": _num(default=None, help="parameter value the branch starts at (default: the sweep's first value of it)"),
         "stop": _num(default=None, help="the other end of the range (default: the sweep's last value of it)"),
-        "ds": _num(0, lo_open=True, default=0.02, help="first arclength step, in units of the range width"),
+        "ds": _num(0, lo_open=True, default=0.02, help="first arclength step, in units of the range width "
+                                                        "(torus branches: in the parameter's own unit, e.g. Hz)"),
         "ds_min": _num(0, lo_open=True, default=1e-6, help="smallest step before the branch gives up"),
         "ds_max": _num(0, lo_open=True, default=0.25, help="largest step"),
         "max_steps": _num(1, kind="int", default=2000, help="points per branch at most"),
@@ -183,7 +184,7 @@ def range_text(k):
 NUMERIC_KINDS = ("float", "int", "float_or")      # whose limits a key's help explains
 
 
-def _help(k):
+def key_help(k):
     """' (what the key is)' where the key says, else nothing (never an empty '()')."""
     return f" ({k.help})" if k.help else ""
 
@@ -249,7 +250,7 @@ def _axis_values(v, rng, errors, where):
     for x in values:
         problem = check_number(float(x), rng)
         if problem:
-            errors.append(f"{where}: every value {problem}{_help(rng)}")
+            errors.append(f"{where}: every value {problem}{key_help(rng)}")
             return None
     if np.any(np.diff(values) <= 0):
         errors.append(f"{where}: values must be strictly increasing, without duplicates")
@@ -395,7 +396,7 @@ def _validate_section(name, table, spec, errors):
             continue
         value, problem = _check_value(table[key], k)
         if problem:
-            errors.append(f"{where}: {problem}{_help(k) if k.kind in NUMERIC_KINDS else ''}")
+            errors.append(f"{where}: {problem}{key_help(k) if k.kind in NUMERIC_KINDS else ''}")
         out[key] = value
     return out
 
@@ -583,31 +584,3 @@ def _config_text(path):
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ConfigError(f"{path}: cannot read as a TOML text file ({exc.__class__.__name__})") from None
-
-
-def check_point(point, data):
-    """Validate a single point (the `point` command): the model's sweep-axis rules and its own
-    checks with the point's values (e.g. the clearance bound of the scene's bearing)."""
-    spec = models.get(data["scene"]["model"])
-    _, axis_keys = model_schema(spec)
-    errors = []
-    for name, key in axis_keys.items():
-        v = point.get(name)
-        if v is None:
-            continue
-        problem = check_number(float(v), key)
-        if problem:
-            errors.append(f"{name}: {problem}{_help(key)}")
-    if not errors and spec.check:
-        errors = spec.check(data, {k: [float(v)] for k, v in point.items() if v is not None})
-    if errors:
-        raise ConfigError("\n".join(errors))
-
-
-def flag_values(flags, spec, unit_of=None):
-    """{axis: value} from CLI flags {axis: (flag, text)}: units.flag_values, its problems as a
-    ConfigError."""
-    try:
-        return units.flag_values(flags, spec, unit_of)
-    except units.UnitError as exc:
-        raise ConfigError(str(exc)) from None

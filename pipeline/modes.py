@@ -21,7 +21,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rotorsweep.pipeline import config, fileio, gridsize
+from rotorsweep.pipeline import config, fileio, gridsize, point_input
 from rotorsweep.pipeline.config import ConfigError
 from rotorsweep.kernels import modal
 
@@ -220,9 +220,9 @@ def campbell_speeds(text, spec, data):
     except ValueError:
         raise ConfigError(f"--campbell {text}: expected START:STOP:NUM (speeds in Hz or unit strings, NUM an "
                           "integer), e.g. 0:200:101 or \"600 rpm:3000 rpm:9\"") from None
-    ends = config.flag_values({"start": ("--campbell START", parts[0].strip()),
-                               "stop": ("--campbell STOP", parts[1].strip())}, spec,
-                              unit_of={"start": "Hz", "stop": "Hz"})
+    ends = point_input.flag_values({"start": ("--campbell START", parts[0].strip()),
+                                    "stop": ("--campbell STOP", parts[1].strip())}, spec,
+                                   unit_of={"start": "Hz", "stop": "Hz"})
     start, stop = ends["start"], ends["stop"]
     key = spec.parameter(spec.speed) if spec.speed else None
     for name, value in (("START", start), ("STOP", stop)):
