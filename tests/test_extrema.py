@@ -239,7 +239,8 @@ def test_peak_in_info_events_table_and_csv():
     assert cols["type"] == ["PK"] and cols["stable"] == [1] and cols["omega"] == [w]
     assert cols["amplitude_max_x"] == ds["event_amplitude_max"].values[:, 0].tolist()
     assert cols["amplitude_half_pp_x"] == ds["event_amplitude_half_pp"].values[:, 0].tolist()
-    np.testing.assert_allclose(cols["amplitude_half_pp_x"], cols["amplitude_max_x"], rtol=1e-12)   # a symmetric orbit
+    # a symmetric orbit's: equal to the orbit's own error, the Newton tolerance (1e-10 of the state)
+    np.testing.assert_allclose(cols["amplitude_half_pp_x"], cols["amplitude_max_x"], rtol=1e-10)
     assert "PK" in query.render(cols, "csv")
 
 
@@ -291,27 +292,35 @@ def test_bai_orbit_means_from_the_sweep_match_scipy_quad(bai_segment):
     assert np.all(np.abs(got - ref) <= error + 10 * 1e-10 * (hi - lo))
 
 
-def test_branch_n_rhs_counts_the_extrema_and_peak_slopes():
-    """A branch's n_rhs counts the extrema passes of its points (issue 32 gap b): the same Duffing
-    branch with weights and a peak costs per point one tangent-linear pass more (the amplitudes
-    and the peak's slope, extrema.amplitudes_and_slope) and takes dphi/dmu from one tangent-linear
-    pass (locked_dphi_dmu) instead of two plain integrations (dphi_dmu). The difference from the
-    plain branch is at least those passes recounted here point by point (the event searches'
-    trial points add more, never less); without the slope pass counted it would fall short by
-    that pass, about 40 % of the difference (measured 230e3 of 322e3 recounted, 467e3 spent)."""
-    def family(**kw):
-        return al.Family(DUFFING, lambda w: duffing(w, 0.05, 1.0, 0.3).p, TIGHT, **kw)
-    settings = al.Settings(ds=0.05, ds_max=0.3)
-    plain = al.continue_orbit(family(), 0.5, np.zeros(2), (0.5, 2.0), settings)
-    weighted_family = family(weights=np.array([[1.0]]), peak=0)
-    weighted = al.continue_orbit(weighted_family, 0.5, np.zeros(2), (0.5, 2.0), settings)
-    assert len(weighted.points) == len(plain.points)
-    pts = weighted.points
-    slope = sum(weighted_family.measures(p.X, p.tangent, settings)[2] for p in pts)
-    recount = slope + sum(weighted_family.locked_dphi_dmu(p.X)[2] - weighted_family.dphi_dmu(p.X, settings.fd_step)[2]
-                          for p in pts)
-    assert recount - slope < 0.9 * recount     # the slope pass is a sizeable part of the difference
-    assert weighted.n_rhs - plain.n_rhs >= 0.9 * recount     # the +- steps' passes differ a little
+def test_branch_n_rhs_counts_the_extrema_and_peak_slopes(monkeypatch):
+    """A branch's n_rhs counts the extrema passes of its points (issue 32 gap b). The same Duffing
+    branch with weights takes the same steps as without (the Newton maps and tangents do not
+    depend on them) and costs exactly its points' extrema passes more (Family.measures,
+    recounted here as they are made, rejected steps' points included); with a peak each pass also
+    takes the slope (extrema.amplitudes_and_slope), and the peak's location and error estimate
+    add correctors and exact tangents (Family.exact), never less: measured 388e3 spent, 310e3 of
+    them the points' passes (uncounted, the difference would fall short of them)."""
+    made = []
+    measures = al.Family.measures
+
+    def counted(self, X, t, settings):
+        out = measures(self, X, t, settings)
+        made.append(out[2])
+        return out
+    monkeypatch.setattr(al.Family, "measures", counted)
+
+    def branch(**kw):
+        made.clear()
+        family = al.Family(DUFFING, lambda w: duffing(w, 0.05, 1.0, 0.3).p, TIGHT, **kw)
+        return al.continue_orbit(family, 0.5, np.zeros(2), (0.5, 2.0), al.Settings(ds=0.05, ds_max=0.3))
+    plain = branch()
+    assert sum(made) == 0
+    weighted = branch(weights=np.array([[1.0]]))
+    assert [p.lam for p in weighted.points] == [p.lam for p in plain.points]
+    assert sum(made) > 0 and weighted.n_rhs - plain.n_rhs == sum(made)
+    peaked = branch(weights=np.array([[1.0]]), peak=0)
+    assert [e.kind for e in peaked.events].count(al.PEAK) == 1
+    assert sum(made) > 0.5 * (peaked.n_rhs - plain.n_rhs) and peaked.n_rhs - plain.n_rhs > sum(made)
 
 
 def test_extremes_change_and_parameter_derivative_match_scipy():

@@ -8,15 +8,24 @@ periods) and one scalar condition c . X = target: the arclength condition t . (X
 a step, mu = bound to end on the range's edge, t_a . (X - X_a) = sigma when locating an event.
 
 Bordered Newton: [[M - I, dphi/dmu], [c]] dX = -[phi - s, c . X - target], with M the monodromy
-from the variational equations (exact to the integrator's tolerance) and dphi/dmu by a central
-difference of two plain integrations (the models are not differentiated in their parameters;
-with a step of 1e-5 in mu the truncation error is O(1e-10) and the integrator's noise
+from the variational equations (exact to the integrator's tolerance) and dphi/dmu by a forward
+difference: one plain integration at mu + 1e-5 less the variational one's phi (the models are not
+differentiated in their parameters; truncation ~1e-5 and the two integrations' different steps
 rtol / 1e-5 ~ 1e-5 relative). dphi/dmu enters only the Newton matrix and the tangent, never the
 residual, so its error slows Newton a little and tilts the predictor, but the converged orbits
 are exact to the Newton tolerance. It is recomputed at every Newton iterate: it depends strongly
 on s (a chord column from the previous point made Newton linear with rate ~0.1-0.4 on the
-Duffing resonance; fresh columns converge quadratically, in 2-3 iterations), and two plain
-integrations cost less than the variational one (n + n^2 components).
+Duffing resonance; fresh columns converge quadratically, in 2-3 iterations). A central difference
+(two plain integrations per iterate, as until issue 35) converged no faster.
+
+A point's tangent (predictor, step control, the direction of travel) comes from the last Newton
+iterate's column, good to ~1e-5 like the column itself, at no further integration. Where a
+tangent must be as exact as the orbit, on the points that locate a peak and estimate its error
+(a peak is a zero of the amplitude's slope along the tangent, and a 1e-5 tilt moves the Bai
+rotor's flat period-4 peak by 1e-4 Hz), `Family.exact()` takes dphi/dmu from one tangent-linear
+pass with the orbit on its steps (`locked_dphi_dmu`). Until issue 35 every point of a peak family
+paid that pass, and every other point two plain integrations: together 0.2 s of the Bai 7.6 um
+line's 0.8 s.
 
 The family is a problem of the continuation engine (`Family`, engine's contract): `engine.follow`
 owns the predictor, step control, edges, end reasons and closed loops; the events are
@@ -46,6 +55,7 @@ class Solution(NamedTuple):
     monodromy: np.ndarray
     iterations: int
     residual: float
+    dphi: np.ndarray = None     # the last Newton iterate's dphi/dmu (None: converged at the first)
 
     @property
     def multipliers(self):
@@ -109,6 +119,7 @@ class Family(NamedTuple):
     periods: float = 1.0
     weights: np.ndarray = None
     peak: int = -1
+    exact_tangents: bool = False
 
     @property
     def parameters(self):
@@ -129,11 +140,19 @@ class Family(NamedTuple):
         mono = z[n:].reshape((n, n)) if variational else None
         return z[:n] - s, mono, status, n_rhs
 
-    def dphi_dmu(self, X, fd_step):
-        """Central difference of phi in mu: (column, flow status, n_rhs)."""
+    def exact(self):
+        """This family with its points' tangents as exact as their orbits (`locked_dphi_dmu`): the
+        peaks' location and error estimates."""
+        return self._replace(exact_tangents=True)
+
+    def dphi_dmu(self, X, fd_step, r=None):
+        """Difference of phi in mu: (column, flow status, n_rhs); forward from r = phi - s at X
+        where given (one plain integration), else central (two)."""
         s, h = X[:-1], self.scale
         step = fd_step * max(1.0, abs(X[-1]))
         plus = self.return_map(s, (X[-1] + step) * h, False)
+        if r is not None:
+            return (plus[0] - r) / step, plus[2], plus[3]
         minus = self.return_map(s, (X[-1] - step) * h, False)
         bad = next((r[2] for r in (plus, minus) if r[2] != ig.STATUS_OK), ig.STATUS_OK)
         return (plus[0] - minus[0]) / (2.0 * step), bad, plus[3] + minus[3]
@@ -190,7 +209,7 @@ class Family(NamedTuple):
     def correct(self, X0, c, target, at, settings, counter):
         """Newton on [phi(s, lam) - s = 0, c . X = target] from X0: (Solution, None) or (None,
         failure), failure NEWTON_FAILED or INTEGRATION_FAILED."""
-        X = X0.copy()
+        X, dphi = X0.copy(), None
         for it in range(settings.max_newton + 1):
             r, mono, status, n_rhs = self.return_map(X[:-1], self.lam(X), True)
             counter.n += n_rhs
@@ -198,10 +217,10 @@ class Family(NamedTuple):
                 return None, INTEGRATION_FAILED
             res = np.abs(r).max() / max(1.0, np.abs(X[:-1]).max())
             if res <= settings.tol:
-                return Solution(X, mono, it, res), None
+                return Solution(X, mono, it, res, dphi), None
             if it == settings.max_newton:
                 break
-            dphi, status, n_rhs = self.dphi_dmu(X, settings.fd_step)
+            dphi, status, n_rhs = self.dphi_dmu(X, settings.fd_step, r)
             counter.n += n_rhs
             if status != ig.STATUS_OK:
                 return None, INTEGRATION_FAILED
@@ -212,8 +231,13 @@ class Family(NamedTuple):
         return None, NEWTON_FAILED
 
     def point(self, sol, at, settings, counter):
-        """The Point of a converged solution (dphi/dmu and tangent there); None if the flow failed."""
-        dphi, status, n_rhs = self.locked_dphi_dmu(sol.X) if self.peak >= 0 else self.dphi_dmu(sol.X, settings.fd_step)
+        """The Point of a converged solution (its tangent from dphi/dmu: the Newton iterates' last,
+        else a central difference; exact where the family is); None if a flow failed."""
+        dphi, status, n_rhs = sol.dphi, ig.STATUS_OK, 0
+        if self.exact_tangents:
+            dphi, status, n_rhs = self.locked_dphi_dmu(sol.X)
+        elif dphi is None:
+            dphi, status, n_rhs = self.dphi_dmu(sol.X, settings.fd_step)
         counter.n += n_rhs
         if status != ig.STATUS_OK:
             return None
@@ -323,7 +347,7 @@ def _with_error(family, points, event, settings, counter):
     if event.kind != PEAK or event.point is None:
         return event
     b = points[event.index + 1] if event.index + 1 < len(points) else points[0]   # a closed loop's last step
-    error, smooth = family.peak_error(event.point, points[event.index], b, settings, counter)
+    error, smooth = family.exact().peak_error(event.point, points[event.index], b, settings, counter)
     return event._replace(lam_error=error) if smooth else None
 
 

@@ -130,9 +130,22 @@ def rejected(a, b, settings):
     return b.iterations > settings.max_newton - 2 or angle(a.tangent, b.tangent) > settings.max_angle
 
 
-def on_arclength(problem, a, sigma, settings, counter):
-    """The corrector's solution on the hyperplane t_a . (X - X_a) = sigma, predicted along t_a."""
-    return problem.correct(a.X + sigma * a.tangent, a.tangent, a.tangent @ a.X + sigma, a, settings, counter)
+def on_arclength(problem, a, sigma, settings, counter, near=None):
+    """The corrector's solution on the hyperplane t_a . (X - X_a) = sigma, predicted along t_a from
+    a, or from `near` = (sigma', solution there) when given."""
+    start, at = (a.X, 0.0) if near is None else (near[1].X, near[0])
+    return problem.correct(start + (sigma - at) * a.tangent, a.tangent, a.tangent @ a.X + sigma, a, settings, counter)
+
+
+def _nearest(found, sigma):
+    """(sigma', solution) of the found solutions nearest sigma (None if none): Brent's late
+    evaluations lie close together, and a predictor from the nearest one needs fewer Newton
+    iterations than one from the step's first point (the Bai 7.6 um line's six events: 61 Newton
+    iterations in 125 evaluations instead of 286 in 129)."""
+    if not found:
+        return None
+    near = min(found, key=lambda s: abs(s - sigma))
+    return near, found[near]
 
 
 class _Lost(Exception):
@@ -149,7 +162,7 @@ def locate_zero(problem, a, b, value, settings, counter, root=brent_root):
     found = {}
 
     def g(sigma):
-        sol, failure = on_arclength(problem, a, sigma, settings, counter)
+        sol, failure = on_arclength(problem, a, sigma, settings, counter, _nearest(found, sigma))
         if failure is not None:
             raise _Lost
         found[sigma] = sol
