@@ -14,7 +14,8 @@ The Python API mirrors the command line:
 Importing pipeline imports nothing heavy and installs import hooks for short commands (issue
 35): the `rotorsweep` accessor registers itself when xarray is imported
 (register_accessor_when_xarray_loads), Numba's BLAS check does not import scipy.linalg
-(_quick_blas_check), and the command line's process sets up no cffi typing (numba_without_cffi).
+(_quick_blas_check), and the command line's process sets up no cffi typing (numba_without_cffi) and
+reads Numba's configuration without yaml where it has no file to read (numba_config_without_yaml).
 """
 import contextlib
 import importlib.abc
@@ -104,18 +105,21 @@ def _quick_blas_check():
 _around_import("numba.np.arraymath", _quick_blas_check)
 
 
-@contextlib.contextmanager
-def _cffi_unavailable():
-    """`import cffi` fails inside (where cffi is not imported yet): sys.modules maps it to None."""
-    if "cffi" in sys.modules:
-        yield
-        return
-    sys.modules["cffi"] = None
-    try:
-        yield
-    finally:
-        if sys.modules.get("cffi", 0) is None:
-            del sys.modules["cffi"]
+def _unimportable(name):
+    """A context manager inside which `import name` fails where `name` is not imported yet
+    (sys.modules maps it to None), and imports again after."""
+    @contextlib.contextmanager
+    def inside():
+        if name in sys.modules:
+            yield
+            return
+        sys.modules[name] = None
+        try:
+            yield
+        finally:
+            if sys.modules.get(name, 0) is None:
+                del sys.modules[name]
+    return inside
 
 
 def numba_without_cffi():
@@ -124,7 +128,18 @@ def numba_without_cffi():
     building an FFI: 14 ms (quiet machine) to 33 ms (loaded) in every command that loads a kernel
     (issue 35), for a feature no rotorsweep kernel uses. Numba then treats cffi as not installed:
     a plugin model whose kernel calls cffi functions runs from Python, not from the command line."""
-    _around_import("numba.core.typing.cffi_utils", _cffi_unavailable)
+    _around_import("numba.core.typing.cffi_utils", _unimportable("cffi"))
+
+
+def numba_config_without_yaml():
+    """For the command line's own process: numba.core.config imports yaml (16 ms of every command
+    that integrates, issue 35) only to read a .numba_config.yaml in the working directory; where
+    there is none, Numba is imported without it (a file created later in the process is not
+    read: Numba warns that yaml is missing)."""
+    import os
+
+    if not os.path.isfile(".numba_config.yaml"):
+        _around_import("numba.core.config", _unimportable("yaml"))
 
 
 def pools_as_a_worker():

@@ -426,6 +426,7 @@ def main(argv=None):
     if argv is None:
         pipeline.pools_as_a_worker()
         pipeline.numba_without_cffi()
+        pipeline.numba_config_without_yaml()
     interrupts = []
     disabled = logging.root.manager.disable
     previous = _recording_interrupts(interrupts)

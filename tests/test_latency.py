@@ -312,6 +312,24 @@ def test_without_cffi_numba_treats_it_as_absent_and_cffi_still_imports():
     subprocess.run([sys.executable, "-c", code], check=True, env=env(), timeout=300, cwd=ROOT)
 
 
+def test_a_command_line_kernel_load_imports_no_yaml():
+    args = ["-m", "rotorsweep.pipeline.cli", "point", "--speed", "100", "--clearance", "7.6e-6"]
+    assert heavy(imported_modules(args), ("yaml.loader", "yaml.cyaml")) == []     # `yaml` itself: the failed import
+
+
+@pytest.mark.parametrize("config_file", [False, True])
+def test_numba_reads_its_config_file_where_there_is_one_and_yaml_still_imports(tmp_path, config_file):
+    """numba_config_without_yaml leaves a working directory's .numba_config.yaml to Numba (here
+    debug_cache: 1, the default 0), and yaml importable after Numba's import either way."""
+    if config_file:
+        (tmp_path / ".numba_config.yaml").write_text("debug_cache: 1\n")
+    code = ("import sys, rotorsweep.pipeline as p; p.numba_config_without_yaml(); import numba; "
+            "print(numba.config.DEBUG_CACHE, bool(sys.modules.get('yaml'))); import yaml; yaml.safe_load('a: 1')")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env(), timeout=300,
+                          cwd=tmp_path, check=True)
+    assert proc.stdout.split() == (["1", "True"] if config_file else ["0", "False"])
+
+
 # --- the command line's process has no thread pools of its own, as a worker (issue 38) ----------
 
 def test_the_command_line_process_sets_single_threaded_pools_before_numpy_and_keeps_the_users():
