@@ -62,10 +62,12 @@ def test_speedup_net_of_steal():
     assert net_of_steal(10.0, 6.0, None, 2.0) is None          # not reported: no guess
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(180)
 def test_scaling_bench_core_on_a_tiny_grid(tmp_path):
     """1 and 2 workers with default chunks plus one chunk size on 2 workers, 8 points: the JSON
-    holds every section and a complete record per run, the Markdown and the plot exist."""
+    holds every section and a complete record per run, the Markdown and the plot exist. Slow (45 s:
+    three local clusters; the default suite's largest test, and over its timeout under load)."""
     from workflows.bench import scaling as bs
     from workflows.bench.scaling_scene import scene_config
 
