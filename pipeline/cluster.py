@@ -6,7 +6,7 @@ file records (the version, the command, the model, the config).
 
 The sweep (rotorsweep.pipeline.sweep) and the per-line commands (rotorsweep.pipeline.results) use this module; none of
 them starts or closes a cluster another way. It imports only the standard library at import time
-(the command line reads the version here; Dask is imported where a cluster starts).
+(the command line reads the version here, rotorsweep.__version__; Dask is imported where a cluster starts).
 
 Commands run their tasks through an executor (`executor()`): a Dask cluster (`DaskExecutor`) or,
 for small work, this process (`InProcess`), with one interface (submitter, as_completed, lost,
@@ -23,19 +23,8 @@ import socket
 import sys
 import types
 from datetime import datetime, timezone
-from importlib import metadata
 
-
-def installed_version():
-    """The installed package's version (pyproject.toml holds the one definition); a checkout used
-    without installing it has none and says so."""
-    try:
-        return metadata.version("rotorsweep")
-    except metadata.PackageNotFoundError:
-        return "0+unknown"
-
-
-VERSION = installed_version()
+from rotorsweep import __version__ as VERSION
 
 
 class SweepError(Exception):

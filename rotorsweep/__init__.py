@@ -17,7 +17,11 @@ as soon as xarray is imported, before or after rotorsweep.
 """
 import importlib
 
-import rotorsweep.pipeline as pipeline
+# The one definition of the version (pyproject.toml reads it: [tool.setuptools.dynamic]); a
+# literal, so the command line knows it without importlib.metadata (25 ms of `info`, issue 35).
+__version__ = "0.1.0"
+
+import rotorsweep.pipeline as pipeline  # noqa: E402
 
 # public name -> (module, attribute in it; None: the module itself)
 _API = {
@@ -25,14 +29,14 @@ _API = {
     "make_report": ("rotorsweep.pipeline", "make_report"), "open_cube": ("rotorsweep.pipeline", "open_cube"),
     "open_result": ("rotorsweep.pipeline", "open_result"), "point": ("rotorsweep.pipeline", "point"), "run": ("rotorsweep.pipeline", "run"),
     "unstable_intervals": ("rotorsweep.pipeline", "unstable_intervals"),
-    "__version__": ("rotorsweep.pipeline.cluster", "VERSION"), "SweepError": ("rotorsweep.pipeline.cluster", "SweepError"),
+    "SweepError": ("rotorsweep.pipeline.cluster", "SweepError"),
     "ConfigError": ("rotorsweep.pipeline.config", "ConfigError"), "load_config": ("rotorsweep.pipeline.config", "load_config"),
     "parse_config": ("rotorsweep.pipeline.config", "parse_config"),
     "CubeError": ("rotorsweep.pipeline.cube", "CubeError"),
     "QueryError": ("rotorsweep.pipeline.query", "QueryError"), "attractor_intervals": ("rotorsweep.pipeline.query", "attractor_intervals"),
 }
 
-__all__ = sorted(_API)
+__all__ = sorted([*_API, "__version__"])
 
 
 def __getattr__(name):

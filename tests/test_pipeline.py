@@ -238,8 +238,10 @@ def test_every_cli_argument_has_help():
 
 
 def test_import_rotorsweep_gives_the_public_api():
+    from importlib import metadata
+
     import rotorsweep
-    assert rotorsweep.__version__ == cluster.VERSION
+    assert rotorsweep.__version__ == cluster.VERSION == metadata.version("rotorsweep")   # pyproject reads it
     assert all(hasattr(rotorsweep, name) for name in rotorsweep.__all__)
     assert all(callable(getattr(rotorsweep, name)) for name in ("run", "open_cube", "unstable_intervals",
                                                                 "make_report", "point", "load_config"))
