@@ -101,11 +101,13 @@ def finish(ds, output, parts):
 
 
 def run_lines(cfg, task, lines, workers, scheduler, stream, summary, parts, unit="continuation_line"):
-    """task(cfg.scene, where) for every line {axis: value}, after compiling the scene's kernels in
-    the driver (workers load them from the cache): in this process when the estimated work of the
-    lines to compute (rotorsweep.pipeline.workload, `unit`) is small or workers == 0, else as Dask tasks. The
-    lines that part files in `parts` hold already are read, not computed; each line done is saved
-    as a part and gets a progress line (`summary(result)`). The results in line order."""
+    """task(cfg.scene, where) for every line {axis: value}: in this process (its kernels loaded on
+    first use) when the estimated work of the lines to compute (rotorsweep.pipeline.workload,
+    `unit`) is small or workers == 0, else as Dask tasks after compiling the scene's kernels in the
+    driver (workers load them from the cache). The lines that part files in `parts` hold already
+    are read, not computed; each line done is saved as a part and gets a progress line
+    (`summary(result)`). The results in line order; the in-process cost per line is recorded
+    unless a kernel had to be compiled."""
     config_hash = cfg.hash()
     results = earlier_lines(parts, config_hash, len(lines))
     todo = [k for k, r in enumerate(results) if r is None]
@@ -122,15 +124,25 @@ def run_lines(cfg, task, lines, workers, scheduler, stream, summary, parts, unit
     executor = cluster.executor(0 if in_process else workers, scheduler)
     try:
         with cluster.heap_frozen():     # the imports' and the cluster's objects (see cluster.heap_frozen)
-            warmup.compile_scene(cfg.scene, lambda text: say(stream, text))
-            with workload.Meter() as meter:
-                _run_tasks(executor, cfg.scene, task, lines, todo, results, stream, summary,
-                           lambda k: save_line(parts, config_hash, k, results[k]))
+            with _kernels_ready(cfg.scene, in_process, lambda text: say(stream, text)) as kernels:
+                with workload.Meter() as meter:
+                    _run_tasks(executor, cfg.scene, task, lines, todo, results, stream, summary,
+                               lambda k: save_line(parts, config_hash, k, results[k]))
     finally:
         executor.close()
-    if in_process:
+    if in_process and not kernels.exclusive:
         workload.record(unit, model, len(todo), meter.seconds)
     return results
+
+
+def _kernels_ready(scene, in_process, say):
+    """The context the tasks run in: in this process the kernels load on first use
+    (warmup.kernels_on_first_use); for a cluster the driver compiles (or loads) them all first, so
+    that the workers load them from the cache instead of each compiling them (compile_scene)."""
+    if in_process:
+        return warmup.kernels_on_first_use(scene, say)
+    warmup.compile_scene(scene, say)
+    return contextlib.nullcontext()
 
 
 def _run_tasks(executor, scene, task, lines, todo, results, stream, summary, saved):

@@ -377,28 +377,32 @@ def tangent_params(params, lam, dlam, step):
     return ig.TangentParams(params(lam), params(lam + step), params(lam - step), dlam / (2.0 * step))
 
 
-def amplitudes_and_slope(kernel, X, tangent, params, scale, span, weights, row, opts, step):
-    """(amplitudes, slope, n_rhs) at a branch point X = (s, mu) (lambda = mu scale, params(lambda)
-    -> p) with unit tangent, in one pass: amplitudes = [max |o|, half peak-to-peak of o] per
-    observable (the rows of weights), slope the derivative of row's half peak-to-peak along the
-    tangent (orbit_extent_slope; the parameter term's step: `step` relative to max(1, |mu|)).
-    NaN where the orbit cannot be integrated."""
-    s, mu = np.ascontiguousarray(X[:-1], dtype=float), float(X[-1])
-    e = step * max(1.0, abs(mu)) * scale
-    hi, lo, d_hi, d_lo, _, _, n_rhs = orbit_extent_slope(
-        kernel, s, np.ascontiguousarray(tangent[:-1], dtype=float),
-        tangent_params(params, mu * scale, float(tangent[-1]) * scale, e), span, weights, opts)
-    amplitudes = np.array([np.maximum(hi, -lo), 0.5 * (hi - lo)])
-    return amplitudes, float(0.5 * (d_hi[row] - d_lo[row])), n_rhs
-
-
-def parameter_derivative(kernel, s, params, lam, step, span, opts):
-    """(d phi / d lambda, status, n_rhs): the flow phi over span from s differentiated in the
-    parameter, integrated with the orbit on its steps (orbit_extent_slope; `step`: the parameter
-    term's), so a branch's tangent is as exact as its orbits (two independent adaptive
-    integrations would leave rtol / step)."""
+def parameter_pass(kernel, s, params, lam, step, span, weights, opts):
+    """((highest, lowest, d_highest, d_lowest), d phi / d lambda, status, n_rhs): the orbit from s
+    integrated with its derivative in the parameter on its own steps (orbit_extent_slope along
+    dlambda = 1; `step`: the parameter term's), so a branch's tangent is as exact as its orbits
+    (two independent adaptive integrations would leave rtol / step), and with it the extremes of
+    the observables (the rows of weights) and their derivatives in lambda."""
     n = s.size
-    _, _, _, _, v_end, status, n_rhs = orbit_extent_slope(
+    hi, lo, d_hi, d_lo, v_end, status, n_rhs = orbit_extent_slope(
         kernel, np.ascontiguousarray(s, dtype=float), np.zeros(n), tangent_params(params, lam, 1.0, step), span,
-        np.zeros((1, n)), opts)
-    return v_end.copy(), status, n_rhs
+        weights, opts)
+    return (hi, lo, d_hi, d_lo), v_end.copy(), status, n_rhs
+
+
+def amplitudes_and_slope(kernel, X, tangent, p, span, weights, row, opts, along):
+    """(amplitudes, slope, n_rhs) at a branch point X = (s, mu) (p its kernel vector) with unit
+    tangent: amplitudes = [max |o|, half peak-to-peak of o] per observable (the rows of weights),
+    slope the derivative of row's half peak-to-peak along the tangent. `along`: the extremes at X
+    and their derivatives in X's last coordinate (parameter_pass's, scaled); this pass adds their
+    derivatives along the tangent's state part (orbit_extent_slope without a parameter term: one
+    right-hand side per stage instead of three). An extremum's derivative is linear in the
+    direction, and both passes take the orbit's own steps and extrema (their error control reads
+    the orbit only), so the sum is the derivative along the whole tangent, to round-off. NaN where
+    the orbit cannot be integrated."""
+    s = np.ascontiguousarray(X[:-1], dtype=float)
+    _, _, d_hi, d_lo, _, _, n_rhs = orbit_extent_slope(kernel, s, np.ascontiguousarray(tangent[:-1], dtype=float),
+                                                       ig.TangentParams(p, p, p, 0.0), span, weights, opts)
+    hi, lo, d_hi_mu, d_lo_mu = along
+    slope = 0.5 * ((d_hi[row] + tangent[-1] * d_hi_mu[row]) - (d_lo[row] + tangent[-1] * d_lo_mu[row]))
+    return np.array([np.maximum(hi, -lo), 0.5 * (hi - lo)]), float(slope), n_rhs

@@ -292,41 +292,48 @@ def test_bai_orbit_means_from_the_sweep_match_scipy_quad(bai_segment):
     assert np.all(np.abs(got - ref) <= error + 10 * 1e-10 * (hi - lo))
 
 
-def test_branch_n_rhs_counts_the_extrema_and_peak_slopes(monkeypatch):
-    """A branch's n_rhs counts the extrema passes of its points (issue 32 gap b). The same Duffing
-    branch with weights takes the same steps as without (the Newton maps and tangents do not
-    depend on them) and costs exactly its points' extrema passes more (Family.measures,
-    recounted here as they are made, rejected steps' points included); with a peak each pass also
-    takes the slope (extrema.amplitudes_and_slope), and the peak's location and error estimate
-    add correctors and exact tangents (Family.exact), never less: measured 388e3 spent, 310e3 of
-    them the points' passes (uncounted, the difference would fall short of them)."""
-    made = []
-    measures = al.Family.measures
+def test_branch_n_rhs_counts_every_integration(monkeypatch):
+    """A branch's n_rhs is the right-hand sides of all its integrations (issue 32 gap b): the
+    Newton maps and their differences (Family.return_map), the tangents' parameter passes
+    (Family.parameter_pass), the extrema passes of weighted points (Family.extremes) and the peak
+    slopes' state passes (extrema.amplitudes_and_slope), each recounted here as it is made, on a
+    plain, a weighted and a peaked Duffing branch (the peak's location and error estimate make
+    more of them). The weighted branch takes the plain one's steps: it costs exactly its extrema
+    passes more."""
+    spent = {}
 
-    def counted(self, X, t, settings):
-        out = measures(self, X, t, settings)
-        made.append(out[2])
-        return out
-    monkeypatch.setattr(al.Family, "measures", counted)
+    def recount(owner, name, index):
+        made = getattr(owner, name)
+
+        def counted(*args, **kw):
+            out = made(*args, **kw)
+            spent[name] = spent.get(name, 0) + out[index]
+            return out
+        monkeypatch.setattr(owner, name, counted)
+    recount(al.Family, "return_map", 3)
+    recount(al.Family, "parameter_pass", 3)
+    recount(al.Family, "extremes", 2)
+    recount(extrema, "amplitudes_and_slope", 2)
 
     def branch(**kw):
-        made.clear()
+        spent.clear()
         family = al.Family(DUFFING, lambda w: duffing(w, 0.05, 1.0, 0.3).p, TIGHT, **kw)
-        return al.continue_orbit(family, 0.5, np.zeros(2), (0.5, 2.0), al.Settings(ds=0.05, ds_max=0.3))
-    plain = branch()
-    assert sum(made) == 0
-    weighted = branch(weights=np.array([[1.0]]))
+        b = al.continue_orbit(family, 0.5, np.zeros(2), (0.5, 2.0), al.Settings(ds=0.05, ds_max=0.3))
+        assert b.n_rhs == sum(spent.values())
+        return b, dict(spent)
+    plain, _ = branch()
+    weighted, passes = branch(weights=np.array([[1.0]]))
     assert [p.lam for p in weighted.points] == [p.lam for p in plain.points]
-    assert sum(made) > 0 and weighted.n_rhs - plain.n_rhs == sum(made)
-    peaked = branch(weights=np.array([[1.0]]), peak=0)
+    assert passes["extremes"] > 0 and weighted.n_rhs - plain.n_rhs == passes["extremes"]
+    peaked, passes = branch(weights=np.array([[1.0]]), peak=0)
     assert [e.kind for e in peaked.events].count(al.PEAK) == 1
-    assert sum(made) > 0.5 * (peaked.n_rhs - plain.n_rhs) and peaked.n_rhs - plain.n_rhs > sum(made)
+    assert passes["parameter_pass"] > 0 and passes["amplitudes_and_slope"] > 0
 
 
 def test_extremes_change_and_parameter_derivative_match_scipy():
     """orbit_extent_slope's d_highest, d_lowest / (2 h) (the extremes' derivative along a state
     direction du and a frequency change, from two perturbed orbits on the orbit's own steps) and
-    parameter_derivative's d phi / d omega, on a hardening Duffing orbit, against scipy alone: the
+    parameter_pass's d phi / d omega, on a hardening Duffing orbit, against scipy alone: the
     extremes (scipy_extremes) and the end states of DOP853 at rtol 1e-13 from u0 +- eps du at
     omega +- eps dw, central differences of step eps = 1e-4 (truncation eps^2 ~ 1e-8 relative,
     noise 1e-13 / eps = 1e-9). Ours: round-off 1e-16 / h = 1e-11 and the method's truncation
@@ -343,8 +350,8 @@ def test_extremes_change_and_parameter_derivative_match_scipy():
                           np.array([[1.0]])) for sign in (1.0, -1.0)]
     for ours, j in ((d_hi, 0), (d_lo, 1)):
         np.testing.assert_allclose(ours[0], (ref[0][j][0] - ref[1][j][0]) / (2 * eps), rtol=1e-6)
-    dphi, status, _ = extrema.parameter_derivative(DUFFING.kernel, sol.state,
-                                                   lambda v: duffing(v, 0.05, 1.0, 0.3).p, w, h, 1.0, TIGHT)
+    _, dphi, status, _ = extrema.parameter_pass(DUFFING.kernel, sol.state, lambda v: duffing(v, 0.05, 1.0, 0.3).p,
+                                                w, h, 1.0, np.array([[1.0]]), TIGHT)
     ends = [solve_ivp(duffing_rhs(w + sign * eps, 0.05, 1.0, 0.3), (0.0, 1.0), sol.state, method="DOP853",
                       rtol=1e-13, atol=1e-16).y[:, -1] for sign in (1.0, -1.0)]
     np.testing.assert_allclose(dphi, (ends[0] - ends[1]) / (2 * eps), rtol=1e-6, atol=1e-6 * np.abs(dphi).max())
@@ -367,18 +374,26 @@ def test_slope_and_parameter_derivative_are_the_linear_closed_form(w):
     slope is d|X|/dw, and the flow's parameter derivative is (I - M) ds/dw (differentiate
     phi(s(w), w) = s(w); M = expm of the scaled system matrix over one period). Ours carries the
     method's truncation error's derivative (~rtol = 1e-12 relative) and the parameter term's
-    central difference (step 1e-5: truncation ~1e-10, measured 3e-11 on the Duffing); 1e-9."""
+    central difference (step 1e-5: truncation ~1e-10, measured 3e-11 on the Duffing); 1e-9. The
+    slope from the parameter pass and the state direction's pass (amplitudes_and_slope)
+    equals one pass along the whole tangent to round-off and the two parameter terms' truncation
+    (~1e-10): 1e-9."""
     from scipy.linalg import expm
     state, dstate, amplitude, slope = linear_orbit(w)
     params = lambda v: duffing(v, 0.05, 0.0, 0.3).p     # noqa: E731
+    weights = np.array([[1.0]])
+    along, dphi, status, _ = extrema.parameter_pass(DUFFING.kernel, state, params, w, 1e-5, 1.0, weights, TIGHT)
+    assert status == ig.STATUS_OK
     amplitudes, got, _ = extrema.amplitudes_and_slope(DUFFING.kernel, np.append(state, w), np.append(dstate, 1.0),
-                                                      params, 1.0, 1.0, np.array([[1.0]]), 0, TIGHT, 1e-5)
+                                                      params(w), 1.0, weights, 0, TIGHT, along)
     np.testing.assert_allclose(amplitudes[:, 0], [amplitude, amplitude], rtol=1e-9)
     np.testing.assert_allclose(got, slope, rtol=1e-9, atol=1e-9 * amplitude)
+    _, _, d_hi, d_lo, _, _, _ = extrema.orbit_extent_slope(DUFFING.kernel, state, dstate,
+                                                           extrema.tangent_params(params, w, 1.0, 1e-5), 1.0, weights,
+                                                           TIGHT)
+    np.testing.assert_allclose(got, 0.5 * (d_hi[0] - d_lo[0]), rtol=1e-9)
     period = 2 * np.pi / w
     monodromy = expm(np.array([[0.0, 1.0], [-period ** 2, -0.1 * period]]))
-    dphi, status, _ = extrema.parameter_derivative(DUFFING.kernel, state, params, w, 1e-5, 1.0, TIGHT)
-    assert status == ig.STATUS_OK
     expected = (np.eye(2) - monodromy) @ dstate
     np.testing.assert_allclose(dphi, expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max())
 

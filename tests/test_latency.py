@@ -299,6 +299,24 @@ def test_the_overwrite_hint_names_the_python_keyword(tmp_path):
         continuation.run(cfg, out, workers=0, stream=None)
 
 
+def test_an_in_process_continuation_loads_only_the_kernels_it_calls(tmp_path):
+    """In this process the kernels load on first use (warmup.kernels_on_first_use): the Duffing
+    line (a peak family) never calls the orbits' plain extrema pass, which a cluster's driver
+    loads for its workers; the line's cost is recorded (no kernel compiled: the cache is warm)."""
+    (tmp_path / "d.toml").write_text(DUFFING)
+    code = ("import io, sys; from rotorsweep.pipeline import config, continuation, workload; "
+            "from rotorsweep.kernels import extrema; log = io.StringIO(); "
+            "cfg = config.load_config('d.toml'); continuation.run(cfg, 'warm.nc', workers=0, stream=None); "
+            "before = workload._measured().get(workload._key('continuation_line', 'duffing'), []); "
+            "continuation.run(cfg, 'd.nc', workers=0, stream=log); "
+            "after = workload._measured().get(workload._key('continuation_line', 'duffing'), []); "
+            "print(len(extrema.orbit_extent.overloads), 'load on first use' in log.getvalue(), after != before)")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env(), timeout=600,
+                          cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout.split() == ["0", "True", "True"]
+
+
 # --- the command line's process sets up no cffi typing in Numba (issue 35) ------------------------
 
 def test_a_command_line_kernel_load_imports_no_cffi():

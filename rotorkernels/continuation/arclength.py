@@ -18,14 +18,14 @@ on s (a chord column from the previous point made Newton linear with rate ~0.1-0
 Duffing resonance; fresh columns converge quadratically, in 2-3 iterations). A central difference
 (two plain integrations per iterate, as until issue 35) converged no faster.
 
-A point's tangent (predictor, step control, the direction of travel) comes from the last Newton
-iterate's column, good to ~1e-5 like the column itself, at no further integration. Where a
-tangent must be as exact as the orbit, on the points that locate a peak and estimate its error
-(a peak is a zero of the amplitude's slope along the tangent, and a 1e-5 tilt moves the Bai
-rotor's flat period-4 peak by 1e-4 Hz), `Family.exact()` takes dphi/dmu from one tangent-linear
-pass with the orbit on its steps (`locked_dphi_dmu`). Until issue 35 every point of a peak family
-paid that pass, and every other point two plain integrations: together 0.2 s of the Bai 7.6 um
-line's 0.8 s.
+A point's tangent comes from a forward difference at the converged orbit (one plain integration
+more, its phi - s that of the last Newton iterate), where the family has no peak to locate; a peak
+family's from the tangent-linear pass (`parameter_pass`), as exact as its orbit, at every point:
+the slope its peaks are detected and located by is taken along it, and a 1e-5 tilt moves the Bai
+rotor's flat period-4 peak by 1e-4 Hz. (The last Newton iterate's column, taken one iterate
+before convergence, tilted period-4 tangents by up to 0.27 rad: no predictor.) Before issue 35
+the Newton column was a central difference (two plain integrations per iterate, converging no
+faster), and so was a peakless family's tangent.
 
 The family is a problem of the continuation engine (`Family`, engine's contract): `engine.follow`
 owns the predictor, step control, edges, end reasons and closed loops; the events are
@@ -55,7 +55,7 @@ class Solution(NamedTuple):
     monodromy: np.ndarray
     iterations: int
     residual: float
-    dphi: np.ndarray = None     # the last Newton iterate's dphi/dmu (None: converged at the first)
+    r: np.ndarray = None        # phi(s, lam) - s at X (a forward difference's base)
 
     @property
     def multipliers(self):
@@ -80,7 +80,7 @@ class Point(NamedTuple):
         return self.X[:-1]
 
 
-# The step in mu of `Family.locked_dphi_dmu`'s parameter term (extrema.tangent_params: a central
+# The step in mu of `Family.parameter_pass`'s parameter term (extrema.tangent_params: a central
 # difference of the right-hand side at a fixed state, smooth in the parameters): truncation
 # ~step^2, round-off ~1e-16 / step, both ~1e-10 here.
 LOCKED_STEP = 1e-6
@@ -119,7 +119,6 @@ class Family(NamedTuple):
     periods: float = 1.0
     weights: np.ndarray = None
     peak: int = -1
-    exact_tangents: bool = False
 
     @property
     def parameters(self):
@@ -140,11 +139,6 @@ class Family(NamedTuple):
         mono = z[n:].reshape((n, n)) if variational else None
         return z[:n] - s, mono, status, n_rhs
 
-    def exact(self):
-        """This family with its points' tangents as exact as their orbits (`locked_dphi_dmu`): the
-        peaks' location and error estimates."""
-        return self._replace(exact_tangents=True)
-
     def dphi_dmu(self, X, fd_step, r=None):
         """Difference of phi in mu: (column, flow status, n_rhs); forward from r = phi - s at X
         where given (one plain integration), else central (two)."""
@@ -157,15 +151,18 @@ class Family(NamedTuple):
         bad = next((r[2] for r in (plus, minus) if r[2] != ig.STATUS_OK), ig.STATUS_OK)
         return (plus[0] - minus[0]) / (2.0 * step), bad, plus[3] + minus[3]
 
-    def locked_dphi_dmu(self, X):
-        """dphi/dmu integrated with the orbit at X on its steps (extrema.parameter_derivative: no
-        rtol / fd_step noise; its parameter term of step LOCKED_STEP): the tangent the peaks'
-        slope is taken along, as exact as the orbit where `dphi_dmu`'s is good to ~1e-5 (a 1e-5
-        tilt moves the Bai rotor's flat period-4 peak by 1e-4 Hz): (column, status, n_rhs)."""
+    def parameter_pass(self, X):
+        """(dphi/dmu, along, status, n_rhs) from one pass of the orbit at X with its derivative in mu
+        on its own steps (extrema.parameter_pass, its parameter term of step LOCKED_STEP: no
+        rtol / fd_step noise): the tangent the peaks' slope is taken along, as exact as the orbit
+        where `dphi_dmu`'s is good to ~1e-5 (a 1e-5 tilt moves the Bai rotor's flat period-4 peak
+        by 1e-4 Hz); along = the observables' extremes and their derivatives in mu, the slope's
+        parameter part (extrema.amplitudes_and_slope)."""
         step = LOCKED_STEP * max(1.0, abs(X[-1]))
-        dphi, status, n_rhs = extrema.parameter_derivative(self.model.kernel, X[:-1], self.params, self.lam(X),
-                                                           step * self.scale, float(self.periods), self.opts)
-        return dphi * self.scale, status, n_rhs
+        (hi, lo, d_hi, d_lo), dphi, status, n_rhs = extrema.parameter_pass(
+            self.model.kernel, X[:-1], self.params, self.lam(X), step * self.scale, float(self.periods),
+            np.ascontiguousarray(self.weights), self.opts)
+        return dphi * self.scale, (hi, lo, d_hi * self.scale, d_lo * self.scale), status, n_rhs
 
     def refined(self, settings, factor):
         """(family, settings) with the integrator's error and the corrector's tolerance `factor`
@@ -209,7 +206,7 @@ class Family(NamedTuple):
     def correct(self, X0, c, target, at, settings, counter):
         """Newton on [phi(s, lam) - s = 0, c . X = target] from X0: (Solution, None) or (None,
         failure), failure NEWTON_FAILED or INTEGRATION_FAILED."""
-        X, dphi = X0.copy(), None
+        X = X0.copy()
         for it in range(settings.max_newton + 1):
             r, mono, status, n_rhs = self.return_map(X[:-1], self.lam(X), True)
             counter.n += n_rhs
@@ -217,10 +214,10 @@ class Family(NamedTuple):
                 return None, INTEGRATION_FAILED
             res = np.abs(r).max() / max(1.0, np.abs(X[:-1]).max())
             if res <= settings.tol:
-                return Solution(X, mono, it, res, dphi), None
+                return Solution(X, mono, it, res, r), None
             if it == settings.max_newton:
                 break
-            dphi, status, n_rhs = self.dphi_dmu(X, settings.fd_step, r)
+            dphi, status, n_rhs = self.dphi_dmu(X, settings.fd_step, r if it == 0 else None)
             counter.n += n_rhs
             if status != ig.STATUS_OK:
                 return None, INTEGRATION_FAILED
@@ -231,13 +228,12 @@ class Family(NamedTuple):
         return None, NEWTON_FAILED
 
     def point(self, sol, at, settings, counter):
-        """The Point of a converged solution (its tangent from dphi/dmu: the Newton iterates' last,
-        else a central difference; exact where the family is); None if a flow failed."""
-        dphi, status, n_rhs = sol.dphi, ig.STATUS_OK, 0
-        if self.exact_tangents:
-            dphi, status, n_rhs = self.locked_dphi_dmu(sol.X)
-        elif dphi is None:
-            dphi, status, n_rhs = self.dphi_dmu(sol.X, settings.fd_step)
+        """The Point of a converged solution (dphi/dmu and tangent there); None if the flow failed."""
+        along = None
+        if self.peak >= 0:
+            dphi, along, status, n_rhs = self.parameter_pass(sol.X)
+        else:
+            dphi, status, n_rhs = self.dphi_dmu(sol.X, settings.fd_step, sol.r)
         counter.n += n_rhs
         if status != ig.STATUS_OK:
             return None
@@ -245,7 +241,7 @@ class Family(NamedTuple):
             t = engine.tangent(_bordered(sol.monodromy, dphi, at.tangent))
         except np.linalg.LinAlgError:
             return None
-        amplitudes, slope, n_rhs = self.measures(sol.X, t, settings)
+        amplitudes, slope, n_rhs = self.measures(sol.X, t, settings, along)
         counter.n += n_rhs
         return Point(sol.X, self.lam(sol.X), sol.monodromy, sol.multipliers, t, dphi, sol.iterations, sol.residual,
                      amplitudes, slope)
@@ -257,15 +253,21 @@ class Family(NamedTuple):
                                                       self.opts, False)
         return hi, lo, n_rhs
 
-    def measures(self, X, t, settings):
-        """(amplitudes, slope, n_rhs) of a point at X with tangent t (None, NaN, 0 without weights)."""
+    def measures(self, X, t, settings, along=None):
+        """(amplitudes, slope, n_rhs) of a point at X with tangent t (None, NaN, 0 without weights);
+        along: its `parameter_pass` extremes where the point has them (else taken here)."""
         if self.weights is None:
             return None, np.nan, 0
         if self.peak < 0:
             hi, lo, n_rhs = self.extremes(X, slice(None))
             return np.array([np.maximum(hi, -lo), 0.5 * (hi - lo)]), np.nan, n_rhs
-        return extrema.amplitudes_and_slope(self.model.kernel, X, t, self.params, self.scale, float(self.periods),
-                                            self.weights, self.peak, self.opts, settings.fd_step)
+        spent = 0
+        if along is None:
+            _, along, _, spent = self.parameter_pass(X)
+        amplitudes, slope, n_rhs = extrema.amplitudes_and_slope(
+            self.model.kernel, X, t, self.params(self.lam(X)), float(self.periods), np.ascontiguousarray(self.weights),
+            self.peak, self.opts, along)
+        return amplitudes, slope, n_rhs + spent
 
     def where(self, point):
         return f"lambda = {point.lam!r}"
@@ -347,7 +349,7 @@ def _with_error(family, points, event, settings, counter):
     if event.kind != PEAK or event.point is None:
         return event
     b = points[event.index + 1] if event.index + 1 < len(points) else points[0]   # a closed loop's last step
-    error, smooth = family.exact().peak_error(event.point, points[event.index], b, settings, counter)
+    error, smooth = family.peak_error(event.point, points[event.index], b, settings, counter)
     return event._replace(lam_error=error) if smooth else None
 
 

@@ -222,9 +222,7 @@ class Peak(Zero):
     amplitude (half peak-to-peak) is the largest local maximum of the signal minus the smallest
     local minimum, so where two local maxima exchange which is the largest (a kink, on period-k
     orbits) it is the larger of two smooth curves, a corner opening upward, never a maximum. The
-    problem's points between a and b are those of `problem.exact()`, whose tangents (and so
-    slopes) are as exact as their orbits; the problem checks the located zero is smooth and
-    estimates its error (arclength.Family.peak_error)."""
+    problem checks the located zero is smooth and estimates its error (arclength.Family.peak_error)."""
     label, code = EVENT_LABELS[PEAK], PEAK
 
     def value(self, point):
@@ -234,14 +232,12 @@ class Peak(Zero):
         return a.slope > 0.0 and b.slope <= 0.0
 
     def locate(self, problem, a, b, settings, counter):
-        exact = problem.exact()
-
-        def slope(solution):       # the branch's points a and b as they are (their signs were detected)
-            point = solution if hasattr(solution, "slope") else exact.point(solution, a, settings, counter)
+        def slope(solution):
+            point = solution if hasattr(solution, "slope") else problem.point(solution, a, settings, counter)
             if point is None:
                 raise ValueError("no tangent at a corrector's solution")
             return point.slope
-        return engine.locate_zero(exact, a, b, slope, settings, counter, self.root)
+        return engine.locate_zero(problem, a, b, slope, settings, counter, self.root)
 
 
 def same_value(level, value):
