@@ -8,24 +8,27 @@ periods) and one scalar condition c . X = target: the arclength condition t . (X
 a step, mu = bound to end on the range's edge, t_a . (X - X_a) = sigma when locating an event.
 
 Bordered Newton: [[M - I, dphi/dmu], [c]] dX = -[phi - s, c . X - target], with M the monodromy
-from the variational equations (exact to the integrator's tolerance) and dphi/dmu by a forward
-difference: one plain integration at mu + 1e-5 less the variational one's phi (the models are not
-differentiated in their parameters; truncation ~1e-5 and the two integrations' different steps
-rtol / 1e-5 ~ 1e-5 relative). dphi/dmu enters only the Newton matrix and the tangent, never the
-residual, so its error slows Newton a little and tilts the predictor, but the converged orbits
-are exact to the Newton tolerance. It is recomputed at every Newton iterate: it depends strongly
-on s (a chord column from the previous point made Newton linear with rate ~0.1-0.4 on the
-Duffing resonance; fresh columns converge quadratically, in 2-3 iterations). A central difference
-(two plain integrations per iterate, as until issue 35) converged no faster.
+from the variational equations (exact to the integrator's tolerance) and dphi/dmu by differences
+of plain integrations in mu (the models are not differentiated in their parameters; step 1e-5):
+at the first iterate a forward one, one integration at mu + 1e-5 less the variational one's phi
+(truncation and the two integrations' different steps ~1e-5 to 1e-3 relative: the predictor's
+error dominates that step anyway), at the later ones a central one (two integrations; truncation
+O(1e-10), noise rtol / 1e-5 ~ 1e-5): forward at every iterate slowed Newton on the Bai rotor's
+period-4 branches into 4-6 iterations, which took 20 % more points and changed how one ended.
+dphi/dmu enters only the Newton matrix and the tangent, never the residual, so its error slows
+Newton a little and tilts the predictor, but the converged orbits are exact to the Newton
+tolerance. It is recomputed at every Newton iterate: it depends strongly on s (a chord column
+from the previous point made Newton linear with rate ~0.1-0.4 on the Duffing resonance; fresh
+columns converge quadratically, in 2-3 iterations).
 
-A point's tangent comes from a forward difference at the converged orbit (one plain integration
-more, its phi - s that of the last Newton iterate), where the family has no peak to locate; a peak
-family's from the tangent-linear pass (`parameter_pass`), as exact as its orbit, at every point:
-the slope its peaks are detected and located by is taken along it, and a 1e-5 tilt moves the Bai
-rotor's flat period-4 peak by 1e-4 Hz. (The last Newton iterate's column, taken one iterate
-before convergence, tilted period-4 tangents by up to 0.27 rad: no predictor.) Before issue 35
-the Newton column was a central difference (two plain integrations per iterate, converging no
-faster), and so was a peakless family's tangent.
+A point's tangent, where the family has no peak to locate, comes from a forward difference at the
+converged orbit (one plain integration, its phi - s that of the last Newton iterate); a peak
+family's from the parameter pass (`parameter_pass`: the orbit with its derivative in mu on its
+own steps), as exact as its orbit, at every point: the slope its peaks are detected and located
+by is taken along it (a 1e-5 tilt moves the Bai rotor's flat period-4 peak by 1e-4 Hz), and the
+same pass gives the extremes' derivative in mu, so that the slope takes one more pass along the
+state part alone (extrema.amplitudes_and_slope). The last Newton iterate's column is no tangent:
+taken one iterate before convergence, it tilted period-4 tangents by up to 0.27 rad.
 
 The family is a problem of the continuation engine (`Family`, engine's contract): `engine.follow`
 owns the predictor, step control, edges, end reasons and closed loops; the events are
