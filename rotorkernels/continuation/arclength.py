@@ -14,7 +14,8 @@ at the first iterate a forward one, one integration at mu + 1e-5 less the variat
 (truncation and the two integrations' different steps ~1e-5 to 1e-3 relative: the predictor's
 error dominates that step anyway), at the later ones a central one (two integrations; truncation
 O(1e-10), noise rtol / 1e-5 ~ 1e-5): forward at every iterate slowed Newton on the Bai rotor's
-period-4 branches into 4-6 iterations, which took 20 % more points and changed how one ended.
+period-4 branches into 4-6 iterations and 20 % more points (forward at the first two, one of them
+ended at a spurious branch point).
 dphi/dmu enters only the Newton matrix and the tangent, never the residual, so its error slows
 Newton a little and tilts the predictor, but the converged orbits are exact to the Newton
 tolerance. It is recomputed at every Newton iterate: it depends strongly on s (a chord column
