@@ -19,7 +19,7 @@ from scipy.optimize import fsolve
 
 from rotorsweep.pipeline import compute, config
 from rotorsweep.kernels import integrators as ig, models, shooting
-from rotorsweep.kernels.continuation import arclength as al, events, solve_orbit
+from rotorsweep.kernels.continuation import arclength as al, engine, events, solve_orbit
 
 DUFFING = models.get("duffing")
 # Integrator tolerance of the continuation runs; the Newton tolerance (1e-10) sits above it.
@@ -262,3 +262,23 @@ def test_an_event_brent_cannot_locate_is_left_out_and_the_branch_goes_on(monkeyp
     monkeypatch.undo()          # located, each fold lies after the point the detail names
     folds = al.continue_orbit(duffing_family(1.0), 0.5, np.zeros(2), (0.5, 2.0), SETTINGS).events
     assert [(str(f.index), str(f.index + 1)) for f in folds] == missed
+
+
+def test_a_step_corrector_stops_where_its_step_would_be_refused(bai, monkeypatch):
+    """A step's corrector stops after max_newton - 2 iterations (engine._step): a step that needs
+    more is refused whether or not it converges (engine.rejected), so the branch is the one the
+    full corrector gives, point for point, at less cost where correctors diverge (the 7.6 um
+    period-1 branch over 20-50 Hz has some; over 38-44 Hz it has none and costs the same)."""
+    _, capped = bai_branch(bai, 7.6e-6, 20.0, 50.0)
+
+    def full_step(problem, a, ds, settings, counter):
+        sol, failure = engine.on_arclength(problem, a, ds, settings, counter)
+        if failure is not None:
+            return None, failure
+        b = problem.point(sol, a, settings, counter)
+        return (b, None) if b is not None else (None, engine.INTEGRATION_FAILED)
+    monkeypatch.setattr(engine, "_step", full_step)
+    _, full = bai_branch(bai, 7.6e-6, 20.0, 50.0)
+    assert [p.lam for p in capped.points] == [p.lam for p in full.points]
+    assert [(e.kind, e.point.lam) for e in capped.events] == [(e.kind, e.point.lam) for e in full.events]
+    assert capped.n_rhs < full.n_rhs
