@@ -40,8 +40,8 @@ class Kinked(al.Family):
     jump of the amplitude would give), no smooth maximum; at KINK + 0.1 it jumps back up."""
     KINK, JUMP = 1.2, 100.0
 
-    def measures(self, X, t, settings, along=None):
-        amplitudes, slope, n_rhs = super().measures(X, t, settings, along)
+    def measures(self, X, t, along=None):
+        amplitudes, slope, n_rhs = super().measures(X, t, along)
         return amplitudes, slope - self.JUMP * (self.KINK <= self.lam(X) < self.KINK + 0.1), n_rhs
 
 

@@ -245,7 +245,7 @@ class Family(NamedTuple):
             t = engine.tangent(_bordered(sol.monodromy, dphi, at.tangent))
         except np.linalg.LinAlgError:
             return None
-        amplitudes, slope, n_rhs = self.measures(sol.X, t, settings, along)
+        amplitudes, slope, n_rhs = self.measures(sol.X, t, along)
         counter.n += n_rhs
         return Point(sol.X, self.lam(sol.X), sol.monodromy, sol.multipliers, t, dphi, sol.iterations, sol.residual,
                      amplitudes, slope)
@@ -257,7 +257,7 @@ class Family(NamedTuple):
                                                       self.opts, False)
         return hi, lo, n_rhs
 
-    def measures(self, X, t, settings, along=None):
+    def measures(self, X, t, along=None):
         """(amplitudes, slope, n_rhs) of a point at X with tangent t (None, NaN, 0 without weights);
         along: its `parameter_pass` extremes where the point has them (else taken here)."""
         if self.weights is None:
