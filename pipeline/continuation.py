@@ -162,7 +162,8 @@ def continue_line(scene, where):
         return torus_branches.continue_torus_line(scene, pl, where)
     family, built = line_family(scene, pl, where)
     model = family.model
-    sol = solve_orbit(model, family.params(pl.start), family.opts, periods=pl.periods,
+    # the start's orbit only: no samples (their kernel would load for nothing in a small run)
+    sol = solve_orbit(model, family.params(pl.start), family.opts, periods=pl.periods, n_samples=0,
                       **scene.newton.solve_orbit_args(model))
     if sol.status != 0:
         empty = al.Branch([], [], al.START_FAILED, f"no periodic orbit converged at {pl.parameter} = {pl.start!r}",
