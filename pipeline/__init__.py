@@ -142,6 +142,32 @@ def numba_config_without_yaml():
         _around_import("numba.core.config", _unimportable("yaml"))
 
 
+# Seconds from the command line's start without the cyclic garbage collector (collector_after_startup).
+STARTUP_WITHOUT_COLLECTOR_S = 2.0
+
+
+def collector_after_startup(seconds=STARTUP_WITHOUT_COLLECTOR_S):
+    """For the command line's own process: no cyclic garbage collection in its first `seconds`,
+    then the objects made so far frozen (never walked again) and collection back on. Start-up makes
+    long-lived objects only (modules, Numba's typing tables, 300k+ with numba or xarray), and each
+    full collection walks all of them: 30-60 ms of a one-second command (issue 35). Reference
+    counting still frees everything else; a process forked meanwhile collects from its start."""
+    import gc
+    import os
+    import threading
+
+    def resume():
+        gc.freeze()
+        gc.enable()
+
+    gc.disable()
+    os.register_at_fork(after_in_child=gc.enable)
+    timer = threading.Timer(seconds, resume)
+    timer.daemon = True
+    timer.start()
+    return timer
+
+
 def pools_as_a_worker():
     """For the command line's own process, before numpy loads: no BLAS or Numba thread pools of its
     own (cluster.WORKER_ENV, where the user has not set them), as each Dask worker has. Small work

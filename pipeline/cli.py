@@ -424,6 +424,7 @@ def main(argv=None):
     """The command line (argv None: sys.argv, and the process exits when this returns)."""
     args = build_parser().parse_args(argv)
     if argv is None:
+        pipeline.collector_after_startup()
         pipeline.pools_as_a_worker()
         pipeline.numba_without_cffi()
         pipeline.numba_config_without_yaml()

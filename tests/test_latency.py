@@ -191,6 +191,29 @@ def test_only_the_command_line_process_freezes_its_heap_for_the_exit(capsys):
     assert proc.returncode == 0 and proc.stderr.split()[-2:] == ["0", "True"], proc.stderr[-2000:]
 
 
+def test_the_command_line_process_starts_without_the_cyclic_collector():
+    """cli.main() as the process turns the collector off for its start-up (cli.main() from Python
+    leaves it on); collector_after_startup turns it back on after its seconds, with the objects
+    made so far frozen, and a process forked meanwhile collects from its start."""
+    from rotorsweep.pipeline import cli
+
+    assert cli.main(["scenes"]) == 0 and gc.isenabled()
+    program = ("import gc, os, sys; import rotorsweep.pipeline as p; from rotorsweep.pipeline import cli; "
+               "asked = []; p.collector_after_startup = lambda: asked.append(1); "
+               "sys.argv = ['rotorsweep', 'scenes']; cli.main(); print(asked, file=sys.stderr)")
+    proc = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, env=env(), cwd=ROOT,
+                          timeout=300)
+    assert proc.returncode == 0 and proc.stderr.split()[-1] == "[1]", proc.stderr[-2000:]
+    program = ("import gc, os, sys; import rotorsweep.pipeline as p; timer = p.collector_after_startup(0.5); "
+               "off = not gc.isenabled(); frozen = gc.get_freeze_count(); pid = os.fork()\n"
+               "if pid == 0: os._exit(0 if gc.isenabled() else 1)\n"
+               "child = os.waitpid(pid, 0)[1] == 0; timer.join(); "
+               "print(off, frozen == 0, child, gc.isenabled(), gc.get_freeze_count() > 1_000, file=sys.stderr)")
+    proc = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, env=env(), cwd=ROOT,
+                          timeout=300)
+    assert proc.returncode == 0 and proc.stderr.split()[-5:] == ["True"] * 5, proc.stderr[-2000:]
+
+
 def test_in_process_tasks_run_by_priority_and_raise_on_result():
     ex = cluster.InProcess()
     ran = []
