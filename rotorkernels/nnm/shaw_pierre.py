@@ -177,7 +177,6 @@ def _scales(system, omega, degree, cols, free):
     """The natural size of each degree-`degree` unknown gamma[s, (a, b)] (a + b = degree), up to
     a factor common to all: the coordinate's size relative to the master's ~ 1 / sqrt(M_ss), times
     omega for a velocity row, over omega^b (r ~ omega p)."""
-    n = len(system.coordinates)
     size = 1.0 / np.sqrt(np.diag(system.M))
     rows = np.concatenate([size, omega * size])
     powers = np.array([omega ** -float(EXPONENTS[c][1]) for c in cols])

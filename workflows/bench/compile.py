@@ -13,7 +13,6 @@ beside wall time: on a shared machine the wall time moves with the load, the com
 not. A revision other than the working tree is exported (`git archive`) under build/compile/."""
 import argparse
 import json
-import os
 import resource
 import shutil
 import statistics

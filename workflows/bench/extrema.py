@@ -13,7 +13,6 @@ the rounds and the median of the per-round ratios are reported, with the load av
 every round."""
 import argparse
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path

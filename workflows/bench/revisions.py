@@ -10,7 +10,6 @@ continuation a sweep runs). Rounds alternate between the revisions so that load 
 the best round of each is compared. Compilation is excluded (a warm-up call first)."""
 import argparse
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path
