@@ -8,7 +8,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from rotorsweep.pipeline import cli, compute, config, continuation, continuation_result, torus_branches
+from rotorsweep.pipeline import cli, config, continuation, continuation_result, torus_branches
 from rotorsweep.kernels import integrators as ig, torus as tr
 from rotorsweep.kernels.continuation import events as ev, tori
 
