@@ -1,7 +1,6 @@
 """What both benchmarks share: paths, logging, best-of-N timing and the machine description."""
 import contextlib
 import os
-import statistics
 import platform
 import sys
 import time
@@ -19,18 +18,6 @@ def log(msg):
 
 def loadavg():
     return [round(x, 2) for x in os.getloadavg()]
-
-
-def host_probe():
-    """Seconds of a fixed pure-Python loop (sum(range(3e7)), median of 3): how fast this host runs
-    now. The machines here are shared virtual ones whose speed drifts by up to half within minutes
-    (0.40-0.66 s on one day): two runs' times compare only at a like probe."""
-    times = []
-    for _ in range(3):
-        t0 = time.perf_counter()
-        sum(range(30_000_000))
-        times.append(time.perf_counter() - t0)
-    return round(statistics.median(times), 3)
 
 
 def steal_seconds():

@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 
 from workflows.bench import trees
-from workflows.bench.common import DOCS, ROOT, host_probe, loadavg, log, provenance
+from workflows.bench.common import DOCS, ROOT, loadavg, log, provenance
 
 BUILD = ROOT / "build" / "latency"
 DEMO = BUILD / "demo.nc"
@@ -147,18 +147,9 @@ average after each run; the machine is shared, and a loaded machine stretches wa
 
 Machine: {result['machine']['cpu']}, {result['machine']['usable_cores']} usable cores; load
 {result['load']}; {result['date']}. Reproduce: `make bench-latency` (`{result['command']}`).
-{probe_text(result.get('host_probe_s'))}"""
+"""
     (out / "latency.md").write_text(text)
     (out / "latency.json").write_text(json.dumps(result, indent=1) + "\n")
-
-
-def probe_text(probe):
-    """The host's speed before and after the run (common.host_probe), where recorded."""
-    if not probe:
-        return ""
-    return (f"Host speed probe (common.host_probe: a fixed pure-Python loop, median of 3): {probe[0]:.2f} s "
-            f"before, {probe[1]:.2f} s after; this virtual machine's probe drifted between 0.40 and 0.66 s "
-            "within a day, by up to half within minutes: compare runs at a like probe.\n")
 
 
 def floor_text(runs):
@@ -208,7 +199,7 @@ def main(argv=None):
                            text=True).stdout.strip()[:70]
     head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
                           text=True).stdout.strip()
-    load, probe = loadavg(), host_probe()
+    load = loadavg()
     prepare()
     trees = {"before": checkout(args.base), "after": ROOT}
     runs = measure(trees, commands, args.repeats)
@@ -216,7 +207,7 @@ def main(argv=None):
         earlier = json.loads((args.out / "latency.json").read_text())["runs"]
         runs = {**earlier, **runs}
     result = {"base": args.base, "base_label": label, "head": head, "repeats": args.repeats, "runs": runs,
-              "host_probe_s": [probe, host_probe()], **provenance(load, "workflows.bench.latency", argv)}
+              **provenance(load, "workflows.bench.latency", argv)}
     args.out.mkdir(parents=True, exist_ok=True)
     write(result, args.out)
     log(f"wrote {args.out / 'latency.md'}")
