@@ -39,7 +39,6 @@ shaft revolution.
 Scaling: tau = t / T (T the common period, or the one active forcing's period), positions in
 units of L = 1 um; u = (q / L, dq/dtau / L).
 """
-import math
 from fractions import Fraction
 from typing import NamedTuple
 

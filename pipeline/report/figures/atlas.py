@@ -14,7 +14,7 @@ import numpy as np
 from rotorsweep.pipeline import schema
 from rotorsweep.pipeline.report import style
 from rotorsweep.pipeline.report.cubeinfo import continued_axis, other_axes
-from rotorsweep.pipeline.report.plan import MAX_PANELS, axis_display, axis_label, fmt, where_label
+from rotorsweep.pipeline.report.plan import MAX_PANELS, axis_display, axis_label, where_label
 from rotorsweep.pipeline.report.registry import Figure, register
 from rotorsweep.pipeline.report.stability import stability_class
 
