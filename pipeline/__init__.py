@@ -14,8 +14,9 @@ The Python API mirrors the command line:
 Importing pipeline imports nothing heavy and installs import hooks for short commands (issue
 35): the `rotorsweep` accessor registers itself when xarray is imported
 (register_accessor_when_xarray_loads), Numba's BLAS check does not import scipy.linalg
-(_quick_blas_check), and the command line's process sets up no cffi typing (numba_without_cffi) and
-reads Numba's configuration without yaml where it has no file to read (numba_config_without_yaml).
+(_quick_blas_check), and the command line's process sets up no cffi typing (numba_without_cffi),
+reads Numba's configuration without yaml where it has no file to read (numba_config_without_yaml)
+and collects no reference cycles during its start-up (collector_after_startup).
 """
 import contextlib
 import importlib.abc
